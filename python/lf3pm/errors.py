@@ -1,0 +1,23 @@
+"""User-facing errors.
+
+Every mistake a user can make (a missing map, an unknown sensor, a pose outside
+the map) raises a subclass of :class:`Lf3pmError` whose message is one line that
+names the problem. The CLI prints that line and exits non-zero; it never shows a
+traceback for these.
+"""
+
+
+class Lf3pmError(Exception):
+    """Base class of errors caused by user input; the message is one line."""
+
+
+class MapError(Lf3pmError):
+    """A map file cannot be read or holds no usable points."""
+
+
+class SensorError(Lf3pmError):
+    """A sensor name or sensor description is invalid."""
+
+
+class PoseError(Lf3pmError):
+    """A pose is malformed or lies where it cannot be evaluated."""
