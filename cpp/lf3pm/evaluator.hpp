@@ -1,0 +1,52 @@
+// One pose's evaluation, end to end: simulate the scan, associate its hits,
+// accumulate the Gram of [A | b] and compute the metric.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "lf3pm/map_index.hpp"
+#include "lf3pm/metric.hpp"
+#include "lf3pm/observations.hpp"
+#include "lf3pm/scan_simulator.hpp"
+
+namespace lf3pm {
+
+struct EvalParams {
+  ScanParams scan;
+  int dof = 6;
+  Association association = Association::Surfel;
+  MetricWeights weights;
+};
+
+struct PoseEvaluation {
+  Metric metric;
+  std::int64_t rays = 0;  // sensor rays cast
+  std::int64_t hits = 0;  // rays with a return (after scan downsampling)
+};
+
+/// Explicit observations of a simulated scan (for export and tests).
+struct Observations {
+  Eigen::MatrixXd a;             // m x dof
+  Eigen::VectorXd b;             // m
+  std::vector<std::uint32_t> hit;  // row -> index into the scan's hits
+};
+
+PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
+                             std::size_t count, const EvalParams& params);
+
+/// The Gram of [A | b] of a scan and its row count; deterministic for any thread count.
+GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
+                          const EvalParams& params);
+
+Observations scan_observations(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
+                               const EvalParams& params);
+
+/// Many poses in parallel (one thread per pose; params.scan.threads is the pool
+/// size). Pose i draws its noise from stream params.scan.stream + i.
+std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,
+                                           const double* directions, std::size_t count,
+                                           const EvalParams& params);
+
+}  // namespace lf3pm

@@ -1,0 +1,91 @@
+#include "lf3pm/point_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace lf3pm {
+
+PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size, int /*threads*/) {
+  Eigen::Vector3d lo = points.front(), hi = points.front();
+  for (const auto& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  grid_ = VoxelGrid(lo, hi, cell_size);
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    pairs[i] = {grid_.key_of(grid_.cell_of(points[i])), static_cast<std::uint32_t>(i)};
+  grid_.build(pairs);
+  // Store the points in cell order: a cell's items are then the index range
+  // [items_begin, items_end) itself, and a search reads memory linearly.
+  order_ = grid_.items();
+  points_.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) points_[i] = points[order_[i]];
+}
+
+namespace {
+// Keeps the k smallest (distance, index) pairs, sorted ascending.
+struct KBest {
+  int k, size = 0;
+  double* d;
+  std::uint32_t* id;
+  double worst() const { return size < k ? std::numeric_limits<double>::infinity() : d[k - 1]; }
+  void offer(double dist, std::uint32_t index) {
+    if (size == k && dist >= d[k - 1]) return;
+    int pos = size < k ? size++ : k - 1;
+    while (pos > 0 && d[pos - 1] > dist) {
+      d[pos] = d[pos - 1];
+      id[pos] = id[pos - 1];
+      --pos;
+    }
+    d[pos] = dist;
+    id[pos] = index;
+  }
+};
+}  // namespace
+
+int PointGrid::nearest(const Eigen::Vector3d& q, int k, double max_distance, std::uint32_t* idx,
+                       double* sq_dist) const {
+  if (k <= 0 || points_.empty()) return 0;
+  const double h = grid_.cell_size();
+  const double max_sq = max_distance * max_distance;
+  const CellCoord c = grid_.cell_of(q);
+  // Distance from q to the nearest face of its own cell: shells of Chebyshev
+  // radius L around the cell then cover every point closer than L*h + margin.
+  const Eigen::Vector3d f = (q - grid_.origin()) / h;
+  double margin = std::numeric_limits<double>::infinity();
+  const int cxyz[3] = {c.x, c.y, c.z};
+  for (int a = 0; a < 3; ++a) {
+    const double frac = f[a] - cxyz[a];
+    margin = std::min(margin, std::min(frac, 1.0 - frac) * h);
+  }
+  margin = std::max(margin, 0.0);
+  KBest best{k, 0, sq_dist, idx};
+  const int max_shell = static_cast<int>(std::ceil(max_distance / h)) + 1;
+  for (int L = 0; L <= max_shell; ++L) {
+    for (int dz = -L; dz <= L; ++dz)
+      for (int dy = -L; dy <= L; ++dy) {
+        const bool face = (std::abs(dz) == L || std::abs(dy) == L);
+        for (int dx = -L; dx <= L; dx += (face ? 1 : 2 * L)) {
+          const CellCoord n{c.x + dx, c.y + dy, c.z + dz};
+          if (grid_.contains(n)) {
+            const std::int64_t slot = grid_.cell_slot(n);
+            if (slot >= 0) {
+              for (std::uint32_t i = grid_.items_begin(slot), e = grid_.items_end(slot); i < e; ++i) {
+                const double d2 = (points_[i] - q).squaredNorm();
+                if (d2 <= max_sq) best.offer(d2, i);
+              }
+            }
+          }
+          if (L == 0) break;
+        }
+      }
+    const double covered = L * h + margin;
+    if (best.size == k && best.worst() <= covered * covered) break;
+    if (covered >= max_distance) break;
+  }
+  return best.size;
+}
+
+}  // namespace lf3pm

@@ -1,0 +1,62 @@
+#include "lf3pm/scan_simulator.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "lf3pm/parallel.hpp"
+#include "lf3pm/random.hpp"
+
+namespace lf3pm {
+
+SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions,
+                            std::size_t count, const ScanParams& params) {
+  if (!(params.max_range > params.min_range) || params.min_range < 0)
+    throw std::invalid_argument("ranges must satisfy 0 <= min_range < max_range");
+  if (!(params.noise_sigma >= 0)) throw std::invalid_argument("range noise sigma must be >= 0");
+  if (!pose.rotation.allFinite() || !pose.position.allFinite())
+    throw std::invalid_argument("the pose is not finite");
+  std::vector<double> range(count);
+  std::vector<std::uint32_t> hit(count);
+  const Eigen::Vector3d& t = pose.position;
+  parallel_for(count, 2048, params.threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const Eigen::Vector3d d = pose.rotation * Eigen::Vector3d(directions + 3 * k);
+      const RayHit h = map.caster().cast(t, d, params.max_range);
+      hit[k] = h.surfel;
+      if (h.surfel == kNoHit) continue;
+      // Refine the float range of the caster in float64 on the disc's own plane,
+      // so a hit on a planar surface lies on it to rounding.
+      const Eigen::Vector3d& n = map.normal(h.surfel);
+      const double denom = n.dot(d);
+      double s = std::abs(denom) > 1e-9 ? n.dot(map.points()[h.surfel] - t) / denom : h.range;
+      if (!(std::abs(s - h.range) < 1e-3)) s = h.range;
+      if (s < params.min_range) {
+        hit[k] = kNoHit;  // blocked below the minimum range: no return
+        continue;
+      }
+      if (params.noise_sigma > 0) s += params.noise_sigma * normal_sample(params.seed, params.stream, k);
+      if (s < params.min_range || s > params.max_range) hit[k] = kNoHit;
+      range[k] = s;
+    }
+  });
+  SimulatedScan scan;
+  std::unordered_set<std::uint64_t> kept_voxels;
+  const bool downsample = params.scan_voxel > 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    if (hit[k] == kNoHit) continue;
+    const Eigen::Vector3d p = range[k] * Eigen::Vector3d(directions + 3 * k);
+    if (downsample) {
+      const auto q = [&](double v) { return static_cast<std::uint64_t>(std::floor(v / params.scan_voxel) + (1 << 20)) & 0x1FFFFFu; };
+      const std::uint64_t key = q(p.x()) | (q(p.y()) << 21) | (q(p.z()) << 42);
+      if (!kept_voxels.insert(key).second) continue;
+    }
+    scan.sensor_points.push_back(p);
+    scan.world_points.push_back(pose.rotation * p + t);
+    scan.surfel.push_back(hit[k]);
+    scan.ray.push_back(static_cast<std::uint32_t>(k));
+  }
+  return scan;
+}
+
+}  // namespace lf3pm
