@@ -1,0 +1,137 @@
+"""The ``lf3pm`` command line."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Optional, Tuple
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from lf3pm.errors import Lf3pmError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="LiDAR perception-aware planning: where will LiDAR localization hold?")
+console = Console()
+err_console = Console(stderr=True)
+
+
+@contextmanager
+def user_errors():
+    """Turns user-input errors into one line on stderr and exit status 2."""
+    try:
+        yield
+    except Lf3pmError as err:
+        err_console.print(f"[bold red]lf3pm: error:[/] {err}", highlight=False, soft_wrap=True)
+        raise typer.Exit(2) from None
+
+
+def write_atomically(path: Path, write) -> None:
+    """Calls write(tmp_path) on a temporary file beside ``path``, then renames it."""
+    path = Path(path)
+    if not path.parent.exists():
+        raise Lf3pmError(f"output folder {path.parent} does not exist")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+@app.command()
+def evaluate(
+    map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
+    pose: Tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
+    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
+    seed: int = typer.Option(0, help="Seed of the range noise."),
+    noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
+    dof: int = typer.Option(6, help="6 for SE(3), 3 for (x, y, yaw)."),
+    w1: float = typer.Option(0.5, help="Metric weight w1 (w2 = 1 - w1)."),
+    scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (FAST-LIO filter_size_surf; 0 = off)."),
+    association: str = typer.Option("surfel", help="'surfel' (plane of the hit map point) or 'knn' (FAST-LIO k-NN)."),
+    map_voxel: Optional[float] = typer.Option(None, help="Voxel-downsample the map first (m)."),
+    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    save_observations: Optional[Path] = typer.Option(None, metavar="OBS.npz",
+                                                     help="Write A, b and the simulated points."),
+):
+    """Simulate the scan at one pose and print the LF-3PM metric and baselines."""
+    with user_errors():
+        from lf3pm.evaluate import evaluate as run_evaluate
+        from lf3pm.map import load_map
+
+        world = load_map(map_path, voxel=map_voxel, threads=threads)
+        result = run_evaluate(world, pose, sensor, seed=seed, noise=noise, dof=dof, w1=w1, w2=1.0 - w1,
+                              scan_voxel=scan_voxel, association=association, threads=threads,
+                              observations=save_observations is not None)
+        if save_observations is not None:
+            obs = result.observations
+            write_atomically(save_observations, lambda tmp: np.savez(
+                tmp, A=obs["A"], b=obs["b"], points=obs["points"],
+                sensor_points=obs["sensor_points"], row_hit=obs["row_hit"],
+                pose=np.asarray(result.pose)))
+        out = result.to_dict()
+        out["map"] = world.describe()
+        if as_json:
+            print(json.dumps(out))
+            return
+        print_evaluation(out)
+
+
+def print_evaluation(out: dict) -> None:
+    table = Table(title=f"LF-3PM metric, sensor {out['sensor']}", show_header=True)
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    for key in ("q_min", "q_n", "q_max", "sigma1", "xi", "zhang", "condition_number", "cov_trace",
+                "step_norm", "residual_norm", "scaled_cov_trace"):
+        value = out[key]
+        table.add_row(key, "inf" if value is None else f"{value:.6g}")
+    table.add_row("rows m", str(out["m"]))
+    table.add_row("hits / rays", f"{out['hits']} / {out['rays']}")
+    table.add_row("degenerate", str(out["degenerate"]))
+    console.print(table)
+
+
+@app.command()
+def sensors():
+    """List the LiDAR presets."""
+    from lf3pm.sensors import list_sensors
+
+    table = Table(title="LiDAR presets (a YAML file also works: see docs/sensors.md)")
+    for col in ("name", "rays", "range (m)", "noise (m)", "h-FoV (deg)", "model"):
+        table.add_column(col)
+    for s in list_sensors():
+        table.add_row(s.name, str(s.num_rays), f"{s.min_range:g}-{s.max_range:g}",
+                      f"{s.range_noise_sigma:g}", f"{math.degrees(s.horizontal_fov):.1f}",
+                      ("approximation: " if s.approximate else "") + s.description)
+    console.print(table)
+
+
+@app.command()
+def info(map_path: Path = typer.Argument(..., metavar="MAP"),
+         map_voxel: Optional[float] = typer.Option(None, help="Voxel-downsample the map first (m).")):
+    """Load and index a map; print its size, extent and index statistics."""
+    with user_errors():
+        from lf3pm.map import load_map
+
+        console.print_json(json.dumps(load_map(map_path, voxel=map_voxel).describe()))
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()
+
+
+if __name__ == "__main__":
+    main()

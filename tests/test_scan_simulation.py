@@ -1,0 +1,139 @@
+"""Scan simulation on maps of known geometry: hits on the surfaces, no
+see-through, ranges and noise as specified."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from lf3pm import _core
+from analytic_scenes import (box_room, grid_plane, random_directions, ray_box_distance,
+                             rigid_transform, spinning_directions)
+
+HALF = (4.0, 3.0, 1.5)
+
+
+@pytest.fixture(scope="module")
+def room():
+    return _core.MapIndex(box_room(HALF, spacing=0.05))
+
+
+def pose_at(x, y, z):
+    T = np.eye(4)
+    T[:3, 3] = (x, y, z)
+    return T
+
+
+def test_every_ray_in_a_closed_room_hits_a_wall_at_the_right_range(room):
+    rng = np.random.default_rng(0)
+    dirs = random_directions(rng, 20000)
+    origin = np.array([0.7, -0.4, 0.2])
+    scan = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0)
+    assert len(scan["ray"]) == len(dirs)  # nothing escapes: no see-through
+    expected = ray_box_distance(origin, dirs, HALF)
+    got = np.linalg.norm(scan["sensor_points"], axis=1)
+    # Within a centimetre everywhere (edges and corners round off over one disc),
+    # and on the wall to rounding away from the edges.
+    assert np.max(np.abs(got - expected)) < 0.01
+    w = scan["world_points"]
+    off_face = np.min(np.abs(np.abs(w) - np.asarray(HALF)), axis=1)
+    interior = np.sum(np.abs(np.abs(w) - np.asarray(HALF)) < 0.1, axis=1) == 1
+    assert np.max(off_face) < 0.01
+    assert np.max(off_face[interior]) < 1e-6
+
+
+def test_hits_on_a_wall_lie_on_its_plane_and_counts_match_geometry():
+    # Wall x = 5, y in [-10, 10], z in [-2, 3], sampled every 5 cm.
+    wall = grid_plane((5.0, -10.0, -2.0), (0, 1, 0), (0, 0, 1), 20.0, 5.0, 0.05)
+    index = _core.MapIndex(np.ascontiguousarray(wall))
+    dirs = spinning_directions(np.arange(-15, 16, 2), 1800)
+    scan = _core.simulate_scan(index, pose_at(0, 0, 0), dirs, 0.5, 100.0)
+    w = scan["world_points"]
+    assert np.max(np.abs(w[:, 0] - 5.0)) < 0.01
+    # Analytic: ray meets the plane x = 5 inside the rectangle. Discs of rim points
+    # reach past the last sample by up to their radius (10 cm at a corner).
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = 5.0 / dirs[:, 0]
+        hit_point = dirs * t[:, None]
+    inside = (dirs[:, 0] > 0) & (np.abs(hit_point[:, 1]) < 10.0 - 0.01) & \
+             (hit_point[:, 2] > -2.0 + 0.01) & (hit_point[:, 2] < 3.0 - 0.01)
+    rim = (dirs[:, 0] > 0) & (np.abs(hit_point[:, 1]) < 10.0 + 0.1) & \
+          (hit_point[:, 2] > -2.0 - 0.1) & (hit_point[:, 2] < 3.0 + 0.1)
+    hit_rays = np.zeros(len(dirs), bool)
+    hit_rays[scan["ray"]] = True
+    assert np.all(hit_rays[inside])
+    assert not np.any(hit_rays & ~rim)
+
+
+def test_nothing_is_seen_through_a_wall():
+    near = grid_plane((3.0, -5.0, -5.0), (0, 1, 0), (0, 0, 1), 10.0, 10.0, 0.05)
+    far = grid_plane((6.0, -8.0, -8.0), (0, 1, 0), (0, 0, 1), 16.0, 16.0, 0.05)
+    index = _core.MapIndex(np.ascontiguousarray(np.vstack([near, far])))
+    dirs = random_directions(np.random.default_rng(1), 20000)
+    dirs = np.ascontiguousarray(dirs[dirs[:, 0] > 0])
+    scan = _core.simulate_scan(index, pose_at(0, 0, 0), dirs, 0.1, 100.0)
+    w = scan["world_points"]
+    t = 3.0 / dirs[scan["ray"], 0]
+    p = dirs[scan["ray"]] * t[:, None]
+    behind_near = (np.abs(p[:, 1]) < 4.99) & (np.abs(p[:, 2]) < 4.99)
+    assert np.all(np.abs(w[behind_near, 0] - 3.0) < 0.01)
+
+
+def test_min_and_max_range(room):
+    dirs = random_directions(np.random.default_rng(2), 2000)
+    origin = np.zeros(3)
+    # Walls are 1.5 to ~5.2 m away.
+    none = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 1.4)
+    assert len(none["ray"]) == 0
+    blocked = _core.simulate_scan(room, pose_at(*origin), dirs, 6.0, 100.0)
+    assert len(blocked["ray"]) == 0  # walls nearer than min_range block, never reveal
+    some = _core.simulate_scan(room, pose_at(*origin), dirs, 2.5, 3.5)
+    r = np.linalg.norm(some["sensor_points"], axis=1)
+    assert len(r) > 0 and r.min() >= 2.5 and r.max() <= 3.5
+    expected = ray_box_distance(origin, dirs, HALF)
+    assert set(some["ray"]) == set(np.nonzero((expected >= 2.5 + 0.01) & (expected <= 3.5 - 0.01))[0]) \
+        | (set(some["ray"]) - set(np.nonzero((expected >= 2.5 + 0.01) & (expected <= 3.5 - 0.01))[0]))
+    assert np.all((expected[some["ray"]] > 2.49) & (expected[some["ray"]] < 3.51))
+
+
+def test_range_noise_is_gaussian_and_seeded(room):
+    dirs = random_directions(np.random.default_rng(3), 30000)
+    origin = np.array([0.1, 0.2, 0.3])
+    clean = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0)
+    a = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0, noise=0.02, seed=7)
+    b = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0, noise=0.02, seed=7, threads=1)
+    c = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0, noise=0.02, seed=8)
+    np.testing.assert_array_equal(a["sensor_points"], b["sensor_points"])  # any thread count
+    assert not np.array_equal(a["sensor_points"], c["sensor_points"])
+    err = np.linalg.norm(a["sensor_points"], axis=1) - np.linalg.norm(clean["sensor_points"], axis=1)
+    assert abs(np.std(err) - 0.02) < 0.001 and abs(np.mean(err)) < 0.001
+
+
+def test_knn_matches_brute_force():
+    rng = np.random.default_rng(4)
+    pts = np.ascontiguousarray(np.vstack([box_room(HALF, 0.1), rng.uniform(-4, 4, size=(3000, 3))]))
+    index = _core.MapIndex(pts)
+    queries = np.ascontiguousarray(rng.uniform(-4.5, 4.5, size=(2000, 3)))
+    idx, dist = index.nearest(queries, 5, 2.0)
+    ref_d, _ = cKDTree(index.points).query(queries, k=5)
+    ref_d = np.where(ref_d <= 2.0, ref_d, np.inf)
+    np.testing.assert_allclose(dist, ref_d, rtol=1e-12)
+    found = idx >= 0
+    np.testing.assert_allclose(np.linalg.norm(index.points[idx[found]] - np.repeat(queries, 5, 0).reshape(-1, 5, 3)[found], axis=1),
+                               dist[found], rtol=1e-12)
+
+
+def test_rigid_motion_of_map_and_pose_leaves_the_metric_unchanged():
+    rng = np.random.default_rng(6)
+    pts = np.vstack([box_room(HALF, 0.05), rng.uniform(-3.5, 3.5, size=(2000, 3))])
+    dirs = spinning_directions(np.arange(-15, 16, 2), 900)
+    pose = pose_at(0.5, -0.3, 0.1)
+    base = _core.evaluate(_core.MapIndex(np.ascontiguousarray(pts)), pose, dirs, 0.1, 100.0,
+                          noise=0.01, seed=3)
+    for trial in range(3):
+        T = rigid_transform(rng)
+        moved = (pts @ T[:3, :3].T) + T[:3, 3]
+        got = _core.evaluate(_core.MapIndex(np.ascontiguousarray(moved)), np.ascontiguousarray(T @ pose),
+                             dirs, 0.1, 100.0, noise=0.01, seed=3)
+        assert got["m"] == pytest.approx(base["m"], rel=2e-3)
+        for key in ("sigma1", "q_min", "q_n", "q_max"):
+            assert got[key] == pytest.approx(base[key], rel=2e-3), key
