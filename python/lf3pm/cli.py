@@ -114,7 +114,7 @@ def sensors():
     for s in list_sensors():
         table.add_row(s.name, str(s.num_rays), f"{s.min_range:g}-{s.max_range:g}",
                       f"{s.range_noise_sigma:g}", f"{math.degrees(s.horizontal_fov):.1f}",
-                      ("approximation: " if s.approximate else "") + s.description)
+                      ("approximation of " if s.approximate else "") + s.description.split(":")[0])
     console.print(table)
 
 

@@ -1,0 +1,40 @@
+"""Writing a file so that readers see either the old file or the complete new one."""
+
+from __future__ import annotations
+
+import os
+import secrets
+from contextlib import contextmanager, suppress
+
+from lf3pm.errors import MapError
+
+
+@contextmanager
+def atomic_write(path: str):
+    """Yields a binary file whose content replaces ``path`` when the block ends without error.
+
+    The data go to a temporary file in the same directory (so that ``os.replace``
+    is a rename within one file system), flushed to disk before the rename. On
+    any error the temporary file is removed and ``path`` is left untouched;
+    OSErrors become a one-line MapError.
+    """
+    directory, base = os.path.split(os.path.abspath(path))
+    temporary = os.path.join(directory, f".{base}.{secrets.token_hex(4)}.tmp")
+    try:
+        # "x" never clobbers a file, and unlike mkstemp keeps the usual umask permissions.
+        with open(temporary, "xb") as fp:
+            yield fp
+            fp.flush()
+            os.fsync(fp.fileno())
+        os.replace(temporary, path)
+    except OSError as err:
+        _remove(temporary)
+        raise MapError(f"{path}: cannot write the file ({err.strerror or err})") from err
+    except BaseException:
+        _remove(temporary)
+        raise
+
+
+def _remove(path: str) -> None:
+    with suppress(FileNotFoundError):
+        os.remove(path)
