@@ -92,7 +92,7 @@ nb::dict metric_dict(const Metric& m) {
 const char* kScanArgsDoc =
     "min_range/max_range in metres, noise: Gaussian range sigma (m), seed/stream: noise "
     "random stream, scan_voxel: keep the first hit per voxel (0 = off), dof: 6 or 3, "
-    "association: 'surfel' (plane of the hit map point) or 'knn' (FAST-LIO k-NN), "
+    "association: 'knn' (FAST-LIO k-NN plane at each hit) or 'surfel' (precomputed plane of the hit map point), "
     "w1/w2: metric weights, threads: 0 = all cores.";
 
 }  // namespace
@@ -118,6 +118,7 @@ NB_MODULE(_core, m) {
            "points"_a, "cell_size"_a = 0.0, "knn"_a = 5, "plane_threshold"_a = 0.1,
            "max_neighbor_distance"_a = 2.2360679775, "threads"_a = 0)
       .def_prop_ro("size", &MapIndex::size)
+      .def_prop_ro("duplicates_removed", &MapIndex::duplicates_removed)
       .def_prop_ro("cell_size", &MapIndex::cell_size)
       .def_prop_ro("median_spacing", &MapIndex::median_spacing)
       .def_prop_ro("memory_bytes", &MapIndex::memory_bytes)
@@ -255,7 +256,7 @@ NB_MODULE(_core, m) {
           return out;
         },
         "map"_a, "pose"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
-        "stream"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "surfel", "w1"_a = 0.5,
+        "stream"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "knn", "w1"_a = 0.5,
         "w2"_a = 0.5, "threads"_a = 0, "observations"_a = false,
         (std::string("Scan, associate and compute the metric at one 4x4 pose. ") + kScanArgsDoc).c_str());
 
@@ -285,7 +286,7 @@ NB_MODULE(_core, m) {
           return out;
         },
         "map"_a, "poses"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
-        "stream"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "surfel", "w1"_a = 0.5,
+        "stream"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "knn", "w1"_a = 0.5,
         "w2"_a = 0.5, "threads"_a = 0,
         "evaluate() at many poses in parallel; pose i uses noise stream stream + i.");
 

@@ -30,7 +30,7 @@ double estimate_spacing(const std::vector<Eigen::Vector3d>& pts, int threads) {
   double cell = std::max(0.02, 4.0 * std::sqrt(area / pts.size()));
   const double volume_cap = std::cbrt(ext.prod() / (1 << 26)) * 8.0;  // keep the provisional grid small
   cell = std::max(cell, volume_cap);
-  PointGrid coarse(pts, cell, threads);
+  PointGrid coarse(pts, cell);
   const std::size_t samples = std::min<std::size_t>(pts.size(), 4000);
   std::vector<double> nn(samples);
   parallel_for(samples, 256, threads, [&](std::size_t b, std::size_t e) {
@@ -65,7 +65,7 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
   median_spacing_ = estimate_spacing(input, threads);
   cell_size_ = params.cell_size > 0 ? params.cell_size
                                     : std::clamp(median_spacing_ * std::sqrt(kPointsPerCell), 0.05, 4.0);
-  grid_ = PointGrid(input, cell_size_, threads);
+  grid_ = PointGrid(input, cell_size_);
   input.clear();
   input.shrink_to_fit();
 

@@ -32,6 +32,7 @@ class MapIndex {
   double cell_size() const { return cell_size_; }
   double median_spacing() const { return median_spacing_; }
   std::size_t size() const { return grid_.points().size(); }
+  std::size_t duplicates_removed() const { return grid_.duplicates_removed(); }
 
   /// Points in index order (sorted by voxel); order()[i] is the input index of point i.
   const std::vector<Eigen::Vector3d>& points() const { return grid_.points(); }

@@ -6,7 +6,7 @@
 
 namespace lf3pm {
 
-PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size, int /*threads*/) {
+PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size) {
   Eigen::Vector3d lo = points.front(), hi = points.front();
   for (const auto& p : points) {
     lo = lo.cwiseMin(p);
@@ -16,12 +16,32 @@ PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_siz
   std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     pairs[i] = {grid_.key_of(grid_.cell_of(points[i])), static_cast<std::uint32_t>(i)};
+  // Equal points share a cell: sort each cell's run by coordinates, keep the first.
+  std::sort(pairs.begin(), pairs.end());
+  auto coords_less = [&](const auto& a, const auto& b) {
+    const Eigen::Vector3d &p = points[a.second], &q = points[b.second];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a.second < b.second;
+  };
+  std::size_t kept = 0;
+  for (std::size_t b = 0; b < pairs.size();) {
+    std::size_t e = b;
+    while (e < pairs.size() && pairs[e].first == pairs[b].first) ++e;
+    std::sort(pairs.begin() + b, pairs.begin() + e, coords_less);
+    for (std::size_t i = b; i < e; ++i)
+      if (i == b || points[pairs[i].second] != points[pairs[kept - 1].second]) pairs[kept++] = pairs[i];
+    b = e;
+  }
+  duplicates_removed_ = pairs.size() - kept;
+  pairs.resize(kept);
   grid_.build(pairs);
   // Store the points in cell order: a cell's items are then the index range
   // [items_begin, items_end) itself, and a search reads memory linearly.
   order_ = grid_.items();
-  points_.resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) points_[i] = points[order_[i]];
+  points_.resize(order_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i) points_[i] = points[order_[i]];
 }
 
 namespace {

@@ -18,8 +18,9 @@ class PointGrid {
  public:
   PointGrid() = default;
   /// Indexes `points` with cubic cells of edge `cell_size`; the points are
-  /// reordered by cell (order() maps new index -> input index).
-  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size, int threads);
+  /// reordered by cell (order() maps new index -> input index) and exact
+  /// duplicates are dropped (a duplicate would count twice among k neighbours).
+  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size);
 
   /// Up to k nearest points to q within max_distance, nearest first.
   /// Returns the count found; idx/sq_dist receive them.
@@ -28,11 +29,13 @@ class PointGrid {
 
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
   const std::vector<std::uint32_t>& order() const { return order_; }
+  std::size_t duplicates_removed() const { return duplicates_removed_; }
   const VoxelGrid& grid() const { return grid_; }
 
  private:
   std::vector<Eigen::Vector3d> points_;
   std::vector<std::uint32_t> order_;
+  std::size_t duplicates_removed_ = 0;
   VoxelGrid grid_;
 };
 

@@ -110,6 +110,36 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   }
   const int* nb = grid_.blocks_per_axis();
   if (static_cast<std::int64_t>(nb[0]) * nb[1] * nb[2] <= kMaxDistanceBlocks) block_distance_ = chebyshev_distance(grid_);
+  build_top_levels();
+}
+
+void SurfelCaster::build_top_levels() {
+  const int* nb = grid_.blocks_per_axis();
+  int w = nb[0], hgt = nb[1];
+  std::vector<std::int32_t> level(static_cast<std::size_t>(w) * hgt, 0);
+  for (int y = 0; y < hgt; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int z = nb[2] - 1; z >= 0; --z)
+        if (grid_.block_at(x, y, z) >= 0) {
+          level[x + static_cast<std::size_t>(w) * y] = z + 1;
+          break;
+        }
+  top_levels_.push_back(level);
+  top_width_.push_back(w);
+  while (w > 1 || hgt > 1) {
+    const int w2 = (w + 1) / 2, h2 = (hgt + 1) / 2;
+    std::vector<std::int32_t> up(static_cast<std::size_t>(w2) * h2, 0);
+    const auto& down = top_levels_.back();
+    for (int y = 0; y < hgt; ++y)
+      for (int x = 0; x < w; ++x) {
+        auto& v = up[x / 2 + static_cast<std::size_t>(w2) * (y / 2)];
+        v = std::max(v, down[x + static_cast<std::size_t>(w) * y]);
+      }
+    top_levels_.push_back(std::move(up));
+    top_width_.push_back(w2);
+    w = w2;
+    hgt = h2;
+  }
 }
 
 RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir,
@@ -119,6 +149,7 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
   constexpr int B = VoxelGrid::kBlockSize;
   const double h = grid_.cell_size();
   const double hb = h * B;
+  const double inv_h = 1.0 / h, inv_hb = 1.0 / hb;
   const Eigen::Vector3d o = origin_world - grid_.origin();  // grid-relative
   const Eigen::Vector3d extent = grid_.upper() - grid_.origin();
   const int* cells = grid_.cells_per_axis();
@@ -168,7 +199,7 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
   auto start_blocks_at = [&](double t) {
     const Eigen::Vector3d p = o + t * dir;
     for (int a = 0; a < 3; ++a) {
-      block[a] = std::clamp(static_cast<int>(std::floor(p[a] / hb)), 0, nb[a] - 1);
+      block[a] = std::clamp(static_cast<int>(std::floor(p[a] * inv_hb)), 0, nb[a] - 1);
       bt_max[a] = std::max(next_face(a, block[a], hb), t);
     }
   };
@@ -186,13 +217,22 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
         continue;
       }
     }
+    if (blk < 0) {
+      const double t_next = height_field_exit(o, dir, inv, block, tb_enter);
+      if (t_next > tb_enter) {
+        tb_enter = t_next;
+        if (tb_enter >= t1) break;
+        start_blocks_at(tb_enter);
+        continue;
+      }
+    }
     const double tb_exit = std::min(bt_max[0], std::min(bt_max[1], bt_max[2]));
     if (blk >= 0) {
       int cell[3];
       double t_max[3], t_delta[3];
       const Eigen::Vector3d p = o + tb_enter * dir;
       for (int a = 0; a < 3; ++a) {
-        cell[a] = std::clamp(static_cast<int>(std::floor(p[a] / h)) - block[a] * B, 0, B - 1);
+        cell[a] = std::clamp(static_cast<int>(std::floor(p[a] * inv_h)) - block[a] * B, 0, B - 1);
         t_max[a] = std::max(next_face(a, block[a] * B + cell[a], h), tb_enter);
         t_delta[a] = step[a] == 0 ? inf : h * std::abs(inv[a]);
       }
@@ -251,6 +291,32 @@ done:
     result.surfel = best_id;
   }
   return result;
+}
+
+double SurfelCaster::height_field_exit(const Eigen::Vector3d& o, const Eigen::Vector3d& dir,
+                                       const double* inv, const int* block, double t) const {
+  // The largest tile around the block whose every column tops out at or below
+  // the block: the ray is free until it leaves the tile sideways or sinks to
+  // the tile's top.
+  int level = -1;
+  for (std::size_t L = 0; L < top_levels_.size(); ++L) {
+    const int tx = block[0] >> L, ty = block[1] >> L;
+    if (top_levels_[L][tx + static_cast<std::size_t>(top_width_[L]) * ty] > block[2]) break;
+    level = static_cast<int>(L);
+  }
+  if (level < 0) return t;
+  const double hb = grid_.cell_size() * VoxelGrid::kBlockSize;
+  const double tile = hb * static_cast<double>(1 << level);
+  const int tile_xy[2] = {block[0] >> level, block[1] >> level};
+  double t_exit = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 2; ++a) {
+    if (std::abs(dir[a]) < 1e-12) continue;
+    const double face = (tile_xy[a] + (dir[a] > 0 ? 1 : 0)) * tile;
+    t_exit = std::min(t_exit, (face - o[a]) * inv[a]);
+  }
+  const int top = top_levels_[level][tile_xy[0] + static_cast<std::size_t>(top_width_[level]) * tile_xy[1]];
+  if (dir[2] < -1e-12) t_exit = std::min(t_exit, (top * hb - o[2]) * inv[2]);
+  return t_exit;
 }
 
 std::size_t SurfelCaster::memory_bytes() const {

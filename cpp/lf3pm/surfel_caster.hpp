@@ -9,7 +9,11 @@
 // blocks; each occupied cell keeps a slab bounding its discs so that rays
 // grazing flat ground reject most cells without testing a disc, and each empty
 // block knows its Chebyshev distance to the nearest occupied block, so a ray in
-// open space jumps that far at once instead of stepping block by block.
+// open space jumps that far at once instead of stepping block by block. Rays that
+// skim terrain (a ground robot's near-horizontal beams) are close to the ground
+// all along, so that distance stays small; for them a max-mipmap of the column
+// tops (height-field ray marching) lets a ray above every column of a tile
+// cross the whole tile in one step.
 #pragma once
 
 #include <Eigen/Core>
@@ -55,12 +59,22 @@ class SurfelCaster {
     float h;
   };
 
+  void build_top_levels();
+  /// Where a ray at parameter t in empty block `block` leaves the largest tile
+  /// of columns it overflies (t itself when it overflies none).
+  double height_field_exit(const Eigen::Vector3d& o, const Eigen::Vector3d& dir, const double* inv,
+                           const int* block, double t) const;
+
   VoxelGrid grid_;
   std::vector<PackedDisc> discs_;  // grid_ item order
   std::vector<CellSlab> slabs_;    // per occupied cell
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
+  // top_levels_[L][tx + ty * width_L]: highest occupied z-block + 1 over the
+  // 2^L x 2^L block columns of tile (tx, ty); level 0 is one column.
+  std::vector<std::vector<std::int32_t>> top_levels_;
+  std::vector<int> top_width_;
 };
 
 }  // namespace lf3pm

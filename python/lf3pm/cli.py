@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional, Tuple
@@ -15,6 +13,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -33,22 +32,6 @@ def user_errors():
         raise typer.Exit(2) from None
 
 
-def write_atomically(path: Path, write) -> None:
-    """Calls write(tmp_path) on a temporary file beside ``path``, then renames it."""
-    path = Path(path)
-    if not path.parent.exists():
-        raise Lf3pmError(f"output folder {path.parent} does not exist")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 @app.command()
 def evaluate(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
@@ -59,7 +42,7 @@ def evaluate(
     dof: int = typer.Option(6, help="6 for SE(3), 3 for (x, y, yaw)."),
     w1: float = typer.Option(0.5, help="Metric weight w1 (w2 = 1 - w1)."),
     scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (FAST-LIO filter_size_surf; 0 = off)."),
-    association: str = typer.Option("surfel", help="'surfel' (plane of the hit map point) or 'knn' (FAST-LIO k-NN)."),
+    association: str = typer.Option("knn", help="'knn' (FAST-LIO k-NN plane at each hit) or 'surfel' (the hit map point's precomputed plane; faster)."),
     map_voxel: Optional[float] = typer.Option(None, help="Voxel-downsample the map first (m)."),
     threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
@@ -68,7 +51,7 @@ def evaluate(
 ):
     """Simulate the scan at one pose and print the LF-3PM metric and baselines."""
     with user_errors():
-        from lf3pm.evaluate import evaluate as run_evaluate
+        from lf3pm.evaluation import evaluate as run_evaluate
         from lf3pm.map import load_map
 
         world = load_map(map_path, voxel=map_voxel, threads=threads)
@@ -77,10 +60,10 @@ def evaluate(
                               observations=save_observations is not None)
         if save_observations is not None:
             obs = result.observations
-            write_atomically(save_observations, lambda tmp: np.savez(
-                tmp, A=obs["A"], b=obs["b"], points=obs["points"],
-                sensor_points=obs["sensor_points"], row_hit=obs["row_hit"],
-                pose=np.asarray(result.pose)))
+            with atomic_write(save_observations) as fp:
+                np.savez(fp, A=obs["A"], b=obs["b"], points=obs["points"],
+                         sensor_points=obs["sensor_points"], row_hit=obs["row_hit"],
+                         pose=np.asarray(result.pose))
         out = result.to_dict()
         out["map"] = world.describe()
         if as_json:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,7 @@ class Map:
             "source": self.source,
             "sha256": self.sha256,
             "points": self.size,
+            "duplicates_removed": self.index.duplicates_removed,
             "cell_size": self.index.cell_size,
             "median_spacing": self.index.median_spacing,
             "bounds": [lower.tolist(), upper.tolist()],
@@ -89,4 +91,7 @@ def load_map(source, *, voxel: float | None = None, cell_size: float = 0.0, knn:
                                max_neighbor_distance=max_neighbor_distance, threads=threads)
     except ValueError as err:
         raise MapError(f"{name}: {err}") from None
+    if index.duplicates_removed:
+        warnings.warn(f"{name}: {index.duplicates_removed} duplicate points dropped", UserWarning,
+                      stacklevel=2)
     return Map(index=index, source=name, sha256=digest)

@@ -9,7 +9,7 @@ from importlib import import_module
 import numpy as np
 
 from lf3pm.errors import MapError
-from lf3pm.io._atomic import atomic_write
+from lf3pm.atomic import atomic_write
 from lf3pm.io.voxel import check_voxel, voxel_downsample
 
 # suffix -> (module, reader, writer). Modules load on first use: pypcd4, plyfile
@@ -97,7 +97,7 @@ def write_points(path, points, encoding: str | None = None) -> None:
         raise MapError(f"{name}: no points to write")
     if not np.isfinite(points).all():
         raise MapError(f"{name}: points to write must all be finite")
-    with atomic_write(name) as fp:
+    with atomic_write(name, MapError) as fp:
         getattr(module, writer)(fp, points, **options)
 
 

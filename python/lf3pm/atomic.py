@@ -6,17 +6,17 @@ import os
 import secrets
 from contextlib import contextmanager, suppress
 
-from lf3pm.errors import MapError
+from lf3pm.errors import Lf3pmError
 
 
 @contextmanager
-def atomic_write(path: str):
+def atomic_write(path, error: type[Lf3pmError] = Lf3pmError):
     """Yields a binary file whose content replaces ``path`` when the block ends without error.
 
     The data go to a temporary file in the same directory (so that ``os.replace``
     is a rename within one file system), flushed to disk before the rename. On
     any error the temporary file is removed and ``path`` is left untouched;
-    OSErrors become a one-line MapError.
+    OSErrors become a one-line ``error`` (an Lf3pmError subclass).
     """
     directory, base = os.path.split(os.path.abspath(path))
     temporary = os.path.join(directory, f".{base}.{secrets.token_hex(4)}.tmp")
@@ -29,7 +29,7 @@ def atomic_write(path: str):
         os.replace(temporary, path)
     except OSError as err:
         _remove(temporary)
-        raise MapError(f"{path}: cannot write the file ({err.strerror or err})") from err
+        raise error(f"{path}: cannot write the file ({err.strerror or err})") from err
     except BaseException:
         _remove(temporary)
         raise

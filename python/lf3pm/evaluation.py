@@ -63,7 +63,7 @@ def _json_number(value):
 
 def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int = 0,
              noise: float | None = None, dof: int = 6, w1: float = 0.5, w2: float = 0.5,
-             scan_voxel: float = 0.0, association: str = "surfel", threads: int = 0,
+             scan_voxel: float = 0.0, association: str = "knn", threads: int = 0,
              observations: bool = False) -> Evaluation:
     """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric.
 
@@ -71,8 +71,9 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     matrix. noise: Gaussian range noise sigma in metres (default: the sensor's),
     drawn from ``seed``. dof: 6 (SE(3)) or 3 (x, y, yaw). scan_voxel: keep the
     first hit per voxel of this edge, like FAST-LIO's scan downsampling (0 =
-    off). association: "surfel" reuses the precomputed plane of the map point a
-    ray hit; "knn" runs FAST-LIO's k-NN plane fit at every hit. With
+    off). association: "knn" (default) is FAST-LIO's: the k nearest map points of
+    every hit and their plane; "surfel" reuses the precomputed plane of the map
+    point the ray hit (faster, but its residuals are smaller: see docs/metric.md). With
     observations=True the result carries A (m x dof), b (m) and the hit points.
     """
     if not isinstance(map, Map):
