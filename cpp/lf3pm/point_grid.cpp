@@ -76,9 +76,10 @@ int PointGrid::nearest(const Eigen::Vector3d& q, int k, double max_distance, std
   const Eigen::Vector3d f = (q - grid_.origin()) / h;
   double margin = std::numeric_limits<double>::infinity();
   const int cxyz[3] = {c.x, c.y, c.z};
+  double frac[3];  // position of q inside its cell, in cells
   for (int a = 0; a < 3; ++a) {
-    const double frac = f[a] - cxyz[a];
-    margin = std::min(margin, std::min(frac, 1.0 - frac) * h);
+    frac[a] = f[a] - cxyz[a];
+    margin = std::min(margin, std::min(frac[a], 1.0 - frac[a]) * h);
   }
   margin = std::max(margin, 0.0);
   KBest best{k, 0, sq_dist, idx};
@@ -89,7 +90,12 @@ int PointGrid::nearest(const Eigen::Vector3d& q, int k, double max_distance, std
         const bool face = (std::abs(dz) == L || std::abs(dy) == L);
         for (int dx = -L; dx <= L; dx += (face ? 1 : 2 * L)) {
           const CellCoord n{c.x + dx, c.y + dy, c.z + dz};
-          if (grid_.contains(n)) {
+          // Skip a cell whose nearest point to q is farther than the current k-th.
+          const double gx = std::max({0.0, dx - frac[0], frac[0] - 1 - dx}) * h;
+          const double gy = std::max({0.0, dy - frac[1], frac[1] - 1 - dy}) * h;
+          const double gz = std::max({0.0, dz - frac[2], frac[2] - 1 - dz}) * h;
+          const double gap2 = gx * gx + gy * gy + gz * gz;
+          if (gap2 <= max_sq && gap2 < best.worst() && grid_.contains(n)) {
             const std::int64_t slot = grid_.cell_slot(n);
             if (slot >= 0) {
               for (std::uint32_t i = grid_.items_begin(slot), e = grid_.items_end(slot); i < e; ++i) {

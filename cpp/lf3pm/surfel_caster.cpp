@@ -142,6 +142,16 @@ void SurfelCaster::build_top_levels() {
   }
 }
 
+namespace {
+// Axis of the smallest of three values, without branches: the DDA's next axis
+// is data-dependent and mispredicted branches cost more than the walk itself.
+inline int min_axis(const double* t) {
+  static constexpr int kAxis[8] = {2, 1, 2, 1, 2, 2, 0, 0};  // index: x<y, x<z, y<z bits
+  const int code = (int(t[0] < t[1]) << 2) | (int(t[0] < t[2]) << 1) | int(t[1] < t[2]);
+  return kAxis[code];
+}
+}  // namespace
+
 RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir,
                           double max_range) const {
   RayHit result;
@@ -266,22 +276,18 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
           }
         }
         if (best <= t_exit || t_exit >= t1) goto done;
-        int a = 0;
-        if (t_max[1] < t_max[a]) a = 1;
-        if (t_max[2] < t_max[a]) a = 2;
+        const int a = min_axis(t_max);
         if (t_max[a] >= tb_exit) break;  // leaving the block
         cell[a] += step[a];
-        if (cell[a] < 0 || cell[a] >= B) break;
+        if (static_cast<unsigned>(cell[a]) >= static_cast<unsigned>(B)) break;
         t_enter = t_max[a];
         t_max[a] += t_delta[a];
       }
     }
     if (best <= tb_exit || tb_exit >= t1) break;
-    int a = 0;
-    if (bt_max[1] < bt_max[a]) a = 1;
-    if (bt_max[2] < bt_max[a]) a = 2;
+    const int a = min_axis(bt_max);
     block[a] += step[a];
-    if (block[a] < 0 || block[a] >= nb[a]) break;
+    if (static_cast<unsigned>(block[a]) >= static_cast<unsigned>(nb[a])) break;
     tb_enter = bt_max[a];
     bt_max[a] += bt_delta[a];
   }
