@@ -15,6 +15,7 @@ from rich.table import Table
 
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
+from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
@@ -44,6 +45,10 @@ def evaluate(
     scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (FAST-LIO filter_size_surf; 0 = off)."),
     association: str = typer.Option("knn", help="'knn' (FAST-LIO k-NN plane at each hit) or 'surfel' (the hit map point's precomputed plane; faster)."),
     map_voxel: Optional[float] = typer.Option(None, help="Voxel-downsample the map first (m)."),
+    knn: int = typer.Option(5, help="Neighbours per association plane (FAST-LIO NUM_MATCH_POINTS)."),
+    plane_threshold: float = typer.Option(0.1, help="Plane validity: every neighbour within this of the plane (m)."),
+    max_neighbor_distance: float = typer.Option(FASTLIO_MAX_NEIGHBOR_DISTANCE,
+                                                help="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt(5))."),
     threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     save_observations: Optional[Path] = typer.Option(None, metavar="OBS.npz",
@@ -54,7 +59,8 @@ def evaluate(
         from lf3pm.evaluation import evaluate as run_evaluate
         from lf3pm.map import load_map
 
-        world = load_map(map_path, voxel=map_voxel, threads=threads)
+        world = load_map(map_path, voxel=map_voxel, knn=knn, plane_threshold=plane_threshold,
+                         max_neighbor_distance=max_neighbor_distance, threads=threads)
         result = run_evaluate(world, pose, sensor, seed=seed, noise=noise, dof=dof, w1=w1, w2=1.0 - w1,
                               scan_voxel=scan_voxel, association=association, threads=threads,
                               observations=save_observations is not None)

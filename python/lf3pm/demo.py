@@ -24,7 +24,7 @@ REPO = Path(__file__).resolve().parents[2]
 #: sensor frame, so the scan origin (0, 0, 0) is a known free pose.
 DEMO_CASES = [
     ("indoor_pcl_room_scan1.pcd", "vlp16",
-     [(0.0, 0.0, 0.0, 0.0), (3.0, 1.0, 0.0, 0.0), (-5.0, 2.0, 0.0, 0.0), (9.0, -1.5, 0.0, 0.0)]),
+     [(0.0, 0.0, 0.0, 0.0), (2.0, 1.0, 0.0, 0.0), (-1.5, 1.5, 0.0, 1.57), (4.0, 0.5, 0.0, 3.14)]),
     ("outdoor_urban64_2021-10-26-16-21-29-468.pcd", "os1-64",
      [(0.0, 0.0, 0.0, 0.0), (8.0, 0.0, 0.0, 0.0), (-10.0, 0.5, 0.0, 0.0)]),
 ]
@@ -45,16 +45,21 @@ def plot_scan(path: Path, world, result, title: str) -> None:
     step = max(1, len(pts) // 200_000)
     hits = result.observations["points"]
     fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
-    ax.scatter(pts[::step, 0], pts[::step, 1], s=0.2, c="0.6", linewidths=0, label="map")
-    ax.scatter(hits[:, 0], hits[:, 1], s=0.6, c=hits[:, 2], cmap="viridis", linewidths=0,
-               label="simulated hits (colour: z)")
+    from matplotlib.lines import Line2D
+
+    ax.scatter(pts[::step, 0], pts[::step, 1], s=0.2, c="0.6", linewidths=0)
+    sc = ax.scatter(hits[:, 0], hits[:, 1], s=0.6, c=hits[:, 2], cmap="viridis", linewidths=0)
+    fig.colorbar(sc, ax=ax, label="hit z (m)", shrink=0.8)
     pose = np.asarray(result.pose)
-    ax.plot(pose[0, 3], pose[1, 3], "r*", ms=14, label="sensor")
+    ax.plot(pose[0, 3], pose[1, 3], "r*", ms=14)
+    handles = [Line2D([], [], ls="", marker="o", ms=4, color="0.6", label="map"),
+               Line2D([], [], ls="", marker="o", ms=4, color="tab:green", label="simulated hits"),
+               Line2D([], [], ls="", marker="*", ms=10, color="r", label="sensor")]
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(title, fontsize=10)
-    ax.legend(loc="upper right", markerscale=8, fontsize=8)
+    ax.legend(handles=handles, loc="upper right", fontsize=8)
     fig.tight_layout()
     tmp = path.with_name(f".{path.name}.tmp.png")
     fig.savefig(tmp)

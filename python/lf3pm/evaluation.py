@@ -106,7 +106,8 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     if observations:
         obs = {key: raw.pop(key) for key in ("A", "b", "points", "sensor_points", "row_hit")}
     params = {"seed": int(seed), "noise": sigma, "dof": dof, "w1": w1, "w2": w2,
-              "scan_voxel": scan_voxel, "association": association, "map_sha256": map.sha256}
+              "scan_voxel": scan_voxel, "association": association, "map_sha256": map.sha256,
+              **map.association_params}
     return Evaluation(**{k: raw[k] for k in METRIC_FIELDS}, m=raw["m"], n=raw["n"],
                       degenerate=raw["degenerate"], rays=raw["rays"], hits=raw["hits"],
                       pose=matrix.tolist(), sensor=sensor.name, params=params, observations=obs)

@@ -32,6 +32,7 @@ class Map:
     index: _core.MapIndex
     source: str
     sha256: str
+    association_params: dict
 
     @property
     def points(self) -> np.ndarray:
@@ -94,4 +95,6 @@ def load_map(source, *, voxel: float | None = None, cell_size: float = 0.0, knn:
     if index.duplicates_removed:
         warnings.warn(f"{name}: {index.duplicates_removed} duplicate points dropped", UserWarning,
                       stacklevel=2)
-    return Map(index=index, source=name, sha256=digest)
+    return Map(index=index, source=name, sha256=digest,
+               association_params={"knn": knn, "plane_threshold": plane_threshold,
+                                   "max_neighbor_distance": max_neighbor_distance})
