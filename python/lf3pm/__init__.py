@@ -15,8 +15,8 @@ __version__ = "0.1.0"
 _LAZY = {
     "Map": "lf3pm.map",
     "load_map": "lf3pm.map",
-    "evaluate": "lf3pm.evaluation",
-    "Evaluation": "lf3pm.evaluation",
+    "evaluate": "lf3pm.metric",
+    "Evaluation": "lf3pm.metric",
     "get_sensor": "lf3pm.sensors",
     "list_sensors": "lf3pm.sensors",
     "Sensor": "lf3pm.sensors",

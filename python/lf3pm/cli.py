@@ -56,7 +56,7 @@ def evaluate(
 ):
     """Simulate the scan at one pose and print the LF-3PM metric and baselines."""
     with user_errors():
-        from lf3pm.evaluation import evaluate as run_evaluate
+        from lf3pm.metric import evaluate as run_evaluate
         from lf3pm.map import load_map
 
         world = load_map(map_path, voxel=map_voxel, knn=knn, plane_threshold=plane_threshold,

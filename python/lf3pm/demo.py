@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lf3pm.evaluation import evaluate
+from lf3pm.metric import evaluate
 from lf3pm.map import load_map
 from lf3pm.sensors import get_sensor
 
