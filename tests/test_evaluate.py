@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import lf3pm
+from lf3pm import _core
 from lf3pm.errors import Lf3pmError, MapError, PoseError, SensorError
 from lf3pm.io import write_points
 from analytic_scenes import box_room, grid_plane
@@ -18,7 +19,7 @@ from reference_metric import reference_metric
 def metric_of_rows(A, b):
     """The metric of explicit rows: NumPy Gram, then the core's Gram path."""
     M = np.hstack([A, b[:, None]])
-    return lf3pm._core.metric_from_gram(M.T @ M, len(b))
+    return _core.metric_from_gram(M.T @ M, len(b))
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 REQUIRED = ("sigma1", "xi", "q_min", "q_n", "q_max", "m")

@@ -117,6 +117,44 @@ def info(map_path: Path = typer.Argument(..., metavar="MAP"),
         console.print_json(json.dumps(load_map(map_path, voxel=map_voxel).describe()))
 
 
+@app.command()
+def scene(
+    name: Optional[str] = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="MAP.pcd",
+                                          help="Map file to write (format by suffix; .pcd is binary)."),
+    seed: int = typer.Option(0, help="Seed of the scene's randomness."),
+    list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
+):
+    """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
+    with user_errors():
+        from lf3pm.scenes import build_scene, describe_scenes, scene_defaults, scene_names
+
+        if list_scenes:
+            table = Table(title="Scenes (`lf3pm scene NAME -o MAP.pcd`; see docs/scenes.md)")
+            table.add_column("name")
+            table.add_column("description")
+            for scene_name, description in describe_scenes():
+                table.add_row(scene_name, description)
+            console.print(table)
+            return
+        if name is None:
+            raise Lf3pmError(f"missing scene NAME; one of: {', '.join(scene_names())} (or --list)")
+        scene_defaults(name)  # an unknown name fails here, before anything else
+        if output is None:
+            raise Lf3pmError("missing -o/--output MAP.pcd: the file to write the scene to")
+        from lf3pm.io import SUPPORTED_SUFFIXES, write_points
+
+        if output.suffix.lower() not in SUPPORTED_SUFFIXES:
+            raise Lf3pmError(f"{output}: unknown suffix {output.suffix or '(none)'}; "
+                             f"supported: {' '.join(SUPPORTED_SUFFIXES)}")
+        built = build_scene(name, seed=seed)
+        write_points(output, built.points)
+        x, y, z, yaw = built.reference_pose
+        console.print(f"{built.name}: {built.size:,} points (seed {seed}) -> {output}", highlight=False)
+        console.print(f"reference pose x y z yaw: {x:g} {y:g} {z:g} {yaw:g}  "
+                      f"(free radius {built.free_radius:g} m)", highlight=False)
+
+
 def main() -> None:
     """Console-script entry point."""
     app()
