@@ -14,11 +14,12 @@ import math
 import os
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.errors import MapError
+from lf3pm.errors import MapError, PoseError
 from lf3pm.io import load_points, voxel_downsample
 
 #: FAST-LIO's neighbour gate: the 5th neighbour within sqrt(5) m (5 m^2).
@@ -42,11 +43,25 @@ class Map:
     def size(self) -> int:
         return self.index.size
 
-    @property
+    @cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Axis-aligned bounding box (lower, upper) of the points."""
         pts = self.index.points
         return pts.min(axis=0), pts.max(axis=0)
+
+    def check_pose(self, matrix: np.ndarray, clearance: float = 0.1) -> None:
+        """Raises PoseError when the sensor at ``matrix`` (4 x 4) lies outside the
+        map's x-y extent or has a map point closer than ``clearance`` metres."""
+        lower, upper = self.bounds
+        xy = matrix[:2, 3]
+        if np.any(xy < lower[:2]) or np.any(xy > upper[:2]):
+            raise PoseError(f"pose x, y = {xy.tolist()} lies outside the map's extent "
+                            f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]")
+        if clearance > 0:
+            _, dist = self.index.nearest(np.ascontiguousarray(matrix[None, :3, 3]), 1, clearance)
+            if np.isfinite(dist[0, 0]):
+                raise PoseError(f"pose {matrix[:3, 3].tolist()} lies inside an obstacle: a map point "
+                                f"is {dist[0, 0]:.3f} m from the sensor (clearance {clearance} m)")
 
     def describe(self) -> dict:
         lower, upper = self.bounds

@@ -6,10 +6,9 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
-import numpy as np
 
 from lf3pm import _core
-from lf3pm.errors import Lf3pmError, PoseError
+from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor
@@ -64,7 +63,7 @@ def _json_number(value):
 def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int = 0,
              noise: float | None = None, dof: int = 6, w1: float = 0.5, w2: float = 0.5,
              scan_voxel: float = 0.0, association: str = "knn", threads: int = 0,
-             observations: bool = False) -> Evaluation:
+             observations: bool = False, clearance: float = 0.1) -> Evaluation:
     """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric.
 
     pose: (x, y, z, yaw), (x, y, z, qw, qx, qy, qz) or a 4 x 4 sensor-to-world
@@ -75,17 +74,15 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     every hit and their plane; "surfel" reuses the precomputed plane of the map
     point the ray hit (faster, but its residuals are smaller: see docs/metric.md). With
     observations=True the result carries A (m x dof), b (m) and the hit points.
+    A pose outside the map's x-y extent or within ``clearance`` m of a map point
+    raises PoseError.
     """
     if not isinstance(map, Map):
         map = load_map(map)
     if not isinstance(sensor, Sensor):
         sensor = get_sensor(sensor)
     matrix = pose_matrix(pose)
-    lower, upper = map.bounds
-    xy = matrix[:2, 3]
-    if np.any(xy < lower[:2]) or np.any(xy > upper[:2]):
-        raise PoseError(f"pose x, y = {xy.tolist()} lies outside the map's extent "
-                        f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]")
+    map.check_pose(matrix, clearance)
     if dof not in (3, 6):
         raise Lf3pmError(f"dof must be 3 or 6, got {dof}")
     if association not in ("surfel", "knn"):

@@ -49,3 +49,51 @@ def quaternion_to_rotation(q) -> np.ndarray:
         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
     ])
+
+
+def _hat(v) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _left_jacobian(phi) -> np.ndarray:
+    """V(phi) of SE(3): t = V rho maps the translation part of a twist."""
+    theta = np.linalg.norm(phi)
+    K = _hat(phi)
+    if theta < 1e-8:
+        return np.eye(3) + 0.5 * K + K @ K / 6.0
+    return (np.eye(3) + (1 - np.cos(theta)) / theta**2 * K
+            + (theta - np.sin(theta)) / theta**3 * K @ K)
+
+
+def se3_exp(xi) -> np.ndarray:
+    """4 x 4 transform of the twist xi = (rho, phi) (translation first, then rotation)."""
+    xi = np.asarray(xi, dtype=np.float64)
+    rho, phi = xi[:3], xi[3:]
+    theta = np.linalg.norm(phi)
+    K = _hat(phi)
+    if theta < 1e-8:
+        R = np.eye(3) + K + K @ K / 2.0
+    else:
+        R = np.eye(3) + np.sin(theta) / theta * K + (1 - np.cos(theta)) / theta**2 * K @ K
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = _left_jacobian(phi) @ rho
+    return T
+
+
+def se3_log(T) -> np.ndarray:
+    """Twist (rho, phi) of the 4 x 4 transform T: the inverse of se3_exp."""
+    R, t = T[:3, :3], T[:3, 3]
+    cos_theta = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
+    theta = np.arccos(cos_theta)
+    if theta < 1e-8:
+        phi = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    elif np.pi - theta < 1e-6:
+        # Near pi the antisymmetric part vanishes: take the axis from R + I.
+        axis = np.sqrt(np.maximum((np.diag(R) + 1.0) / 2.0, 0.0))
+        signs = np.sign(np.array([1.0, R[0, 1] + R[1, 0], R[0, 2] + R[2, 0]]))
+        phi = theta * axis * np.where(signs == 0, 1.0, signs)
+    else:
+        phi = theta / (2 * np.sin(theta)) * np.array(
+            [R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    return np.concatenate([np.linalg.solve(_left_jacobian(phi), t), phi])
