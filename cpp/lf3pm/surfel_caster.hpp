@@ -21,6 +21,7 @@
 #include <limits>
 #include <vector>
 
+#include "lf3pm/disc_set.hpp"
 #include "lf3pm/voxel_grid.hpp"
 
 namespace lf3pm {
@@ -47,33 +48,30 @@ class SurfelCaster {
   std::size_t memory_bytes() const;
 
  private:
-  struct PackedDisc {  // coordinates relative to the grid origin (float keeps it 32 bytes)
-    float c[3];
-    float n[3];
-    float r2;
-    std::uint32_t id;
-  };
   struct CellSlab {  // every disc of the cell lies within |n.x - d| <= h
     float n[3];
     float d;
     float h;
   };
 
+  struct Ray;  // a ray's per-cast constants (surfel_caster.cpp)
+
   void build_top_levels();
-  /// Where a ray at parameter t in empty block `block` leaves the largest tile
-  /// of columns it overflies (t itself when it overflies none).
-  double height_field_exit(const Eigen::Vector3d& o, const Eigen::Vector3d& dir, const double* inv,
-                           const int* block, double t) const;
+  /// Where a ray at parameter t in empty block (bx, by, bz) leaves the largest
+  /// tile of columns it overflies (t itself when it overflies none).
+  double height_field_exit(const Ray& ray, int bx, int by, int bz, double t) const;
 
   VoxelGrid grid_;
-  std::vector<PackedDisc> discs_;  // grid_ item order
+  DiscSet discs_;                  // grid_ item order, centres relative to the grid origin
   std::vector<CellSlab> slabs_;    // per occupied cell
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
-  // top_levels_[L][tx + ty * width_L]: highest occupied z-block + 1 over the
-  // 2^L x 2^L block columns of tile (tx, ty); level 0 is one column.
-  std::vector<std::vector<std::int32_t>> top_levels_;
+  // top_levels_[top_offset_[L] + tx + ty * top_width_[L]]: highest occupied
+  // z-block + 1 over the 2^L x 2^L block columns of tile (tx, ty); level 0 is
+  // one column. One array: a lookup per level, no pointer chase.
+  std::vector<std::int32_t> top_levels_;
+  std::vector<std::size_t> top_offset_;
   std::vector<int> top_width_;
 };
 
