@@ -131,8 +131,9 @@ void SurfelCaster::build_top_levels() {
   for (int y = 0; y < hgt; ++y)
     for (int x = 0; x < w; ++x)
       for (int z = nb[2] - 1; z >= 0; --z)
-        if (grid_.block_at(x, y, z) >= 0) {
-          level[x + static_cast<std::size_t>(w) * y] = z + 1;
+        if (const std::int32_t b = grid_.block_at(x, y, z); b >= 0) {
+          const int top_layer = (63 - __builtin_clzll(grid_.block_mask(b))) >> (2 * VoxelGrid::kBlockBits);
+          level[x + static_cast<std::size_t>(w) * y] = z * VoxelGrid::kBlockSize + top_layer + 1;
           break;
         }
   top_levels_.clear();
@@ -264,22 +265,24 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
   Dda bw = blocks_at(t0);
   double tb_enter = t0;
   for (;;) {
-    const std::int32_t blk = grid_.block_at(bw.x, bw.y, bw.z);
-    if (blk < 0) {
-      double t_next = tb_enter;
-      if (!block_distance_.empty()) {
-        const int dist = block_distance_[bw.x + static_cast<std::size_t>(nbx) *
-                                                    (bw.y + static_cast<std::size_t>(nby) * bw.z)];
-        if (dist >= 2) t_next = tb_enter + (dist - 1) * jump_per_block;
-      }
-      if (t_next == tb_enter) t_next = height_field_exit(ray, bw.x, bw.y, bw.z, tb_enter);
-      if (t_next > tb_enter) {
-        tb_enter = t_next;
-        if (tb_enter >= t1) break;
-        bw = blocks_at(tb_enter);
-        continue;
-      }
+    // Above every column of a tile the ray crosses the tile at once; failing
+    // that, in an empty block it jumps by the block's Chebyshev distance. The
+    // dense distance (0 when occupied) is read before the sparse block lookup,
+    // whose two dependent loads then serve occupied blocks only.
+    const int zc = static_cast<int>(std::floor((ray.oz + tb_enter * ray.dz) * inv_h));
+    double t_next = height_field_exit(ray, bw.x, bw.y, zc, tb_enter);
+    int dist = 0;
+    if (t_next == tb_enter && !block_distance_.empty()) {
+      dist = block_distance_[bw.x + static_cast<std::size_t>(nbx) * (bw.y + static_cast<std::size_t>(nby) * bw.z)];
+      if (dist >= 2) t_next = tb_enter + (dist - 1) * jump_per_block;
     }
+    if (t_next > tb_enter) {
+      tb_enter = t_next;
+      if (tb_enter >= t1) break;
+      bw = blocks_at(tb_enter);
+      continue;
+    }
+    const std::int32_t blk = dist == 0 ? grid_.block_at(bw.x, bw.y, bw.z) : -1;
     const double tb_exit = std::min(bw.tx, std::min(bw.ty, bw.tz));
     if (blk >= 0) {
       const double px = ray.ox + tb_enter * ray.dx, py = ray.oy + tb_enter * ray.dy,
@@ -325,25 +328,25 @@ done:
   return result;
 }
 
-double SurfelCaster::height_field_exit(const Ray& ray, int bx, int by, int bz, double t) const {
-  // The largest tile around the block whose every column tops out at or below
-  // the block: the ray is free until it leaves the tile sideways or sinks to
-  // the tile's top.
+double SurfelCaster::height_field_exit(const Ray& ray, int bx, int by, int zc, double t) const {
+  // The largest tile around the column whose every column tops out at or below
+  // the ray's cell layer: the ray is free until it leaves the tile sideways or
+  // sinks to the tile's top.
   int level = -1;
   for (std::size_t L = 0; L < top_offset_.size(); ++L) {
     const int tx = bx >> L, ty = by >> L;
-    if (top_levels_[top_offset_[L] + tx + static_cast<std::size_t>(top_width_[L]) * ty] > bz) break;
+    if (top_levels_[top_offset_[L] + tx + static_cast<std::size_t>(top_width_[L]) * ty] > zc) break;
     level = static_cast<int>(L);
   }
   if (level < 0) return t;
-  const double hb = grid_.cell_size() * VoxelGrid::kBlockSize;
-  const double tile = hb * static_cast<double>(1 << level);
+  const double h = grid_.cell_size();
+  const double tile = h * VoxelGrid::kBlockSize * static_cast<double>(1 << level);
   const int tx = bx >> level, ty = by >> level;
   double t_exit = std::numeric_limits<double>::infinity();
   if (ray.sx != 0) t_exit = std::min(t_exit, ((tx + (ray.sx > 0 ? 1 : 0)) * tile - ray.ox) * ray.ix);
   if (ray.sy != 0) t_exit = std::min(t_exit, ((ty + (ray.sy > 0 ? 1 : 0)) * tile - ray.oy) * ray.iy);
   const int top = top_levels_[top_offset_[level] + tx + static_cast<std::size_t>(top_width_[level]) * ty];
-  if (ray.dz < -1e-12) t_exit = std::min(t_exit, (top * hb - ray.oz) * ray.iz);
+  if (ray.dz < -1e-12) t_exit = std::min(t_exit, (top * h - ray.oz) * ray.iz);
   return t_exit;
 }
 

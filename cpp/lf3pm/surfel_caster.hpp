@@ -57,9 +57,10 @@ class SurfelCaster {
   struct Ray;  // a ray's per-cast constants (surfel_caster.cpp)
 
   void build_top_levels();
-  /// Where a ray at parameter t in empty block (bx, by, bz) leaves the largest
-  /// tile of columns it overflies (t itself when it overflies none).
-  double height_field_exit(const Ray& ray, int bx, int by, int bz, double t) const;
+  /// Where a ray at parameter t, in block column (bx, by) and cell layer zc,
+  /// leaves the largest tile of columns it overflies (t itself when it
+  /// overflies none).
+  double height_field_exit(const Ray& ray, int bx, int by, int zc, double t) const;
 
   VoxelGrid grid_;
   DiscSet discs_;                  // grid_ item order, centres relative to the grid origin
@@ -68,8 +69,10 @@ class SurfelCaster {
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
   // top_levels_[top_offset_[L] + tx + ty * top_width_[L]]: highest occupied
-  // z-block + 1 over the 2^L x 2^L block columns of tile (tx, ty); level 0 is
-  // one column. One array: a lookup per level, no pointer chase.
+  // cell layer + 1 over the 2^L x 2^L block columns of tile (tx, ty); level 0
+  // is one column. Cell (not block) precision lets a ray skimming the ground
+  // skip the empty upper cells of the ground's blocks, which it would otherwise
+  // walk for metres. One array: a lookup per level, no pointer chase.
   std::vector<std::int32_t> top_levels_;
   std::vector<std::size_t> top_offset_;
   std::vector<int> top_width_;
