@@ -79,30 +79,43 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   grid_.build(pairs);
   const auto& items = grid_.items();
   const Eigen::Vector3d origin = grid_.origin();
-  discs_.resize(items.size());
-  for (std::size_t k = 0; k < items.size(); ++k) {
-    const std::uint32_t i = items[k];
-    const Eigen::Vector3d c = centres[i] - origin;
-    discs_.cx[k] = float(c.x());
-    discs_.cy[k] = float(c.y());
-    discs_.cz[k] = float(c.z());
-    discs_.nx[k] = float(normals[i].x());
-    discs_.ny[k] = float(normals[i].y());
-    discs_.nz[k] = float(normals[i].z());
-    discs_.r2[k] = radii[i] * radii[i];
-    discs_.id[k] = i;
-  }
-  slabs_.resize(grid_.occupied_cells());
+  cells_.resize(grid_.occupied_cells());
+  std::size_t total_groups = 0;
+  for (std::size_t s = 0; s < cells_.size(); ++s)
+    total_groups += (grid_.items_end(s) - grid_.items_begin(s) + DiscGroup::kLanes - 1) / DiscGroup::kLanes;
+  groups_.reserve(total_groups);
   const float no_slab = std::numeric_limits<float>::infinity();
-  for (std::size_t s = 0; s < slabs_.size(); ++s) {
+  for (std::size_t s = 0; s < cells_.size(); ++s) {
     const std::uint32_t b = grid_.items_begin(s), e = grid_.items_end(s);
+    Cell& cell = cells_[s];
+    cell.first_group = static_cast<std::uint32_t>(groups_.size());
+    cell.groups = (e - b + DiscGroup::kLanes - 1) / DiscGroup::kLanes;
+    groups_.resize(groups_.size() + cell.groups, DiscGroup{});  // zero normals: padding lanes never hit
+    for (std::uint32_t k = b; k < e; ++k) {
+      const std::uint32_t i = items[k];
+      DiscGroup& g = groups_[cell.first_group + (k - b) / DiscGroup::kLanes];
+      const int lane = static_cast<int>((k - b) % DiscGroup::kLanes);
+      const Eigen::Vector3d c = centres[i] - origin;
+      g.cx[lane] = float(c.x());
+      g.cy[lane] = float(c.y());
+      g.cz[lane] = float(c.z());
+      g.nx[lane] = float(normals[i].x());
+      g.ny[lane] = float(normals[i].y());
+      g.nz[lane] = float(normals[i].z());
+      g.r2[lane] = radii[i] * radii[i];
+      g.id[lane] = i;
+    }
     Eigen::Vector3d n_sum = Eigen::Vector3d::Zero();
     const Eigen::Vector3d n0 = normals[items[b]];
     for (std::uint32_t k = b; k < e; ++k) {
       const Eigen::Vector3d& n = normals[items[k]];
       n_sum += n.dot(n0) >= 0 ? n : Eigen::Vector3d(-n);
     }
-    CellSlab slab{{0, 0, 1}, 0, no_slab};
+    cell.n[0] = 0;
+    cell.n[1] = 0;
+    cell.n[2] = 1;
+    cell.d = 0;
+    cell.h = no_slab;
     if (n_sum.norm() > 0.5 * (e - b)) {  // normals roughly agree: a flat-ish cell
       const Eigen::Vector3d n = n_sum.normalized();
       double lo_s = std::numeric_limits<double>::infinity(), hi_s = -lo_s;
@@ -114,11 +127,14 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
         lo_s = std::min(lo_s, centre - reach);
         hi_s = std::max(hi_s, centre + reach);
       }
-      slab = {{float(n.x()), float(n.y()), float(n.z())}, float(0.5 * (lo_s + hi_s)),
-              float(0.5 * (hi_s - lo_s) + 1e-4)};
+      cell.n[0] = float(n.x());
+      cell.n[1] = float(n.y());
+      cell.n[2] = float(n.z());
+      cell.d = float(0.5 * (lo_s + hi_s));
+      cell.h = float(0.5 * (hi_s - lo_s) + 1e-4);
     }
-    slabs_[s] = slab;
   }
+  grid_.drop_items();  // the groups hold the ids
   const int* nb = grid_.blocks_per_axis();
   if (static_cast<std::int64_t>(nb[0]) * nb[1] * nb[2] <= kMaxDistanceBlocks) block_distance_ = chebyshev_distance(grid_);
   build_top_levels();
@@ -205,7 +221,7 @@ inline double advance(Dda& w, int sx, int sy, int sz, double dtx, double dty, do
 RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir,
                           double max_range) const {
   RayHit result;
-  if (discs_.size() == 0) return result;
+  if (groups_.empty()) return result;
   constexpr int B = VoxelGrid::kBlockSize;
   const double h = grid_.cell_size();
   const double hb = h * B;
@@ -299,13 +315,13 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
         const double t_exit = std::min(std::min(cw.tx, cw.ty), std::min(cw.tz, tb_exit));
         const std::int64_t slot = grid_.slot_in_block(blk, cw.x, cw.y, cw.z);
         if (slot >= 0) {
-          const CellSlab& slab = slabs_[slot];
+          const Cell& slab = cells_[slot];
           const float base = slab.n[0] * of[0] + slab.n[1] * of[1] + slab.n[2] * of[2] - slab.d;
           const float rate = slab.n[0] * df[0] + slab.n[1] * df[1] + slab.n[2] * df[2];
           const float s0 = base + rate * float(t_enter), s1 = base + rate * float(t_exit);
           // Infinite h (cells with disagreeing normals) never rejects.
           if (!((s0 > slab.h && s1 > slab.h) || (s0 < -slab.h && s1 < -slab.h)))
-            discs_.nearest_hit(of, df, t_min_hit, grid_.items_begin(slot), grid_.items_end(slot), best, best_id);
+            nearest_disc_hit(&groups_[slab.first_group], slab.groups, of, df, t_min_hit, best, best_id);
         }
         if (best <= t_exit || t_exit >= t1) goto done;
         if (t_exit >= tb_exit) break;  // leaving the block
@@ -351,7 +367,7 @@ double SurfelCaster::height_field_exit(const Ray& ray, int bx, int by, int zc, d
 }
 
 std::size_t SurfelCaster::memory_bytes() const {
-  return grid_.memory_bytes() + discs_.memory_bytes() + slabs_.size() * sizeof(CellSlab) +
+  return grid_.memory_bytes() + groups_.size() * sizeof(DiscGroup) + cells_.size() * sizeof(Cell) +
          block_distance_.size() + top_levels_.size() * sizeof(std::int32_t);
 }
 

@@ -48,10 +48,11 @@ class SurfelCaster {
   std::size_t memory_bytes() const;
 
  private:
-  struct CellSlab {  // every disc of the cell lies within |n.x - d| <= h
+  struct Cell {  // every disc of the cell lies within |n.x - d| <= h
     float n[3];
     float d;
     float h;
+    std::uint32_t first_group, groups;  // its discs: groups_[first_group, first_group + groups)
   };
 
   struct Ray;  // a ray's per-cast constants (surfel_caster.cpp)
@@ -63,8 +64,8 @@ class SurfelCaster {
   double height_field_exit(const Ray& ray, int bx, int by, int zc, double t) const;
 
   VoxelGrid grid_;
-  DiscSet discs_;                  // grid_ item order, centres relative to the grid origin
-  std::vector<CellSlab> slabs_;    // per occupied cell
+  std::vector<Cell> cells_;         // per occupied cell
+  std::vector<DiscGroup> groups_;   // centres relative to the grid origin
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
