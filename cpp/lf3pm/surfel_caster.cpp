@@ -65,6 +65,9 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   // margin covers the float rounding of hit points.
   std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
   pairs.reserve(centres.size() * 2);
+  // Highest disc point per block column (grid-relative, rounded up to float).
+  const int nbx = grid_.blocks_per_axis()[0], nby = grid_.blocks_per_axis()[1];
+  std::vector<float> column_top(static_cast<std::size_t>(nbx) * nby, 0.0f);
   for (std::size_t i = 0; i < centres.size(); ++i) {
     const Eigen::Vector3d& n = normals[i];
     const Eigen::Vector3d r =
@@ -75,6 +78,14 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
       for (int y = a.y; y <= b.y; ++y)
         for (int x = a.x; x <= b.x; ++x)
           pairs.emplace_back(grid_.key_of({x, y, z}), static_cast<std::uint32_t>(i));
+    const double top = centres[i].z() - grid_.origin().z() + r.z();
+    float top_f = static_cast<float>(top);
+    if (top_f < top) top_f = std::nextafter(top_f, std::numeric_limits<float>::infinity());
+    for (int y = a.y >> VoxelGrid::kBlockBits; y <= b.y >> VoxelGrid::kBlockBits; ++y)
+      for (int x = a.x >> VoxelGrid::kBlockBits; x <= b.x >> VoxelGrid::kBlockBits; ++x) {
+        float& t = column_top[x + static_cast<std::size_t>(nbx) * y];
+        t = std::max(t, top_f);
+      }
   }
   grid_.build(pairs);
   const auto& items = grid_.items();
@@ -137,21 +148,11 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   grid_.drop_items();  // the groups hold the ids
   const int* nb = grid_.blocks_per_axis();
   if (static_cast<std::int64_t>(nb[0]) * nb[1] * nb[2] <= kMaxDistanceBlocks) block_distance_ = chebyshev_distance(grid_);
-  build_top_levels();
+  build_top_levels(std::move(column_top));
 }
 
-void SurfelCaster::build_top_levels() {
-  const int* nb = grid_.blocks_per_axis();
-  int w = nb[0], hgt = nb[1];
-  std::vector<std::int32_t> level(static_cast<std::size_t>(w) * hgt, 0);
-  for (int y = 0; y < hgt; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int z = nb[2] - 1; z >= 0; --z)
-        if (const std::int32_t b = grid_.block_at(x, y, z); b >= 0) {
-          const int top_layer = (63 - __builtin_clzll(grid_.block_mask(b))) >> (2 * VoxelGrid::kBlockBits);
-          level[x + static_cast<std::size_t>(w) * y] = z * VoxelGrid::kBlockSize + top_layer + 1;
-          break;
-        }
+void SurfelCaster::build_top_levels(std::vector<float> level) {
+  int w = grid_.blocks_per_axis()[0], hgt = grid_.blocks_per_axis()[1];
   top_levels_.clear();
   top_offset_.clear();
   top_width_.clear();
@@ -161,7 +162,7 @@ void SurfelCaster::build_top_levels() {
     top_levels_.insert(top_levels_.end(), level.begin(), level.end());
     if (w == 1 && hgt == 1) break;
     const int w2 = (w + 1) / 2, h2 = (hgt + 1) / 2;
-    std::vector<std::int32_t> up(static_cast<std::size_t>(w2) * h2, 0);
+    std::vector<float> up(static_cast<std::size_t>(w2) * h2, 0.0f);
     for (int y = 0; y < hgt; ++y)
       for (int x = 0; x < w; ++x) {
         auto& v = up[x / 2 + static_cast<std::size_t>(w2) * (y / 2)];
@@ -285,8 +286,7 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
     // that, in an empty block it jumps by the block's Chebyshev distance. The
     // dense distance (0 when occupied) is read before the sparse block lookup,
     // whose two dependent loads then serve occupied blocks only.
-    const int zc = static_cast<int>(std::floor((ray.oz + tb_enter * ray.dz) * inv_h));
-    double t_next = height_field_exit(ray, bw.x, bw.y, zc, tb_enter);
+    double t_next = height_field_exit(ray, bw.x, bw.y, ray.oz + tb_enter * ray.dz, tb_enter);
     int dist = 0;
     if (t_next == tb_enter && !block_distance_.empty()) {
       dist = block_distance_[bw.x + static_cast<std::size_t>(nbx) * (bw.y + static_cast<std::size_t>(nby) * bw.z)];
@@ -344,31 +344,30 @@ done:
   return result;
 }
 
-double SurfelCaster::height_field_exit(const Ray& ray, int bx, int by, int zc, double t) const {
-  // The largest tile around the column whose every column tops out at or below
-  // the ray's cell layer: the ray is free until it leaves the tile sideways or
-  // sinks to the tile's top.
+double SurfelCaster::height_field_exit(const Ray& ray, int bx, int by, double z, double t) const {
+  // The largest tile around the column whose every disc lies below the ray's
+  // height z: the ray is free until it leaves the tile sideways or sinks to the
+  // tile's top.
   int level = -1;
   for (std::size_t L = 0; L < top_offset_.size(); ++L) {
     const int tx = bx >> L, ty = by >> L;
-    if (top_levels_[top_offset_[L] + tx + static_cast<std::size_t>(top_width_[L]) * ty] > zc) break;
+    if (top_levels_[top_offset_[L] + tx + static_cast<std::size_t>(top_width_[L]) * ty] > z) break;
     level = static_cast<int>(L);
   }
   if (level < 0) return t;
-  const double h = grid_.cell_size();
-  const double tile = h * VoxelGrid::kBlockSize * static_cast<double>(1 << level);
+  const double tile = grid_.cell_size() * VoxelGrid::kBlockSize * static_cast<double>(1 << level);
   const int tx = bx >> level, ty = by >> level;
   double t_exit = std::numeric_limits<double>::infinity();
   if (ray.sx != 0) t_exit = std::min(t_exit, ((tx + (ray.sx > 0 ? 1 : 0)) * tile - ray.ox) * ray.ix);
   if (ray.sy != 0) t_exit = std::min(t_exit, ((ty + (ray.sy > 0 ? 1 : 0)) * tile - ray.oy) * ray.iy);
-  const int top = top_levels_[top_offset_[level] + tx + static_cast<std::size_t>(top_width_[level]) * ty];
-  if (ray.dz < -1e-12) t_exit = std::min(t_exit, (top * h - ray.oz) * ray.iz);
+  const double top = top_levels_[top_offset_[level] + tx + static_cast<std::size_t>(top_width_[level]) * ty];
+  if (ray.dz < -1e-12) t_exit = std::min(t_exit, (top - ray.oz) * ray.iz);
   return t_exit;
 }
 
 std::size_t SurfelCaster::memory_bytes() const {
   return grid_.memory_bytes() + groups_.size() * sizeof(DiscGroup) + cells_.size() * sizeof(Cell) +
-         block_distance_.size() + top_levels_.size() * sizeof(std::int32_t);
+         block_distance_.size() + top_levels_.size() * sizeof(float);
 }
 
 }  // namespace lf3pm

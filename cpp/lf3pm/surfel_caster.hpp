@@ -57,11 +57,11 @@ class SurfelCaster {
 
   struct Ray;  // a ray's per-cast constants (surfel_caster.cpp)
 
-  void build_top_levels();
-  /// Where a ray at parameter t, in block column (bx, by) and cell layer zc,
-  /// leaves the largest tile of columns it overflies (t itself when it
-  /// overflies none).
-  double height_field_exit(const Ray& ray, int bx, int by, int zc, double t) const;
+  /// Max-mipmap of the per-column disc tops `level` (x fastest).
+  void build_top_levels(std::vector<float> level);
+  /// Where a ray at parameter t, at height z in block column (bx, by), leaves
+  /// the largest tile of columns it overflies (t itself when it overflies none).
+  double height_field_exit(const Ray& ray, int bx, int by, double z, double t) const;
 
   VoxelGrid grid_;
   std::vector<Cell> cells_;         // per occupied cell
@@ -69,12 +69,13 @@ class SurfelCaster {
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
-  // top_levels_[top_offset_[L] + tx + ty * top_width_[L]]: highest occupied
-  // cell layer + 1 over the 2^L x 2^L block columns of tile (tx, ty); level 0
-  // is one column. Cell (not block) precision lets a ray skimming the ground
-  // skip the empty upper cells of the ground's blocks, which it would otherwise
-  // walk for metres. One array: a lookup per level, no pointer chase.
-  std::vector<std::int32_t> top_levels_;
+  // top_levels_[top_offset_[L] + tx + ty * top_width_[L]]: the highest disc
+  // point (grid-relative z, rounded up) over the 2^L x 2^L block columns of tile
+  // (tx, ty); level 0 is one column. Disc (not block or cell) precision lets a
+  // ray skimming the ground skip everything down to the ground's discs, which
+  // it would otherwise walk cell by cell for metres. One array: a lookup per
+  // level, no pointer chase.
+  std::vector<float> top_levels_;
   std::vector<std::size_t> top_offset_;
   std::vector<int> top_width_;
 };

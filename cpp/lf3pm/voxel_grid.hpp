@@ -57,8 +57,6 @@ class VoxelGrid {
     if (bz < col.lo || bz >= col.hi) return -1;
     return block_ids_[col.offset + (bz - col.lo)];
   }
-  /// Occupancy of the cells of block `block`: bit (lx + 4 ly + 16 lz).
-  std::uint64_t block_mask(std::int32_t block) const { return blocks_[block].mask; }
   /// Compact index of cell (local lx, ly, lz in 0..3) of block `block`, or -1 when empty.
   std::int64_t slot_in_block(std::int32_t block, int lx, int ly, int lz) const {
     const Block& b = blocks_[block];
