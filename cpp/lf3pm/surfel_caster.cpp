@@ -288,9 +288,9 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
     // whose two dependent loads then serve occupied blocks only.
     double t_next = height_field_exit(ray, bw.x, bw.y, ray.oz + tb_enter * ray.dz, tb_enter);
     int dist = 0;
-    if (t_next == tb_enter && !block_distance_.empty()) {
+    if (!block_distance_.empty()) {
       dist = block_distance_[bw.x + static_cast<std::size_t>(nbx) * (bw.y + static_cast<std::size_t>(nby) * bw.z)];
-      if (dist >= 2) t_next = tb_enter + (dist - 1) * jump_per_block;
+      if (dist >= 2) t_next = std::max(t_next, tb_enter + (dist - 1) * jump_per_block);
     }
     if (t_next > tb_enter) {
       tb_enter = t_next;
