@@ -6,6 +6,11 @@
 namespace lf3pm {
 
 namespace {
+// The walk's cells are this much larger than the map's (k-NN) cells: with discs
+// tested eight at a time a cell's discs cost less than the steps that smaller
+// cells would add (town benchmark: 1.5x walked 20% faster than 1x and stored
+// 19% fewer disc copies; 2x was no faster).
+constexpr double kWalkCellScale = 1.5;
 // Dense per-block distances cost a byte per block; above this many blocks the
 // caster walks block by block instead.
 constexpr std::int64_t kMaxDistanceBlocks = std::int64_t(1) << 28;
@@ -55,7 +60,8 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
     lo = lo.cwiseMin(centres[i] - Eigen::Vector3d::Constant(radii[i]));
     hi = hi.cwiseMax(centres[i] + Eigen::Vector3d::Constant(radii[i]));
   }
-  grid_ = VoxelGrid(lo, hi, cell_size);
+  frame_origin_ = lo - Eigen::Vector3d::Constant(cell_size);
+  grid_ = VoxelGrid(lo, hi, cell_size * kWalkCellScale);
   // A disc is listed in every cell its bounding box touches: a ray then meets
   // the disc in the cell that contains the hit point, which is what lets the
   // walk stop at the first cell whose exit lies beyond the nearest hit. The box
@@ -89,7 +95,7 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   }
   grid_.build(pairs);
   const auto& items = grid_.items();
-  const Eigen::Vector3d origin = grid_.origin();
+  const Eigen::Vector3d origin = frame_origin_;
   cells_.resize(grid_.occupied_cells());
   std::size_t total_groups = 0;
   for (std::size_t s = 0; s < cells_.size(); ++s)
@@ -253,7 +259,8 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
   const Ray ray{o.x(), o.y(), o.z(), dir.x(), dir.y(), dir.z(), inv[0], inv[1], inv[2], step[0], step[1], step[2]};
   const int sx = ray.sx, sy = ray.sy, sz = ray.sz;
 
-  const float of[3] = {float(ray.ox), float(ray.oy), float(ray.oz)};
+  const Eigen::Vector3d o_frame = origin_world - frame_origin_;
+  const float of[3] = {float(o_frame.x()), float(o_frame.y()), float(o_frame.z())};
   const float df[3] = {float(ray.dx), float(ray.dy), float(ray.dz)};
   const float t_min_hit = 1e-6f;
   float best = std::numeric_limits<float>::infinity();

@@ -5,15 +5,17 @@
 // nearest disc intersection, so a hit on a sampled wall lies on the wall's plane
 // (no voxel snapping), a hit on grass carries the grass's roughness, and a
 // surface sampled at the map's density is never seen through (discs overlap).
-// The discs are found by a voxel walk (Amanatides-Woo) that skips empty 8^3
-// blocks; each occupied cell keeps a slab bounding its discs so that rays
-// grazing flat ground reject most cells without testing a disc, and each empty
-// block knows its Chebyshev distance to the nearest occupied block, so a ray in
-// open space jumps that far at once instead of stepping block by block. Rays that
-// skim terrain (a ground robot's near-horizontal beams) are close to the ground
-// all along, so that distance stays small; for them a max-mipmap of the column
-// tops (height-field ray marching) lets a ray above every column of a tile
-// cross the whole tile in one step.
+// The discs are found by a voxel walk (Amanatides-Woo) over 4^3-cell blocks and,
+// in occupied blocks, over cells; each disc is listed in the cells its own
+// bounding box touches. Each occupied cell keeps a slab bounding its discs so
+// that rays grazing flat ground reject most cells without testing a disc, and
+// its discs in contiguous groups of eight tested together (disc_set.hpp).
+// Empty space is skipped two ways, whichever goes farther: a max-mipmap of the
+// highest disc point per block column (height-field ray marching) lets a ray
+// above every disc of a tile cross the whole tile in one step, down to the
+// ground's discs for rays skimming terrain; and each empty block knows its
+// Chebyshev distance to the nearest occupied block, so a ray in open space
+// jumps that far at once.
 #pragma once
 
 #include <Eigen/Core>
@@ -36,8 +38,8 @@ struct RayHit {
 class SurfelCaster {
  public:
   SurfelCaster() = default;
-  /// Discs at `centres` with unit `normals` and `radii`, indexed by cells of
-  /// edge `cell_size`.
+  /// Discs at `centres` with unit `normals` and `radii`, for a map indexed with
+  /// cells of edge `cell_size` (the caster walks somewhat larger cells).
   SurfelCaster(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& normals,
                const std::vector<float>& radii, double cell_size);
 
@@ -63,6 +65,10 @@ class SurfelCaster {
   /// the largest tile of columns it overflies (t itself when it overflies none).
   double height_field_exit(const Ray& ray, int bx, int by, double z, double t) const;
 
+  // Discs and slabs are in float coordinates relative to this corner (the
+  // discs' lower corner less one map cell), not to the walk grid's origin, so
+  // the hits' float rounding does not depend on the walk's cell size.
+  Eigen::Vector3d frame_origin_ = Eigen::Vector3d::Zero();
   VoxelGrid grid_;
   std::vector<Cell> cells_;         // per occupied cell
   std::vector<DiscGroup> groups_;   // centres relative to the grid origin
