@@ -50,6 +50,49 @@ std::vector<std::uint8_t> chebyshev_distance(const VoxelGrid& grid) {
       for (int x = nx - 1; x >= 0; --x) relax(x, y, z, -1);
   return d;
 }
+
+// Chebyshev distance to the nearest occupied block at the same height or above:
+// all a ray that never descends can reach. Rays rising over streets then jump
+// to the buildings instead of creeping along at their distance to the ground.
+// A shortest path to such a block can always rise monotonically, so layers are
+// solved top-down: seeds from the layer above (one diagonal step up), then an
+// exact 2D chessboard transform (forward and backward 8-neighbour passes).
+std::vector<std::uint8_t> upward_chebyshev_distance(const VoxelGrid& grid) {
+  const int nx = grid.blocks_per_axis()[0], ny = grid.blocks_per_axis()[1], nz = grid.blocks_per_axis()[2];
+  std::vector<std::uint8_t> d(static_cast<std::size_t>(nx) * ny * nz, 255);
+  auto at = [&](int x, int y, int z) -> std::uint8_t& {
+    return d[x + static_cast<std::size_t>(nx) * (y + static_cast<std::size_t>(ny) * z)];
+  };
+  auto relax = [&](int x, int y, int z, int dx, int dy, int dz) {
+    const int xx = x + dx, yy = y + dy;
+    if (xx < 0 || yy < 0 || xx >= nx || yy >= ny) return;
+    at(x, y, z) = static_cast<std::uint8_t>(std::min<int>(at(x, y, z), at(xx, yy, z + dz) + 1));
+  };
+  for (int z = nz - 1; z >= 0; --z) {
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x) {
+        if (grid.block_at(x, y, z) >= 0) at(x, y, z) = 0;
+        if (z + 1 < nz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) relax(x, y, z, dx, dy, 1);
+      }
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x) {
+        relax(x, y, z, -1, -1, 0);
+        relax(x, y, z, 0, -1, 0);
+        relax(x, y, z, 1, -1, 0);
+        relax(x, y, z, -1, 0, 0);
+      }
+    for (int y = ny - 1; y >= 0; --y)
+      for (int x = nx - 1; x >= 0; --x) {
+        relax(x, y, z, 1, 1, 0);
+        relax(x, y, z, 0, 1, 0);
+        relax(x, y, z, -1, 1, 0);
+        relax(x, y, z, 1, 0, 0);
+      }
+  }
+  return d;
+}
 }  // namespace
 
 SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
@@ -153,7 +196,10 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   }
   grid_.drop_items();  // the groups hold the ids
   const int* nb = grid_.blocks_per_axis();
-  if (static_cast<std::int64_t>(nb[0]) * nb[1] * nb[2] <= kMaxDistanceBlocks) block_distance_ = chebyshev_distance(grid_);
+  if (static_cast<std::int64_t>(nb[0]) * nb[1] * nb[2] <= kMaxDistanceBlocks) {
+    block_distance_ = chebyshev_distance(grid_);
+    block_distance_up_ = upward_chebyshev_distance(grid_);
+  }
   build_top_levels(std::move(column_top));
 }
 
@@ -286,6 +332,9 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
     w.tz = next_face(w.z, ray.sz, hb, ray.oz, ray.iz, t);
     return w;
   };
+  const std::uint8_t* distance = block_distance_.empty()       ? nullptr
+                                 : ray.dz >= 0.0 ? block_distance_up_.data()
+                                                 : block_distance_.data();
   Dda bw = blocks_at(t0);
   double tb_enter = t0;
   for (;;) {
@@ -295,8 +344,8 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
     // whose two dependent loads then serve occupied blocks only.
     double t_next = height_field_exit(ray, bw.x, bw.y, ray.oz + tb_enter * ray.dz, tb_enter);
     int dist = 0;
-    if (!block_distance_.empty()) {
-      dist = block_distance_[bw.x + static_cast<std::size_t>(nbx) * (bw.y + static_cast<std::size_t>(nby) * bw.z)];
+    if (distance) {
+      dist = distance[bw.x + static_cast<std::size_t>(nbx) * (bw.y + static_cast<std::size_t>(nby) * bw.z)];
       if (dist >= 2) t_next = std::max(t_next, tb_enter + (dist - 1) * jump_per_block);
     }
     if (t_next > tb_enter) {
@@ -374,7 +423,7 @@ double SurfelCaster::height_field_exit(const Ray& ray, int bx, int by, double z,
 
 std::size_t SurfelCaster::memory_bytes() const {
   return grid_.memory_bytes() + groups_.size() * sizeof(DiscGroup) + cells_.size() * sizeof(Cell) +
-         block_distance_.size() + top_levels_.size() * sizeof(float);
+         2 * block_distance_.size() + top_levels_.size() * sizeof(float);
 }
 
 }  // namespace lf3pm

@@ -14,8 +14,9 @@
 // highest disc point per block column (height-field ray marching) lets a ray
 // above every disc of a tile cross the whole tile in one step, down to the
 // ground's discs for rays skimming terrain; and each empty block knows its
-// Chebyshev distance to the nearest occupied block, so a ray in open space
-// jumps that far at once.
+// Chebyshev distance to the nearest occupied block (for rising rays: the
+// nearest at its height or above), so a ray in open space jumps that far at
+// once.
 #pragma once
 
 #include <Eigen/Core>
@@ -75,6 +76,9 @@ class SurfelCaster {
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
+  // The same to the nearest occupied block at the same z or above, for rays
+  // that never descend.
+  std::vector<std::uint8_t> block_distance_up_;
   // top_levels_[top_offset_[L] + tx + ty * top_width_[L]]: the highest disc
   // point (grid-relative z, rounded up) over the 2^L x 2^L block columns of tile
   // (tx, ty); level 0 is one column. Disc (not block or cell) precision lets a
