@@ -228,7 +228,7 @@ void SurfelCaster::build_top_levels(std::vector<float> level) {
 
 // Everything about a ray that the walk reads but never changes. The walk keeps
 // its state in plain scalars (one per axis, no arrays indexed by a runtime
-// axis, no lambdas capturing by reference) so that the compiler holds it in
+// axis, nothing captured by reference) so that the compiler holds it in
 // registers; indexing a stored array by the step axis forced a store and a
 // reload on every step.
 struct SurfelCaster::Ray {
@@ -322,7 +322,7 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
   const int* nb = grid_.blocks_per_axis();
   const int nbx = nb[0], nby = nb[1], nbz = nb[2];
   // The walker over blocks, (re)started at parameter t.
-  const auto blocks_at = [&ray, inv_hb, hb, nbx, nby, nbz](double t) {
+  const auto blocks_at = [ray, inv_hb, hb, nbx, nby, nbz](double t) {
     Dda w;
     w.x = std::clamp(static_cast<int>(std::floor((ray.ox + t * ray.dx) * inv_hb)), 0, nbx - 1);
     w.y = std::clamp(static_cast<int>(std::floor((ray.oy + t * ray.dy) * inv_hb)), 0, nby - 1);
@@ -371,13 +371,13 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
         const double t_exit = std::min(std::min(cw.tx, cw.ty), std::min(cw.tz, tb_exit));
         const std::int64_t slot = grid_.slot_in_block(blk, cw.x, cw.y, cw.z);
         if (slot >= 0) {
-          const Cell& slab = cells_[slot];
-          const float base = slab.n[0] * of[0] + slab.n[1] * of[1] + slab.n[2] * of[2] - slab.d;
-          const float rate = slab.n[0] * df[0] + slab.n[1] * df[1] + slab.n[2] * df[2];
+          const Cell& cell = cells_[slot];
+          const float base = cell.n[0] * of[0] + cell.n[1] * of[1] + cell.n[2] * of[2] - cell.d;
+          const float rate = cell.n[0] * df[0] + cell.n[1] * df[1] + cell.n[2] * df[2];
           const float s0 = base + rate * float(t_enter), s1 = base + rate * float(t_exit);
           // Infinite h (cells with disagreeing normals) never rejects.
-          if (!((s0 > slab.h && s1 > slab.h) || (s0 < -slab.h && s1 < -slab.h)))
-            nearest_disc_hit(&groups_[slab.first_group], slab.groups, of, df, t_min_hit, best, best_id);
+          if (!((s0 > cell.h && s1 > cell.h) || (s0 < -cell.h && s1 < -cell.h)))
+            nearest_disc_hit(&groups_[cell.first_group], cell.groups, of, df, t_min_hit, best, best_id);
         }
         if (best <= t_exit || t_exit >= t1) goto done;
         if (t_exit >= tb_exit) break;  // leaving the block

@@ -9,7 +9,7 @@
 // in occupied blocks, over cells; each disc is listed in the cells its own
 // bounding box touches. Each occupied cell keeps a slab bounding its discs so
 // that rays grazing flat ground reject most cells without testing a disc, and
-// its discs in contiguous groups of eight tested together (disc_set.hpp).
+// its discs in contiguous groups of eight tested together (disc_group.hpp).
 // Empty space is skipped two ways, whichever goes farther: a max-mipmap of the
 // highest disc point per block column (height-field ray marching) lets a ray
 // above every disc of a tile cross the whole tile in one step, down to the
@@ -24,7 +24,7 @@
 #include <limits>
 #include <vector>
 
-#include "lf3pm/disc_set.hpp"
+#include "lf3pm/disc_group.hpp"
 #include "lf3pm/voxel_grid.hpp"
 
 namespace lf3pm {

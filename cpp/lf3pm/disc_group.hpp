@@ -5,9 +5,9 @@
 // loads, no branch per disc), which is what makes a cell of twenty discs cost
 // about as much as one step of the voxel walk. A cell's groups are contiguous,
 // so its discs arrive in whole cache lines instead of from eight arrays. The
-// scalar fallback computes the same float expressions in the same order (the
-// products the compiler contracts to fused multiply-adds included), so both
-// paths return the same hits to the last bit.
+// AVX2 path spells out the fused multiply-adds that GCC contracts the scalar
+// fallback's expressions into (a*b + c*d + e*f becomes fma(e, f, fma(a, b,
+// c*d))), so with FMA both paths return the same hits to the last bit.
 #pragma once
 
 #include <cmath>
@@ -73,13 +73,13 @@ inline void nearest_disc_hit(const DiscGroup* groups, std::uint32_t count, const
   for (std::uint32_t g = 0; g < count; ++g) {
     const DiscGroup& q = groups[g];
     for (int k = 0; k < DiscGroup::kLanes; ++k) {
-      const float denom = q.ny[k] * d[1] + q.nx[k] * d[0] + q.nz[k] * d[2];
+      const float denom = q.nx[k] * d[0] + q.ny[k] * d[1] + q.nz[k] * d[2];
       if (std::abs(denom) < 1e-7f) continue;
-      const float num = q.ny[k] * (q.cy[k] - o[1]) + q.nx[k] * (q.cx[k] - o[0]) + q.nz[k] * (q.cz[k] - o[2]);
+      const float num = q.nx[k] * (q.cx[k] - o[0]) + q.ny[k] * (q.cy[k] - o[1]) + q.nz[k] * (q.cz[k] - o[2]);
       const float t = num / denom;
       if (!(t > t_min) || t >= best) continue;
-      const float qx = d[0] * t + o[0] - q.cx[k], qy = d[1] * t + o[1] - q.cy[k], qz = d[2] * t + o[2] - q.cz[k];
-      if (qy * qy + qx * qx + qz * qz <= q.r2[k]) {
+      const float qx = o[0] + t * d[0] - q.cx[k], qy = o[1] + t * d[1] - q.cy[k], qz = o[2] + t * d[2] - q.cz[k];
+      if (qx * qx + qy * qy + qz * qz <= q.r2[k]) {
         best = t;
         best_id = q.id[k];
       }
