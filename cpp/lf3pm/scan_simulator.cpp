@@ -1,5 +1,6 @@
 #include "lf3pm/scan_simulator.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <unordered_set>
@@ -20,11 +21,12 @@ SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double*
   std::vector<std::uint32_t> hit(count);
   const Eigen::Vector3d& t = pose.position;
   parallel_for(count, 2048, params.threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) {
-      const Eigen::Vector3d d = pose.rotation * Eigen::Vector3d(directions + 3 * k);
-      const RayHit h = map.caster().cast(t, d, params.max_range);
+    // Rays are cast one ahead of their refinement: the hit point's plane is in
+    // two arrays of map size, mostly not in cache, and prefetching it while the
+    // next ray is cast hides that latency.
+    auto refine = [&](std::size_t k, const Eigen::Vector3d& d, const RayHit& h) {
       hit[k] = h.surfel;
-      if (h.surfel == kNoHit) continue;
+      if (h.surfel == kNoHit) return;
       // Refine the float range of the caster in float64 on the disc's own plane,
       // so a hit on a planar surface lies on it to rounding.
       const Eigen::Vector3d& n = map.normal(h.surfel);
@@ -33,14 +35,33 @@ SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double*
       if (!(std::abs(s - h.range) < 1e-3)) s = h.range;
       if (s < params.min_range) {
         hit[k] = kNoHit;  // blocked below the minimum range: no return
-        continue;
+        return;
       }
       if (params.noise_sigma > 0) s += params.noise_sigma * normal_sample(params.seed, params.stream, k);
       if (s < params.min_range || s > params.max_range) hit[k] = kNoHit;
       range[k] = s;
+    };
+    Eigen::Vector3d pending_d;
+    RayHit pending;
+    for (std::size_t k = b; k < e; ++k) {
+      const Eigen::Vector3d d = pose.rotation * Eigen::Vector3d(directions + 3 * k);
+      const RayHit h = map.caster().cast(t, d, params.max_range);
+      if (h.surfel != kNoHit) {
+        __builtin_prefetch(&map.normal(h.surfel));
+        __builtin_prefetch(&map.points()[h.surfel]);
+      }
+      if (k > b) refine(k - 1, pending_d, pending);
+      pending_d = d;
+      pending = h;
     }
+    if (e > b) refine(e - 1, pending_d, pending);
   });
   SimulatedScan scan;
+  const std::size_t hits = count - static_cast<std::size_t>(std::count(hit.begin(), hit.end(), kNoHit));
+  scan.sensor_points.reserve(hits);
+  scan.world_points.reserve(hits);
+  scan.surfel.reserve(hits);
+  scan.ray.reserve(hits);
   std::unordered_set<std::uint64_t> kept_voxels;
   const bool downsample = params.scan_voxel > 0;
   for (std::size_t k = 0; k < count; ++k) {

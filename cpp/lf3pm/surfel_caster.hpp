@@ -5,15 +5,18 @@
 // nearest disc intersection, so a hit on a sampled wall lies on the wall's plane
 // (no voxel snapping), a hit on grass carries the grass's roughness, and a
 // surface sampled at the map's density is never seen through (discs overlap).
-// The discs are found by a voxel walk (Amanatides-Woo) that skips empty 8^3
-// blocks; each occupied cell keeps a slab bounding its discs so that rays
-// grazing flat ground reject most cells without testing a disc, and each empty
-// block knows its Chebyshev distance to the nearest occupied block, so a ray in
-// open space jumps that far at once instead of stepping block by block. Rays that
-// skim terrain (a ground robot's near-horizontal beams) are close to the ground
-// all along, so that distance stays small; for them a max-mipmap of the column
-// tops (height-field ray marching) lets a ray above every column of a tile
-// cross the whole tile in one step.
+// The discs are found by a voxel walk (Amanatides-Woo) over 4^3-cell blocks and,
+// in occupied blocks, over cells; each disc is listed in the cells its own
+// bounding box touches. Each occupied cell keeps a slab bounding its discs so
+// that rays grazing flat ground reject most cells without testing a disc, and
+// its discs in contiguous groups of eight tested together (disc_group.hpp).
+// Empty space is skipped two ways, whichever goes farther: a max-mipmap of the
+// highest disc point per block column (height-field ray marching) lets a ray
+// above every disc of a tile cross the whole tile in one step, down to the
+// ground's discs for rays skimming terrain; and each empty block knows its
+// Chebyshev distance to the nearest occupied block (for rising rays: the
+// nearest at its height or above), so a ray in open space jumps that far at
+// once.
 #pragma once
 
 #include <Eigen/Core>
@@ -21,6 +24,7 @@
 #include <limits>
 #include <vector>
 
+#include "lf3pm/disc_group.hpp"
 #include "lf3pm/voxel_grid.hpp"
 
 namespace lf3pm {
@@ -35,8 +39,8 @@ struct RayHit {
 class SurfelCaster {
  public:
   SurfelCaster() = default;
-  /// Discs at `centres` with unit `normals` and `radii`, indexed by cells of
-  /// edge `cell_size`.
+  /// Discs at `centres` with unit `normals` and `radii`, for a map indexed with
+  /// cells of edge `cell_size` (the caster walks somewhat larger cells).
   SurfelCaster(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& normals,
                const std::vector<float>& radii, double cell_size);
 
@@ -47,33 +51,42 @@ class SurfelCaster {
   std::size_t memory_bytes() const;
 
  private:
-  struct PackedDisc {  // coordinates relative to the grid origin (float keeps it 32 bytes)
-    float c[3];
-    float n[3];
-    float r2;
-    std::uint32_t id;
-  };
-  struct CellSlab {  // every disc of the cell lies within |n.x - d| <= h
+  struct Cell {  // every disc of the cell lies within |n.x - d| <= h
     float n[3];
     float d;
     float h;
+    std::uint32_t first_group, groups;  // its discs: groups_[first_group, first_group + groups)
   };
 
-  void build_top_levels();
-  /// Where a ray at parameter t in empty block `block` leaves the largest tile
-  /// of columns it overflies (t itself when it overflies none).
-  double height_field_exit(const Eigen::Vector3d& o, const Eigen::Vector3d& dir, const double* inv,
-                           const int* block, double t) const;
+  struct Ray;  // a ray's per-cast constants (surfel_caster.cpp)
 
+  /// Max-mipmap of the per-column disc tops `level` (x fastest).
+  void build_top_levels(std::vector<float> level);
+  /// Where a ray at parameter t, at height z in block column (bx, by), leaves
+  /// the largest tile of columns it overflies (t itself when it overflies none).
+  double height_field_exit(const Ray& ray, int bx, int by, double z, double t) const;
+
+  // Discs and slabs are in float coordinates relative to this corner (the
+  // discs' lower corner less one map cell), not to the walk grid's origin, so
+  // the hits' float rounding does not depend on the walk's cell size.
+  Eigen::Vector3d frame_origin_ = Eigen::Vector3d::Zero();
   VoxelGrid grid_;
-  std::vector<PackedDisc> discs_;  // grid_ item order
-  std::vector<CellSlab> slabs_;    // per occupied cell
+  std::vector<Cell> cells_;         // per occupied cell
+  std::vector<DiscGroup> groups_;   // centres relative to the grid origin
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;
-  // top_levels_[L][tx + ty * width_L]: highest occupied z-block + 1 over the
-  // 2^L x 2^L block columns of tile (tx, ty); level 0 is one column.
-  std::vector<std::vector<std::int32_t>> top_levels_;
+  // The same to the nearest occupied block at the same z or above, for rays
+  // that never descend.
+  std::vector<std::uint8_t> block_distance_up_;
+  // top_levels_[top_offset_[L] + tx + ty * top_width_[L]]: the highest disc
+  // point (grid-relative z, rounded up) over the 2^L x 2^L block columns of tile
+  // (tx, ty); level 0 is one column. Disc (not block or cell) precision lets a
+  // ray skimming the ground skip everything down to the ground's discs, which
+  // it would otherwise walk cell by cell for metres. One array: a lookup per
+  // level, no pointer chase.
+  std::vector<float> top_levels_;
+  std::vector<std::size_t> top_offset_;
   std::vector<int> top_width_;
 };
 

@@ -75,6 +75,12 @@ class VoxelGrid {
   std::uint32_t items_end(std::int64_t slot) const { return cell_start_[slot + 1]; }
   const std::vector<std::uint32_t>& items() const { return items_; }
   std::size_t occupied_cells() const { return cell_start_.empty() ? 0 : cell_start_.size() - 1; }
+  /// Frees the item lists, for an owner that copied them into its own layout;
+  /// the cell lookup stays, the items_* accessors must not be used afterwards.
+  void drop_items() {
+    std::vector<std::uint32_t>().swap(cell_start_);
+    std::vector<std::uint32_t>().swap(items_);
+  }
   std::size_t memory_bytes() const;
 
  private:
