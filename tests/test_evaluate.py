@@ -75,9 +75,15 @@ def test_planar_dof_uses_three_columns(room_file):
     assert res.n == 3 and res.observations["A"].shape == (res.m, 3)
 
 
-def test_a_single_plane_is_degenerate_not_a_crash(tmp_path):
-    wall = grid_plane((3.0, -20.0, -5.0), (0, 1, 0), (0, 0, 1), 40.0, 10.0, 0.05)
-    res = lf3pm.evaluate(np.ascontiguousarray(wall), (3.0, 0.0, 0.0, 0.0), "vlp16", noise=0.0)
+def test_a_corridor_without_ends_is_degenerate_not_a_crash():
+    # A wall and a floor longer than the sensor's range: translation along them is
+    # unobservable, so A is rank-deficient. They do not touch: k-NN planes fitted
+    # across a crease tilt arbitrarily (as FAST-LIO's do) and break the symmetry.
+    wall = grid_plane((3.0, -200.0, -0.5), (0, 1, 0), (0, 0, 1), 400.0, 3.5, 0.1)
+    floor = grid_plane((-5.0, -200.0, -1.0), (1, 0, 0), (0, 1, 0), 7.5, 400.0, 0.1)
+    res = lf3pm.evaluate(np.ascontiguousarray(np.vstack([wall, floor])), (0.0, 0.0, 0.0, 0.0),
+                         "vlp16", noise=0.0)
+    assert res.m > 1000
     assert res.degenerate and res.q_n == np.inf and res.to_dict()["q_n"] is None
 
 
@@ -145,5 +151,7 @@ def test_real_map_indoor_scan():
     path = SHARED_DATA / "indoor_pcl_room_scan1.pcd"
     with pytest.warns(UserWarning, match="duplicate"):
         world = lf3pm.load_map(path)
-    res = lf3pm.evaluate(world, (0, 0, 0, 0), "vlp16", seed=0)
+    res = lf3pm.evaluate(world, (2.0, 1.0, 0.0, 0.0), "vlp16", seed=0)
     assert res.m > 10000 and np.isfinite(res.q_n)
+    with pytest.raises(PoseError, match="obstacle"):  # the scanner's own returns at 0.1 m
+        lf3pm.evaluate(world, (0, 0, 0, 0), "vlp16")

@@ -21,10 +21,11 @@ from lf3pm.sensors import get_sensor
 REPO = Path(__file__).resolve().parents[2]
 
 #: (map file, sensor, poses x y z yaw). Both maps are single scans in their
-#: sensor frame, so the scan origin (0, 0, 0) is a known free pose.
+#: sensor frame. The room scan holds a cluster of returns within 0.2 m of its
+#: origin (the scanner's own mount), so its poses keep clear of it.
 DEMO_CASES = [
     ("indoor_pcl_room_scan1.pcd", "vlp16",
-     [(0.0, 0.0, 0.0, 0.0), (2.0, 1.0, 0.0, 0.0), (-1.5, 1.5, 0.0, 1.57), (4.0, 0.5, 0.0, 3.14)]),
+     [(1.0, 0.5, 0.0, 0.0), (2.0, 1.0, 0.0, 0.0), (-1.5, 1.5, 0.0, 1.57), (4.0, 0.5, 0.0, 3.14)]),
     ("outdoor_urban64_2021-10-26-16-21-29-468.pcd", "os1-64",
      [(0.0, 0.0, 0.0, 0.0), (8.0, 0.0, 0.0, 0.0), (-10.0, 0.5, 0.0, 0.0)]),
 ]
