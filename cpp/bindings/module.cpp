@@ -12,6 +12,7 @@
 #include "lf3pm/map_index.hpp"
 #include "lf3pm/metric.hpp"
 #include "lf3pm/parallel.hpp"
+#include "lf3pm/plane_fit.hpp"
 #include "lf3pm/scan_simulator.hpp"
 
 namespace nb = nanobind;
@@ -191,6 +192,28 @@ NB_MODULE(_core, m) {
            },
            "origin"_a, "directions"_a, "max_range"_a,
            "Raw surfel casting (world frame): (range, hit point index or -1); range is inf on a miss.");
+
+  m.def("fit_planes",
+        [](nb::ndarray<const double, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu> sets) {
+          const std::size_t m = sets.shape(0), n = sets.shape(1);
+          std::vector<double> normals(3 * m), centroids(3 * m), max_distance(m);
+          const double* data = sets.data();
+          std::vector<Eigen::Vector3d> pts(n);
+          for (std::size_t i = 0; i < m; ++i) {
+            for (std::size_t j = 0; j < n; ++j) pts[j] = Eigen::Vector3d(data + 3 * (i * n + j));
+            const Plane p = fit_plane(pts.data(), static_cast<int>(n));
+            for (int a = 0; a < 3; ++a) {
+              normals[3 * i + a] = p.normal[a];
+              centroids[3 * i + a] = p.centroid[a];
+            }
+            max_distance[i] = p.max_distance;
+          }
+          return nb::make_tuple(to_numpy(std::move(normals), {m, 3}), to_numpy(std::move(centroids), {m, 3}),
+                                to_numpy(std::move(max_distance), {m}));
+        },
+        "point_sets"_a,
+        "PCA plane of each of M sets of N points (M x N x 3): (normals M x 3, centroids M x 3, "
+        "largest |distance| of a set's points to its plane, M).");
 
   m.def("simulate_scan",
         [](const MapIndex& map, nb::ndarray<const double, nb::shape<4, 4>, nb::c_contig, nb::device::cpu> pose,

@@ -22,8 +22,8 @@ class PointGrid {
   /// duplicates are dropped (a duplicate would count twice among k neighbours).
   PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size);
 
-  /// Up to k nearest points to q within max_distance, nearest first.
-  /// Returns the count found; idx/sq_dist receive them.
+  /// Up to k nearest points to q within max_distance, nearest first (equal
+  /// distances by index). Returns the count found; idx/sq_dist receive them.
   int nearest(const Eigen::Vector3d& q, int k, double max_distance, std::uint32_t* idx,
               double* sq_dist) const;
 
