@@ -78,3 +78,22 @@ def test_knn_ties_go_to_the_smaller_index():
             order = order[d[qi, order] <= radius]
             np.testing.assert_array_equal(idx[qi, :len(order)], order)
             np.testing.assert_array_equal(dist[qi, :len(order)], d[qi, order])
+
+
+def test_knn_in_sparse_regions_matches_brute_force():
+    # A dense patch sets a small cell; sparse points around it put most
+    # neighbours many cells away, where the search switches to whole blocks.
+    from scipy.spatial import cKDTree
+
+    from lf3pm import _core
+
+    rng = np.random.default_rng(21)
+    dense = rng.uniform(-0.5, 0.5, size=(20000, 3)) * [1, 1, 0.01]
+    sparse = rng.uniform(-15, 15, size=(4000, 3))
+    index = _core.MapIndex(np.ascontiguousarray(np.vstack([dense, sparse])))
+    queries = np.ascontiguousarray(rng.uniform(-16, 16, size=(3000, 3)))
+    for k, radius in ((5, 2.236), (1, 4.0), (8, 3.0)):
+        idx, dist = index.nearest(queries, k, radius)
+        ref, _ = cKDTree(index.points).query(queries, k=k)
+        ref = np.where(ref.reshape(len(queries), k) <= radius, ref.reshape(len(queries), k), np.inf)
+        np.testing.assert_allclose(dist, ref, rtol=1e-12)

@@ -76,7 +76,7 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
   valid_.resize(n);
   radii_.resize(n);
   const int k = params.knn;
-  const double max_radius = std::min(cell_size_, params.max_neighbor_distance);
+  const double max_radius = std::min(3.0 * cell_size_, params.max_neighbor_distance);
   parallel_for(n, 4096, threads, [&](std::size_t b, std::size_t e) {
     std::uint32_t idx[kMaxKnn];
     double d2[kMaxKnn];
@@ -90,9 +90,9 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
       valid_[i] = (found == k && plane.max_distance <= params.plane_threshold) ? 1 : 0;
       // The disc reaches the farthest of the k neighbours, so neighbouring discs
       // overlap and a sampled surface has no holes; never smaller than the
-      // typical spacing (isolated points), never larger than one cell: a disc
-      // is listed in every cell it touches, and sparse clutter with metre-wide
-      // discs would otherwise multiply the caster's memory.
+      // typical spacing (isolated points), never larger than three cells: a
+      // disc is listed in every cell it touches, and sparse clutter with
+      // metre-wide discs would otherwise multiply the caster's memory.
       const double reach = found > 1 ? std::sqrt(d2[found - 1]) : median_spacing_;
       radii_[i] = static_cast<float>(std::clamp(reach, 0.75 * median_spacing_, max_radius));
     }

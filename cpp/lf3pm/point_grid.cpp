@@ -128,6 +128,60 @@ void scan_neighbourhood(const VoxelGrid& grid, const std::vector<Eigen::Vector3d
   }
 }
 
+// Cell shells searched before switching to whole blocks.
+constexpr int kCellShells = 3;
+
+// k-NN over whole 4x4x4-cell blocks in Chebyshev shells around q's block, from
+// scratch (best must be empty): for queries whose neighbours are many cells away.
+void scan_blocks(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& points,
+                 const Eigen::Vector3d& q, KBest& best) {
+  constexpr int B = VoxelGrid::kBlockSize;
+  const double hb = grid.cell_size() * B;
+  const Eigen::Vector3d f = (q - grid.origin()) / hb;
+  const int* nb = grid.blocks_per_axis();
+  int bq[3];
+  double frac[3];
+  double margin = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    bq[a] = static_cast<int>(std::floor(f[a]));
+    frac[a] = f[a] - bq[a];
+    margin = std::min(margin, std::min(frac[a], 1.0 - frac[a]) * hb);
+  }
+  margin = std::max(margin - kGapSlack * hb, 0.0);
+  auto gap = [&](int a, int d) {
+    return std::max(0.0, std::max(d - frac[a], frac[a] - 1 - d) * hb - kGapSlack * hb);
+  };
+  const int max_shell = static_cast<int>(std::ceil(std::sqrt(best.max_sq) / hb)) + 1;
+  for (int L = 0; L <= max_shell; ++L) {
+    for (int dz = -L; dz <= L; ++dz)
+      for (int dy = -L; dy <= L; ++dy) {
+        const bool face = (std::abs(dz) == L || std::abs(dy) == L);
+        for (int dx = -L; dx <= L; dx += (face ? 1 : 2 * L)) {
+          const int x = bq[0] + dx, y = bq[1] + dy, z = bq[2] + dz;
+          const double gx = gap(0, dx), gy = gap(1, dy), gz = gap(2, dz);
+          if (gx * gx + gy * gy + gz * gz <= best.limit() && x >= 0 && y >= 0 && z >= 0 &&
+              x < nb[0] && y < nb[1] && z < nb[2]) {
+            const std::int32_t block = grid.block_at(x, y, z);
+            if (block >= 0) {
+              const auto [first, last] = grid.block_items(block);
+              double limit = best.limit();
+              for (std::uint32_t i = first; i < last; ++i) {
+                const double d2 = (points[i] - q).squaredNorm();
+                if (d2 <= limit) {
+                  best.offer(d2, i);
+                  limit = best.limit();
+                }
+              }
+            }
+          }
+          if (L == 0) break;
+        }
+      }
+    const double covered = L * hb + margin;
+    if ((best.size == best.k && best.d[best.k - 1] < covered * covered) || covered * covered > best.max_sq) return;
+  }
+}
+
 }  // namespace
 
 int PointGrid::nearest(const Eigen::Vector3d& q, int k, double max_distance, std::uint32_t* idx,
@@ -168,8 +222,7 @@ int PointGrid::nearest(const Eigen::Vector3d& q, int k, double max_distance, std
     first_shell = 2;
   }
   // Farther shells (and queries at the edge of the grid): cell by cell.
-  const int max_shell = static_cast<int>(std::ceil(max_distance / h)) + 1;
-  for (int L = first_shell; L <= max_shell; ++L) {
+  auto scan_shell = [&](int L) {
     for (int dz = -L; dz <= L; ++dz)
       for (int dy = -L; dy <= L; ++dy) {
         const bool face = (std::abs(dz) == L || std::abs(dy) == L);
@@ -184,8 +237,18 @@ int PointGrid::nearest(const Eigen::Vector3d& q, int k, double max_distance, std
           if (L == 0) break;
         }
       }
-    if (done(L * h + margin)) break;
+  };
+  const int max_shell = static_cast<int>(std::ceil(max_distance / h)) + 1;
+  // A shell of radius L holds ~24 L^2 cells: in sparse regions (the far rings
+  // of a single scan) the search restarts block by block instead.
+  const int cell_shells = std::min(max_shell, kCellShells);
+  for (int L = first_shell; L <= cell_shells; ++L) {
+    scan_shell(L);
+    if (done(L * h + margin)) return best.size;
   }
+  if (cell_shells == max_shell) return best.size;
+  best.size = 0;
+  scan_blocks(grid_, points_, q, best);
   return best.size;
 }
 

@@ -70,6 +70,13 @@ class VoxelGrid {
     return b < 0 ? -1 : slot_in_block(b, c.x & 3, c.y & 3, c.z & 3);
   }
 
+  /// Items of all cells of block `block`: [first, second). Contiguous because
+  /// build() orders items block by block.
+  std::pair<std::uint32_t, std::uint32_t> block_items(std::int32_t block) const {
+    const Block& b = blocks_[block];
+    return {cell_start_[b.first_cell], cell_start_[b.first_cell + __builtin_popcountll(b.mask)]};
+  }
+
   /// Items of the cell with compact index `slot`: [items_begin, items_end).
   std::uint32_t items_begin(std::int64_t slot) const { return cell_start_[slot]; }
   std::uint32_t items_end(std::int64_t slot) const { return cell_start_[slot + 1]; }
