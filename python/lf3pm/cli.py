@@ -192,6 +192,39 @@ def scene(
                       f"(free radius {built.free_radius:g} m)", highlight=False)
 
 
+experiment_app = typer.Typer(help="Reproducible experiments (tables, figures, summary.json).",
+                              no_args_is_help=True)
+app.add_typer(experiment_app, name="experiment")
+
+
+@experiment_app.command("table1")
+def experiment_table1(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+    poses: int = typer.Option(8, help="Poses per scene (reference position at 4 yaws, then random)."),
+    trials: int = typer.Option(10, help="MDE trials per pose."),
+    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
+):
+    """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
+    with user_errors():
+        from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
+
+        from lf3pm.experiments import table1
+
+        if poses < 1 or trials < 1:
+            raise Lf3pmError("poses and trials must be >= 1")
+        with Progress("[progress.description]{task.description}", BarColumn(),
+                      "{task.completed}/{task.total}", TimeElapsedColumn(), TimeRemainingColumn(),
+                      console=err_console) as bar:
+            task = bar.add_task("table1", total=None)
+
+            def step(label, total):
+                bar.update(task, description=label, total=total, advance=1)
+
+            table1.run(out, poses=poses, trials=trials, seed=seed, progress=step)
+        console.print((out / "table1.md").read_text())
+        console.print(f"wrote {out / 'summary.json'}, {out / 'table1.md'}, {out / 'table1.png'}")
+
+
 def main() -> None:
     """Console-script entry point."""
     app()
