@@ -206,23 +206,60 @@ def experiment_table1(
 ):
     """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
     with user_errors():
-        from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
-
         from lf3pm.experiments import table1
 
         if poses < 1 or trials < 1:
             raise Lf3pmError("poses and trials must be >= 1")
-        with Progress("[progress.description]{task.description}", BarColumn(),
-                      "{task.completed}/{task.total}", TimeElapsedColumn(), TimeRemainingColumn(),
-                      console=err_console) as bar:
-            task = bar.add_task("table1", total=None)
-
-            def step(label, total):
-                bar.update(task, description=label, total=total, advance=1)
-
+        with progress_bar() as step:
             table1.run(out, poses=poses, trials=trials, seed=seed, progress=step)
         console.print((out / "table1.md").read_text())
         console.print(f"wrote {out / 'summary.json'}, {out / 'table1.md'}, {out / 'table1.png'}")
+
+
+@experiment_app.command("correlation")
+def experiment_correlation(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+    poses_per_map: int = typer.Option(40, help="Random free poses per map (6 scenes + 2 real maps)."),
+    trials: int = typer.Option(5, help="MDE trials per pose."),
+    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
+    bootstrap: int = typer.Option(1000, help="Bootstrap resamples for the confidence intervals."),
+    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
+):
+    """Spearman correlation of each predictor with MDE, pooled and within maps."""
+    with user_errors():
+        from lf3pm.experiments import correlation
+
+        if poses_per_map < 3 or trials < 1 or bootstrap < 1:
+            raise Lf3pmError("poses-per-map must be >= 3, trials and bootstrap >= 1")
+        with progress_bar() as step:
+            summary = correlation.run(out, poses_per_map=poses_per_map, trials=trials, sensor=sensor,
+                                      seed=seed, bootstrap=bootstrap, progress=step)
+        table = Table(title=f"Spearman rho with MDE ({summary['params']['poses']} poses)")
+        for col in ("predictor", "pooled rho", "95% CI", "mean within-map rho", "95% CI"):
+            table.add_column(col)
+        for name, p in summary["predictors"].items():
+            table.add_row(name, f"{p['rho']:.2f}", f"[{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]",
+                          f"{p['within_mean_rho']:.2f}",
+                          f"[{p['within_mean_ci'][0]:.2f}, {p['within_mean_ci'][1]:.2f}]")
+        console.print(table)
+        console.print(f"best within maps: {summary['best_within_map']}; best pooled: "
+                      f"{summary['best_pooled']}; wrote {out}/summary.json, poses.csv, scatter.png")
+
+
+@contextmanager
+def progress_bar():
+    """A rich progress bar on stderr; yields step(label, total) that advances it by one."""
+    from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
+
+    with Progress("[progress.description]{task.description}", BarColumn(),
+                  "{task.completed}/{task.total}", TimeElapsedColumn(), TimeRemainingColumn(),
+                  console=err_console) as bar:
+        task = bar.add_task("starting", total=None)
+
+        def step(label, total):
+            bar.update(task, description=label, total=total, advance=1)
+
+        yield step
 
 
 def main() -> None:

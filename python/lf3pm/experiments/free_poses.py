@@ -1,0 +1,59 @@
+"""Random free sensor poses on a map, for experiments: the sensor at a fixed
+height above the local ground, clear of every map point around it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from lf3pm.map import Map
+
+#: Horizontal cell (m) of the ground-height grid.
+GROUND_CELL = 0.5
+
+
+class GroundGrid:
+    """Lowest map point per 0.5 m x 0.5 m column: the ground under a position."""
+
+    def __init__(self, world: Map):
+        pts = world.points
+        self.lower = pts[:, :2].min(axis=0)
+        ij = np.floor((pts[:, :2] - self.lower) / GROUND_CELL).astype(np.int64)
+        self.shape = tuple(ij.max(axis=0) + 1)
+        self.z = np.full(self.shape, np.inf)
+        np.minimum.at(self.z, (ij[:, 0], ij[:, 1]), pts[:, 2])
+
+    def height(self, x: float, y: float) -> float:
+        """Ground z under (x, y), or inf where the map has no point in that column."""
+        i, j = np.floor((np.array([x, y]) - self.lower) / GROUND_CELL).astype(int)
+        if not (0 <= i < self.shape[0] and 0 <= j < self.shape[1]):
+            return math.inf
+        return float(self.z[i, j])
+
+
+def random_free_poses(world: Map, count: int, rng: np.random.Generator, *, sensor_height: float,
+                      region: tuple[float, float, float, float], clearance: float = 0.5,
+                      max_tries: int = 200) -> list[tuple]:
+    """``count`` poses (x, y, z, yaw) uniform over ``region`` (xmin, ymin, xmax,
+    ymax) with random yaw, z = local ground + ``sensor_height``; a pose is kept
+    only where the map has ground and no point lies within ``clearance`` of the
+    sensor or of the body below it (checked down to ``clearance`` + 0.1 m above
+    the ground)."""
+    ground = GroundGrid(world)
+    xmin, ymin, xmax, ymax = region
+    poses = []
+    for _ in range(count * max_tries):
+        if len(poses) == count:
+            break
+        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+        g = ground.height(x, y)
+        if not math.isfinite(g):
+            continue
+        z = g + sensor_height
+        low = min(z, g + clearance + 0.1)
+        probes = np.array([[x, y, z], [x, y, 0.5 * (z + low)], [x, y, low]])
+        _, dist = world.index.nearest(np.ascontiguousarray(probes), 1, clearance)
+        if np.all(np.isinf(dist)):
+            poses.append((x, y, z, rng.uniform(-math.pi, math.pi)))
+    return poses
