@@ -86,6 +86,9 @@ def print_evaluation(out: dict) -> None:
                 "step_norm", "residual_norm", "scaled_cov_trace"):
         value = out[key]
         table.add_row(key, "inf" if value is None else f"{value:.6g}")
+    if out["predicted_mde"] is not None:
+        lo, hi = out["predicted_mde_interval"]
+        table.add_row("predicted MDE", f"{out['predicted_mde']:.3g} [{lo:.2g}, {hi:.2g}]")
     table.add_row("rows m", str(out["m"]))
     table.add_row("hits / rays", f"{out['hits']} / {out['rays']}")
     table.add_row("degenerate", str(out["degenerate"]))

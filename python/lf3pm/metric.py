@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, field
 
 
 from lf3pm import _core
+from lf3pm.calibration import calibration_applies, packaged_calibration, predict_mde
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
@@ -44,6 +45,8 @@ class Evaluation:
     degenerate: bool
     rays: int
     hits: int
+    predicted_mde: float | None
+    predicted_mde_interval: list | None
     pose: list
     sensor: str
     params: dict
@@ -74,6 +77,10 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     every hit and their plane; "surfel" reuses the precomputed plane of the map
     point the ray hit (faster, but its residuals are smaller: see docs/metric.md). With
     observations=True the result carries A (m x dof), b (m) and the hit points.
+    predicted_mde (with a 10-90 % interval) comes from the packaged calibration
+    (see lf3pm.calibration) when the query matches the conditions it was fitted
+    under (its sensor, default noise, dof 6, k-NN association, no scan
+    downsampling), else None.
     A pose outside the map's x-y extent or within ``clearance`` m of a map point
     raises PoseError.
     """
@@ -99,6 +106,11 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
                              observations=observations)
     except ValueError as err:
         raise Lf3pmError(str(err)) from None
+    calibration = packaged_calibration()
+    prediction = None
+    if calibration_applies(calibration, sensor=sensor.name, dof=dof, association=association,
+                           scan_voxel=scan_voxel, noise_is_default=noise is None, w1=w1):
+        prediction = predict_mde(calibration, raw[calibration["predictor"]])
     obs = None
     if observations:
         obs = {key: raw.pop(key) for key in ("A", "b", "points", "sensor_points", "row_hit")}
@@ -107,4 +119,6 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
               **map.association_params}
     return Evaluation(**{k: raw[k] for k in METRIC_FIELDS}, m=raw["m"], n=raw["n"],
                       degenerate=raw["degenerate"], rays=raw["rays"], hits=raw["hits"],
+                      predicted_mde=prediction[0] if prediction else None,
+                      predicted_mde_interval=list(prediction[1:]) if prediction else None,
                       pose=matrix.tolist(), sensor=sensor.name, params=params, observations=obs)

@@ -7,7 +7,8 @@ Random free poses on every procedural scene and on the real maps in
 and MDE (lf3pm.evaluation.mde). Spearman rank correlation of each predictor
 with MDE, pooled over maps and within each map (a planner compares places
 within one map), with bootstrap confidence intervals. Writes DIR/summary.json,
-DIR/poses.csv and DIR/scatter.png.
+DIR/poses.csv, DIR/scatter.png and DIR/calibration.json (the best within-map
+predictor calibrated to MDE; lf3pm ships a copy in lf3pm/calibration_data/).
 """
 
 from __future__ import annotations
@@ -20,7 +21,9 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
+from lf3pm import __version__
 from lf3pm.atomic import atomic_write
+from lf3pm.calibration import fit_calibration
 from lf3pm.demo import shared_data_dir
 from lf3pm.evaluation import RegistrationTarget, mde
 from lf3pm.experiments.free_poses import random_free_poses
@@ -103,6 +106,17 @@ def run(out: Path, *, poses_per_map: int = 40, trials: int = 5, sensor: str = "v
         text = _csv(records)
         fp.write(text.encode())
     plot(out / "scatter.png", records, summary)
+    best = summary["best_within_map"]
+    calibration = fit_calibration(
+        np.array([r[best] for r in records], float) * PREDICTORS[best],
+        np.array([r["mde"] for r in records]), name=best,
+        provenance={"command": f"lf3pm experiment correlation (poses_per_map={poses_per_map}, "
+                               f"trials={trials}, seed={seed})",
+                    "why": "the predictor with the best mean within-map Spearman rho",
+                    "within_map_rho": summary["predictors"][best]["within_mean_rho"],
+                    "lf3pm_version": __version__, **summary["params"]})
+    with atomic_write(out / "calibration.json") as fp:
+        fp.write(json.dumps(calibration).encode())
     return summary
 
 
