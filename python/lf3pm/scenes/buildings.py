@@ -33,6 +33,15 @@ class Opening:
     recess: float = 0.0
 
 
+def footprint_sides(width: float, depth: float):
+    """The four walls of a width x depth footprint centred on the origin, counter-
+    clockwise from the front (y = -depth/2): (side, start, end, length)."""
+    hw, hd = width / 2, depth / 2
+    corners = [(-hw, -hd), (hw, -hd), (hw, hd), (-hw, hd)]
+    for side in range(4):
+        yield side, corners[side], corners[(side + 1) % 4], width if side % 2 == 0 else depth
+
+
 def wall(rng: np.random.Generator, start, end, base_z: float, height: float, spacing: float,
          jitter: float = JITTER, openings=(), top=None) -> np.ndarray:
     """Samples a vertical wall from ``start`` to ``end`` (x, y), ``height`` above ``base_z``.
@@ -107,11 +116,8 @@ def house(rng: np.random.Generator, centre, yaw: float, width: float, depth: flo
     rise = math.tan(pitch)
     ridge = eave + depth / 2 * rise
     hw, hd = width / 2, depth / 2
-    corners = [(-hw, -hd), (hw, -hd), (hw, hd), (-hw, hd)]
     parts = []
-    for side in range(4):
-        start, end = corners[side], corners[(side + 1) % 4]
-        length = width if side % 2 == 0 else depth
+    for side, start, end, length in footprint_sides(width, depth):
         door_at = None if door_x is None else door_x - 0.5 + hw
         openings = facade_openings(rng, length, storeys, door=side == 0,
                                    recess_fraction=recess_fraction, door_at=door_at)
@@ -144,11 +150,8 @@ def flat_building(rng: np.random.Generator, centre, yaw: float, width: float, de
     if storeys is None:
         storeys = max(1, int(height // STOREY))
     hw, hd = width / 2, depth / 2
-    corners = [(-hw, -hd), (hw, -hd), (hw, hd), (-hw, hd)]
     parts = []
-    for side in range(4):
-        start, end = corners[side], corners[(side + 1) % 4]
-        length = width if side % 2 == 0 else depth
+    for side, start, end, length in footprint_sides(width, depth):
         if side == 0 and doors is not None:
             openings = list(doors)
         else:
