@@ -284,34 +284,47 @@ NB_MODULE(_core, m) {
         (std::string("Scan, associate and compute the metric at one 4x4 pose. ") + kScanArgsDoc).c_str());
 
   m.def("evaluate_many",
-        [](const MapIndex& map, PosesIn poses, PointsIn dirs, double min_range, double max_range, double noise,
-           std::uint64_t seed, std::uint64_t stream, double scan_voxel, int dof, const std::string& association,
-           double w1, double w2, int threads) {
-          const EvalParams p = eval_params(min_range, max_range, noise, seed, stream, scan_voxel, dof,
+        [](const MapIndex& map, PosesIn poses, nb::ndarray<const std::uint64_t, nb::ndim<1>, nb::c_contig,
+           nb::device::cpu> streams, PointsIn dirs, double min_range, double max_range, double noise,
+           std::uint64_t seed, double scan_voxel, int dof, const std::string& association, double w1,
+           double w2, int threads) {
+          const EvalParams p = eval_params(min_range, max_range, noise, seed, 0, scan_voxel, dof,
                                            association, w1, w2, threads);
           const std::size_t np = poses.shape(0);
+          if (streams.shape(0) != np) throw std::invalid_argument("streams must hold one value per pose");
           std::vector<Pose> ps(np);
           for (std::size_t i = 0; i < np; ++i) ps[i] = pose_from_matrix(poses.data() + 16 * i);
+          const std::vector<std::uint64_t> st(streams.data(), streams.data() + np);
           const double* d = dirs.data();
           const std::size_t n = dirs.shape(0);
           std::vector<PoseEvaluation> res;
           {
             nb::gil_scoped_release release;
-            res = evaluate_poses(map, ps, d, n, p);
+            res = evaluate_poses(map, ps, st, d, n, p);
           }
-          nb::list out;
-          for (const auto& r : res) {
-            nb::dict dct = metric_dict(r.metric);
-            dct["rays"] = r.rays;
-            dct["hits"] = r.hits;
-            out.append(dct);
-          }
+          // Columns, not a list of dicts: a SOLM chunk is thousands of poses.
+          auto column = [&](auto field) {
+            std::vector<double> v(np);
+            for (std::size_t i = 0; i < np; ++i) v[i] = static_cast<double>(field(res[i]));
+            return to_numpy(std::move(v), {np});
+          };
+          nb::dict out;
+          out["sigma1"] = column([](const PoseEvaluation& r) { return r.metric.sigma1; });
+          out["xi"] = column([](const PoseEvaluation& r) { return r.metric.xi; });
+          out["q_min"] = column([](const PoseEvaluation& r) { return r.metric.q_min; });
+          out["q_n"] = column([](const PoseEvaluation& r) { return r.metric.q_n; });
+          out["q_max"] = column([](const PoseEvaluation& r) { return r.metric.q_max; });
+          out["step_norm"] = column([](const PoseEvaluation& r) { return r.metric.step_norm; });
+          out["m"] = column([](const PoseEvaluation& r) { return r.metric.m; });
+          out["hits"] = column([](const PoseEvaluation& r) { return r.hits; });
+          out["degenerate"] = column([](const PoseEvaluation& r) { return r.metric.degenerate ? 1.0 : 0.0; });
           return out;
         },
-        "map"_a, "poses"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
-        "stream"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "knn", "w1"_a = 0.5,
+        "map"_a, "poses"_a, "streams"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0,
+        "seed"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "knn", "w1"_a = 0.5,
         "w2"_a = 0.5, "threads"_a = 0,
-        "evaluate() at many poses in parallel; pose i uses noise stream stream + i.");
+        "evaluate() at many 4x4 poses in parallel; pose i uses noise stream streams[i]. "
+        "Returns a dict of per-pose columns (float64).");
 
   m.def("metric_from_gram",
         [](MatIn gram, std::int64_t rows, double w1, double w2) {

@@ -76,14 +76,16 @@ PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double
 }
 
 std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,
+                                           const std::vector<std::uint64_t>& streams,
                                            const double* directions, std::size_t count,
                                            const EvalParams& params) {
+  if (streams.size() != poses.size()) throw std::invalid_argument("one noise stream per pose");
   std::vector<PoseEvaluation> out(poses.size());
   parallel_for(poses.size(), 1, params.scan.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       EvalParams one = params;
       one.scan.threads = 1;
-      one.scan.stream = params.scan.stream + i;
+      one.scan.stream = streams[i];
       out[i] = evaluate_pose(map, poses[i], directions, count, one);
     }
   });

@@ -44,8 +44,10 @@ Observations scan_observations(const MapIndex& map, const Pose& pose, const Simu
                                const EvalParams& params);
 
 /// Many poses in parallel (one thread per pose; params.scan.threads is the pool
-/// size). Pose i draws its noise from stream params.scan.stream + i.
+/// size). Pose i draws its noise from stream streams[i], so a pose's result does
+/// not depend on which batch it was evaluated in.
 std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,
+                                           const std::vector<std::uint64_t>& streams,
                                            const double* directions, std::size_t count,
                                            const EvalParams& params);
 

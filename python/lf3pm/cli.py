@@ -251,7 +251,7 @@ def experiment_correlation(
 
 @contextmanager
 def progress_bar():
-    """A rich progress bar on stderr; yields step(label, total) that advances it by one."""
+    """A rich progress bar on stderr; yields step(label, total, advance=1)."""
     from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
 
     with Progress("[progress.description]{task.description}", BarColumn(),
@@ -259,10 +259,84 @@ def progress_bar():
                   console=err_console) as bar:
         task = bar.add_task("starting", total=None)
 
-        def step(label, total):
-            bar.update(task, description=label, total=total, advance=1)
+        def step(label, total, advance=1):
+            bar.update(task, description=label, total=total, advance=advance)
 
         yield step
+
+
+solm_app = typer.Typer(help="Static Observation Loss Maps: build, view, export.", no_args_is_help=True)
+app.add_typer(solm_app, name="solm")
+
+
+@solm_app.command("build")
+def solm_build(
+    map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
+    out: Path = typer.Option(..., "-o", "--out", help="Output Zarr store (resumed if it exists)."),
+    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
+    space: str = typer.Option("r2", help="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z)."),
+    res: float = typer.Option(0.5, help="Cell size (m)."),
+    yaw_bins: int = typer.Option(36, help="Yaw bins (se2)."),
+    height: float = typer.Option(1.0, help="Sensor height above the local ground (r2, se2), m."),
+    bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
+        None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
+    robot_radius: float = typer.Option(0.3, help="Robot radius for the obstacle mask (m)."),
+    seed: int = typer.Option(0, help="Seed of the range noise."),
+    noise: Optional[float] = typer.Option(None, help="Range noise sigma (m; default the sensor's)."),
+    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+):
+    """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
+    with user_errors():
+        from lf3pm.map import load_map
+        from lf3pm.sensors import get_sensor
+        from lf3pm.solm import build_solm, make_grid
+
+        lidar = get_sensor(sensor)
+        world = load_map(map_path, threads=threads)
+        grid = make_grid(world, space, res, bounds=bounds, yaw_bins=yaw_bins, height=height)
+        with progress_bar() as step:
+            def advance(cells, total):
+                step(f"SOLM {space} {grid.shape} cells", total, cells)
+
+            result = build_solm(world, lidar, grid, out, seed=seed, noise=noise,
+                                robot_radius=robot_radius, threads=threads, progress=advance)
+        console.print(f"{out}: {grid.space} grid {grid.shape} at {res} m; tiles built now "
+                      f"{result['built_now']} of {result['tiles']}; complete: {result['complete']}")
+
+
+@solm_app.command("view")
+def solm_view(
+    store: Path = typer.Argument(..., metavar="OUT.zarr"),
+    png: Path = typer.Option(..., "-o", "--out", help="PNG to write."),
+    channel: str = typer.Option("q_n", help="Channel to draw."),
+    reduce: str = typer.Option("mean", help="min, mean or max over yaw bins / z levels."),
+    map_path: Optional[Path] = typer.Option(None, "--map", help="Draw this map's top view under it."),
+):
+    """Heat map of a SOLM channel over the map's top view."""
+    with user_errors():
+        from lf3pm.io import load_points
+        from lf3pm.solm import Solm
+        from lf3pm.solm.figures import heat_map
+
+        solm = Solm.open(store)
+        points = load_points(map_path) if map_path else None
+        heat_map(solm, png, channel=channel, reduce=reduce, map_points=points)
+        console.print(f"wrote {png}")
+
+
+@solm_app.command("export")
+def solm_export(
+    store: Path = typer.Argument(..., metavar="OUT.zarr"),
+    folder: Path = typer.Argument(..., metavar="DIR"),
+    reduce: str = typer.Option("mean", help="min, mean or max over yaw bins / z levels."),
+):
+    """ROS map_server PNG + YAML per channel."""
+    with user_errors():
+        from lf3pm.solm import Solm
+        from lf3pm.solm.figures import export_ros
+
+        written = export_ros(Solm.open(store), folder, reduce=reduce)
+        console.print(f"wrote {len(written)} files to {folder}")
 
 
 def main() -> None:

@@ -1,0 +1,131 @@
+"""Building a SOLM: evaluate the metric at every cell of a grid, tile by tile,
+resumable (see store.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from lf3pm import __version__, _core
+from lf3pm.errors import Lf3pmError
+from lf3pm.map import Map
+from lf3pm.sensors import Sensor
+from lf3pm.solm.grid import SolmGrid
+from lf3pm.solm.store import CHANNELS, TILE, open_or_create, tiles_shape
+
+
+def column_ground(world: Map, grid: SolmGrid) -> np.ndarray:
+    """Lowest map point in each cell's column (ny x nx); inf where none."""
+    pts = world.points
+    ij = np.floor((pts[:, :2] - [grid.x0, grid.y0]) / grid.res).astype(np.int64)
+    inside = (ij[:, 0] >= 0) & (ij[:, 0] < grid.nx) & (ij[:, 1] >= 0) & (ij[:, 1] < grid.ny)
+    ground = np.full((grid.ny, grid.nx), np.inf)
+    np.minimum.at(ground, (ij[inside, 1], ij[inside, 0]), pts[inside, 2])
+    return ground
+
+
+def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = 0,
+               noise: float | None = None, robot_radius: float = 0.3, floor_clearance: float = 0.2,
+               association: str = "knn", w1: float = 0.5, threads: int = 0,
+               tile: int = TILE, max_tiles: int | None = None, progress=None) -> dict:
+    """Builds (or resumes) the SOLM of ``world`` for ``sensor`` on ``grid`` into
+    the Zarr store ``out``. Cell c (linear index over the channel's shape) uses
+    noise stream c, so results do not depend on tiling or resumption.
+    ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
+    after that many tiles (for tests of resumption)."""
+    sigma = sensor.range_noise_sigma if noise is None else float(noise)
+    if tile < 1:
+        raise Lf3pmError(f"tile must be >= 1, got {tile}")
+    if sigma < 0 or robot_radius < 0 or floor_clearance < 0:
+        raise Lf3pmError("noise, robot radius and floor clearance must be >= 0")
+    ground_robot = grid.space != "r3"
+    attrs = {"lf3pm_version": __version__, "grid": grid.to_dict(), "sensor": sensor.name,
+             "sensor_rays": sensor.num_rays, "noise": sigma, "seed": int(seed),
+             "w1": w1, "w2": 1.0 - w1, "association": association, "robot_radius": robot_radius,
+             "floor_clearance": floor_clearance, "map_sha256": world.sha256,
+             "map_source": world.source, "channels": list(CHANNELS),
+             "noise_stream": "linear cell index over the channel shape", "tile": tile}
+    ground = column_ground(world, grid) if ground_robot else None
+    group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
+    if ground_robot:
+        group["ground_z"][...] = np.where(np.isfinite(ground), ground, np.nan).astype(np.float32)
+    done = group["done"][...]
+    ty_n, tx_n = tiles_shape(grid.ny, grid.nx, tile)
+    todo = [(ty, tx) for ty in range(ty_n) for tx in range(tx_n) if not done[ty, tx]]
+    if max_tiles is not None:
+        todo = todo[:max_tiles]
+    xs, ys = grid.xs(), grid.ys()
+    for ty, tx in todo:
+        ys_ = slice(ty * tile, min(grid.ny, (ty + 1) * tile))
+        xs_ = slice(tx * tile, min(grid.nx, (tx + 1) * tile))
+        yy, xx = np.meshgrid(ys[ys_], xs[xs_], indexing="ij")
+        layer_shape = (grid.layers,) + yy.shape
+        if ground_robot:
+            g = np.broadcast_to(ground[ys_, xs_], layer_shape)
+            z = g + grid.height
+            unknown = ~np.isfinite(g)
+            yaw = np.broadcast_to(grid.yaws()[:, None, None], layer_shape)
+        else:
+            z = np.broadcast_to(np.asarray(grid.z_levels)[:, None, None], layer_shape)
+            unknown = np.zeros(layer_shape, bool)
+            yaw = np.zeros(layer_shape)
+        X, Y = np.broadcast_to(xx, layer_shape), np.broadcast_to(yy, layer_shape)
+        obstacle = _obstacles(world, X, Y, z, g if ground_robot else None, robot_radius, floor_clearance,
+                              unknown)
+        valid = ~unknown & ~obstacle
+        cell_index = np.ravel_multi_index(
+            np.meshgrid(np.arange(grid.layers), np.arange(grid.ny)[ys_], np.arange(grid.nx)[xs_],
+                        indexing="ij"), (grid.layers, grid.ny, grid.nx))
+        values = {name: np.full(layer_shape, np.nan, np.float32) for name in CHANNELS}
+        degenerate = np.zeros(layer_shape, np.uint8)
+        if valid.any():
+            poses = _pose_matrices(X[valid], Y[valid], z[valid], yaw[valid])
+            res = _core.evaluate_many(world.index, poses, cell_index[valid].astype(np.uint64),
+                                      sensor.directions, sensor.min_range, sensor.max_range,
+                                      noise=sigma, seed=int(seed), association=association,
+                                      w1=w1, w2=1.0 - w1, threads=threads)
+            for name in CHANNELS:
+                values[name][valid] = res[name]
+            degenerate[valid] = res["degenerate"].astype(np.uint8)
+        region = (slice(None),) * (0 if grid.space == "r2" else 1) + (ys_, xs_)
+        squeeze = (lambda a: a[0]) if grid.space == "r2" else (lambda a: a)
+        for name in CHANNELS:
+            group[name][region] = squeeze(values[name])
+        group["obstacle"][region] = squeeze(obstacle.astype(np.uint8))
+        group["unknown"][region] = squeeze(unknown.astype(np.uint8))
+        group["degenerate"][region] = squeeze(degenerate)
+        group["done"][ty, tx] = 1  # last: the tile counts only once all its data are on disk
+        if progress:
+            progress(int(np.prod(layer_shape)), grid.layers * grid.ny * grid.nx)
+    return {"tiles": ty_n * tx_n, "built_now": len(todo),
+            "complete": bool(group["done"][...].all())}
+
+
+def _pose_matrices(x, y, z, yaw) -> np.ndarray:
+    n = len(x)
+    T = np.zeros((n, 4, 4))
+    c, s = np.cos(yaw), np.sin(yaw)
+    T[:, 0, 0], T[:, 0, 1], T[:, 1, 0], T[:, 1, 1] = c, -s, s, c
+    T[:, 2, 2] = T[:, 3, 3] = 1.0
+    T[:, 0, 3], T[:, 1, 3], T[:, 2, 3] = x, y, z
+    return np.ascontiguousarray(T)
+
+
+def _obstacles(world, X, Y, z, ground, radius, floor_clearance, unknown) -> np.ndarray:
+    """Cells whose robot body (a vertical cylinder of ``radius`` from the floor
+    clearance up to the sensor) holds a map point, probed at three heights."""
+    if radius <= 0:
+        return np.zeros(X.shape, bool)
+    low = z if ground is None else np.minimum(z, ground + floor_clearance + radius)
+    blocked = np.zeros(X.shape, bool)
+    ok = ~unknown
+    for frac in (0.0, 0.5, 1.0):
+        h = low[ok] + frac * (z[ok] - low[ok])
+        probes = np.ascontiguousarray(np.stack([X[ok], Y[ok], h], axis=1))
+        if len(probes):
+            _, dist = world.index.nearest(probes, 1, radius)
+            hit = np.zeros(X.shape, bool)
+            hit[ok] = np.isfinite(dist[:, 0])
+            blocked |= hit
+    return blocked

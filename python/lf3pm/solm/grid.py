@@ -1,0 +1,91 @@
+"""The SOLM grid: which poses a Static Observation Loss Map is evaluated at.
+
+Spaces (DESIGN.md, "State spaces"):
+- ``r2``: (y, x) cells, yaw 0: for 360-degree LiDARs;
+- ``se2``: (yaw, y, x), K yaw bins centred on k * 2 pi / K: for limited fields of view;
+- ``r3``: (z, y, x) for aerial robots, at fixed heights.
+Ground robots (r2, se2) keep the sensor ``height`` above the local ground under
+each cell (terrain following): the lowest map point in the cell's column.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from lf3pm.errors import Lf3pmError
+from lf3pm.map import Map
+
+SPACES = ("r2", "se2", "r3")
+
+
+@dataclass(frozen=True)
+class SolmGrid:
+    """Cell centres: x = x0 + (i + 0.5) res, y likewise; yaw bins or z levels."""
+
+    space: str
+    x0: float
+    y0: float
+    res: float
+    nx: int
+    ny: int
+    yaw_bins: int = 1
+    z_levels: tuple = ()
+    height: float = 1.0
+
+    @property
+    def shape(self) -> tuple:
+        """Array shape of a channel: (ny, nx), (yaw_bins, ny, nx) or (nz, ny, nx)."""
+        if self.space == "r2":
+            return (self.ny, self.nx)
+        return (self.yaw_bins if self.space == "se2" else len(self.z_levels), self.ny, self.nx)
+
+    @property
+    def layers(self) -> int:
+        return 1 if self.space == "r2" else self.shape[0]
+
+    def xs(self) -> np.ndarray:
+        return self.x0 + (np.arange(self.nx) + 0.5) * self.res
+
+    def ys(self) -> np.ndarray:
+        return self.y0 + (np.arange(self.ny) + 0.5) * self.res
+
+    def yaws(self) -> np.ndarray:
+        return np.arange(self.yaw_bins) * 2 * math.pi / self.yaw_bins
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["z_levels"] = list(self.z_levels)
+        return d
+
+
+def make_grid(world: Map, space: str, res: float, *, bounds=None, yaw_bins: int = 36,
+              height: float = 1.0, z_levels=None) -> SolmGrid:
+    """The grid over ``bounds`` (xmin, ymin, xmax, ymax; default the map's extent)."""
+    if space not in SPACES:
+        raise Lf3pmError(f"unknown space {space!r}; use one of {', '.join(SPACES)}")
+    if not (res > 0 and math.isfinite(res)):
+        raise Lf3pmError(f"resolution must be > 0, got {res}")
+    lower, upper = world.bounds
+    if bounds is None:
+        bounds = (lower[0], lower[1], upper[0], upper[1])
+    xmin, ymin, xmax, ymax = map(float, bounds)
+    if not (xmin < xmax and ymin < ymax):
+        raise Lf3pmError(f"bounds {bounds} are empty: need xmin < xmax and ymin < ymax")
+    if xmax <= lower[0] or xmin >= upper[0] or ymax <= lower[1] or ymin >= upper[1]:
+        raise Lf3pmError(f"bounds {bounds} lie outside the map's extent "
+                         f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]")
+    nx, ny = math.ceil((xmax - xmin) / res), math.ceil((ymax - ymin) / res)
+    if space == "se2" and yaw_bins < 1:
+        raise Lf3pmError(f"yaw bins must be >= 1, got {yaw_bins}")
+    levels = ()
+    if space == "r3":
+        if z_levels is None:
+            z_levels = np.arange(lower[2] + height, upper[2], res)
+        levels = tuple(float(z) for z in z_levels)
+        if not levels:
+            raise Lf3pmError("an r3 grid needs at least one z level")
+    return SolmGrid(space, xmin, ymin, float(res), nx, ny, yaw_bins if space == "se2" else 1,
+                    levels, float(height))

@@ -1,0 +1,67 @@
+"""SOLM storage: a Zarr group, chunked and compressed, written tile by tile.
+
+Layout: one array per channel (float32; NaN where a cell was not evaluated:
+unknown ground or an obstacle) and per mask (uint8), ``ground_z`` for ground
+robots, and ``done``, one flag per tile set only after the tile's data are
+written. An interrupted build (Ctrl-C or kill -9) therefore loses at most the
+tile in flight, and a rerun recomputes exactly the tiles without a flag. The
+group's attributes hold the grid, sensor, parameters, map hash and version; a
+store built from another map or with other parameters is refused, never mixed.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from lf3pm.errors import Lf3pmError
+
+CHANNELS = ("q_min", "q_n", "q_max", "sigma1", "step_norm", "m")
+MASKS = ("obstacle", "unknown", "degenerate")
+#: Default cells per tile edge (x and y); a tile holds every yaw bin or z level.
+TILE = 32
+
+
+def tiles_shape(ny: int, nx: int, tile: int) -> tuple[int, int]:
+    return math.ceil(ny / tile), math.ceil(nx / tile)
+
+
+def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: int):
+    """The store at ``path``: created when absent, else checked against ``attrs``."""
+    import zarr
+
+    path = Path(path)
+    if path.exists():
+        try:
+            group = zarr.open_group(str(path), mode="r+")
+        except Exception as err:  # noqa: BLE001 - any unreadable store is refused the same way
+            raise Lf3pmError(f"{path} exists and is not a SOLM store ({err.__class__.__name__})") from None
+        old = dict(group.attrs)
+        differ = sorted(k for k in set(old) | set(attrs) if old.get(k) != attrs.get(k))
+        if differ:
+            raise Lf3pmError(f"{path} was built from another map or with other parameters "
+                             f"(differs in: {', '.join(differ)}); remove it or choose another output")
+        return group
+    if not path.parent.exists():
+        raise Lf3pmError(f"output folder {path.parent} does not exist")
+    try:
+        group = zarr.open_group(str(path), mode="w")
+        group.attrs.update(attrs)
+        chunks = (tile, tile) if len(shape) == 2 else (shape[0], tile, tile)
+        for name in CHANNELS:
+            group.create_array(name, shape=shape, chunks=chunks, dtype="float32", fill_value=np.nan)
+        for name in MASKS:
+            group.create_array(name, shape=shape, chunks=chunks, dtype="uint8", fill_value=0)
+        if ground:
+            group.create_array("ground_z", shape=shape[-2:], chunks=(tile, tile), dtype="float32",
+                               fill_value=np.nan)
+        tiles = tiles_shape(*shape[-2:], tile)
+        group.create_array("done", shape=tiles, chunks=tiles, dtype="uint8", fill_value=0)
+        group["done"][...] = np.zeros(tiles, np.uint8)
+    except OSError as err:
+        shutil.rmtree(path, ignore_errors=True)  # never leave a half-created store
+        raise Lf3pmError(f"{path}: cannot write the store ({err.strerror or err})") from None
+    return group

@@ -1,0 +1,141 @@
+"""SOLM builds: cells equal evaluate(), resumption is exact, queries and masks."""
+
+import hashlib
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import lf3pm
+from lf3pm import _core
+from lf3pm.errors import Lf3pmError
+from lf3pm.io import write_points
+from lf3pm.pose import pose_matrix
+from lf3pm.solm import Solm, build_solm, make_grid
+from lf3pm.scenes import build_scene
+
+BOUNDS = (-3.5, -3.5, 3.5, 3.5)
+
+
+@pytest.fixture(scope="module")
+def boxes():
+    scene = build_scene("boxes")
+    return scene, lf3pm.load_map(scene.points), lf3pm.get_sensor("vlp16")
+
+
+@pytest.fixture(scope="module")
+def built(boxes, tmp_path_factory):
+    _, world, sensor = boxes
+    grid = make_grid(world, "se2", 1.0, bounds=BOUNDS, yaw_bins=4, height=1.0)
+    path = tmp_path_factory.mktemp("solm") / "full.zarr"
+    build_solm(world, sensor, grid, path, tile=3)
+    return path, grid
+
+
+def store_digest(path: Path) -> str:
+    h = hashlib.sha256()
+    for f in sorted(p for p in path.rglob("*") if p.is_file()):
+        h.update(str(f.relative_to(path)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def test_a_cell_equals_evaluate_at_its_centre(boxes, built):
+    _, world, sensor = boxes
+    path, grid = built
+    solm = Solm.open(path)
+    x, y, yaw = solm.grid()
+    q = solm.channel("q_n")
+    ground = solm.channel("ground_z")
+    k, iy, ix = np.argwhere(np.isfinite(q))[5]
+    cell = np.ravel_multi_index((k, iy, ix), q.shape)
+    pose = pose_matrix((x[k, iy, ix], y[k, iy, ix], ground[iy, ix] + 1.0, yaw[k, iy, ix]))
+    ref = _core.evaluate(world.index, pose, sensor.directions, sensor.min_range, sensor.max_range,
+                         noise=sensor.range_noise_sigma, seed=0, stream=int(cell))
+    assert q[k, iy, ix] == pytest.approx(ref["q_n"], rel=1e-6)  # stored as float32
+
+
+def test_resume_after_interruption_is_bitwise_identical(boxes, built, tmp_path):
+    _, world, sensor = boxes
+    path, grid = built
+    partial = tmp_path / "resumed.zarr"
+    first = build_solm(world, sensor, grid, partial, tile=3, max_tiles=2)
+    assert not first["complete"]
+    with pytest.raises(Lf3pmError, match="unfinished"):
+        Solm.open(partial)
+    second = build_solm(world, sensor, grid, partial, tile=3)
+    assert second["complete"] and second["built_now"] == first["tiles"] - 2
+    assert store_digest(partial) == store_digest(path)
+
+
+def test_a_store_from_other_parameters_is_refused(boxes, built):
+    _, world, sensor = boxes
+    path, grid = built
+    with pytest.raises(Lf3pmError, match="other parameters"):
+        build_solm(world, sensor, grid, path, tile=3, robot_radius=0.5)
+
+
+def test_query_interpolates_and_its_gradient_matches_finite_differences(built):
+    solm = Solm.open(built[0])
+    rng = np.random.default_rng(0)
+    q = solm.channel("q_n")
+    for _ in range(20):
+        x, y, yaw = rng.uniform(-2.5, 2.5), rng.uniform(-2.5, 2.5), rng.uniform(-np.pi, np.pi)
+        value, grad = solm.query(x, y, yaw)
+        if not np.isfinite(value):
+            continue
+        h = 1e-6
+        num = [(solm.query(x + h, y, yaw)[0] - solm.query(x - h, y, yaw)[0]) / (2 * h),
+               (solm.query(x, y + h, yaw)[0] - solm.query(x, y - h, yaw)[0]) / (2 * h),
+               (solm.query(x, y, yaw + h)[0] - solm.query(x, y, yaw - h)[0]) / (2 * h)]
+        np.testing.assert_allclose(grad, num, rtol=1e-4, atol=1e-9)
+    # At a cell centre the query returns the cell; yaw is periodic.
+    xs, ys, yaws = solm.grid()
+    k, iy, ix = np.argwhere(np.isfinite(q))[0]
+    assert solm.query(xs[k, iy, ix], ys[k, iy, ix], yaws[k, iy, ix])[0] == pytest.approx(q[k, iy, ix])
+    assert solm.query(0.1, 0.2, 0.3)[0] == pytest.approx(solm.query(0.1, 0.2, 0.3 + 2 * np.pi)[0])
+
+
+def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path):
+    scene, world, sensor = boxes
+    grid = make_grid(world, "r2", 0.5, bounds=(-4, -4, 8, 4), height=1.0)
+    path = tmp_path / "r2.zarr"
+    build_solm(world, sensor, grid, path, noise=0.0)
+    solm = Solm.open(path)
+    obstacle = solm.channel("obstacle")
+    x, y = solm.grid()
+    centre = np.argmin(np.hypot(x, y))  # the reference pose is free
+    assert obstacle.ravel()[centre] == 0 and np.isfinite(solm.channel("q_n").ravel()[centre])
+    # Cells against the room's walls are obstacles, and obstacles are not evaluated.
+    assert obstacle[:, 0].all() and np.isnan(solm.channel("q_n")[obstacle == 1]).all()
+
+
+@pytest.mark.parametrize("kwargs,needle", [
+    ({"bounds": (100, 100, 110, 110)}, "outside"),
+    ({"res": 0.0}, "resolution"),
+    ({"space": "se3"}, "space"),
+])
+def test_bad_grids_are_refused(boxes, kwargs, needle):
+    _, world, _ = boxes
+    args = {"space": "r2", "res": 1.0, **kwargs}
+    with pytest.raises(Lf3pmError, match=needle):
+        make_grid(world, args.pop("space"), args.pop("res"), **args)
+
+
+def test_cli_unwritable_output_and_unknown_sensor_leave_no_store(boxes, tmp_path):
+    scene, _, _ = boxes
+    map_path = tmp_path / "boxes.pcd"
+    write_points(map_path, scene.points)
+    # A regular file where a folder should be: writing fails as on a read-only
+    # or full disk, even for root (which permissions do not stop).
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("")
+    for extra, needle in ((["-o", str(blocker / "s.zarr")], "cannot write"),
+                          (["-o", str(tmp_path / "s.zarr"), "--sensor", "nosuch"], "unknown sensor"),
+                          (["-o", str(tmp_path / "s.zarr"), "--res", "0"], "resolution")):
+        out = subprocess.run([sys.executable, "-m", "lf3pm.cli", "solm", "build", str(map_path),
+                              "--res", "2", *extra], capture_output=True, text=True, timeout=300)
+        assert out.returncode == 2 and needle in out.stderr and "Traceback" not in out.stderr, out.stderr
+    assert not (tmp_path / "s.zarr").exists() and blocker.is_file()
