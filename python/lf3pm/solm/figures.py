@@ -48,7 +48,7 @@ def heat_map(solm: Solm, path: Path, *, channel: str = "q_n", reduce: str = "mea
     positive = layer[np.isfinite(layer) & (layer > 0)]
     norm = LogNorm(positive.min(), positive.max()) if len(positive) and channel.startswith("q") else None
     image = ax.imshow(np.ma.masked_invalid(layer), origin="lower", extent=extent, cmap="viridis_r"
-                      if channel.startswith("q") else "viridis", norm=norm, alpha=0.85,
+                      if channel.startswith("q") else "viridis", norm=norm,
                       interpolation="nearest")
     blocked = solm.channel("obstacle")
     blocked = blocked.max(axis=0) if blocked.ndim == 3 else blocked
