@@ -44,16 +44,17 @@ def heat_map(solm: Solm, path: Path, *, channel: str = "q_n", reduce: str = "mea
     fig, ax = plt.subplots(figsize=(9, 7), dpi=110)
     if map_points is not None:
         step = max(1, len(map_points) // 300_000)
-        ax.scatter(map_points[::step, 0], map_points[::step, 1], s=0.1, c="0.75", linewidths=0)
+        ax.scatter(map_points[::step, 0], map_points[::step, 1], s=0.1, c="0.75", linewidths=0,
+                   zorder=0)  # under the heat map: shows through unknown cells only
     positive = layer[np.isfinite(layer) & (layer > 0)]
     norm = LogNorm(positive.min(), positive.max()) if len(positive) and channel.startswith("q") else None
     image = ax.imshow(np.ma.masked_invalid(layer), origin="lower", extent=extent, cmap="viridis_r"
                       if channel.startswith("q") else "viridis", norm=norm,
-                      interpolation="nearest")
+                      interpolation="nearest", zorder=1)
     blocked = solm.channel("obstacle")
     blocked = blocked.max(axis=0) if blocked.ndim == 3 else blocked
     ax.imshow(np.ma.masked_equal(blocked, 0), origin="lower", extent=extent, cmap="Greys",
-              vmin=0, vmax=1, interpolation="nearest")
+              vmin=0, vmax=1, interpolation="nearest", zorder=2)
     fig.colorbar(image, ax=ax, label=f"{channel} (lower = better localization)" if
                  channel.startswith("q") else channel, shrink=0.85)
     how = "" if g.space == "r2" else f", {reduce} over {'yaw' if g.space == 'se2' else 'z'}"
