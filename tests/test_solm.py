@@ -110,6 +110,13 @@ def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path)
     assert obstacle.ravel()[centre] == 0 and np.isfinite(solm.channel("q_n").ravel()[centre])
     # Cells against the room's walls are obstacles, and obstacles are not evaluated.
     assert obstacle[:, 0].all() and np.isnan(solm.channel("q_n")[obstacle == 1]).all()
+    # r2 queries: bilinear, gradient (d/dx, d/dy) against central differences.
+    value, grad = solm.query(0.37, -0.21)
+    h = 1e-6
+    num = [(solm.query(0.37 + h, -0.21)[0] - solm.query(0.37 - h, -0.21)[0]) / (2 * h),
+           (solm.query(0.37, -0.21 + h)[0] - solm.query(0.37, -0.21 - h)[0]) / (2 * h)]
+    assert np.isfinite(value) and grad.shape == (2,)
+    np.testing.assert_allclose(grad, num, rtol=1e-4)
 
 
 @pytest.mark.parametrize("kwargs,needle", [

@@ -71,13 +71,10 @@ class Solm:
         fx, ix, tx = _frac(x, g.x0, g.res, g.nx)
         fy, iy, ty = _frac(y, g.y0, g.res, g.ny)
         if g.space == "r2":
-            v00, v01 = data[iy, ix], data[iy, ix + 1]
-            v10, v11 = data[iy + 1, ix], data[iy + 1, ix + 1]
-            value = (1 - ty) * ((1 - tx) * v00 + tx * v01) + ty * ((1 - tx) * v10 + tx * v11)
-            dx = ((1 - ty) * (v01 - v00) + ty * (v11 - v10)) / g.res * fx
-            dy = ((1 - tx) * (v10 - v00) + tx * (v11 - v01)) / g.res * fy
-            return value, np.stack([dx, dy], axis=-1)
-        if g.space == "se2":
+            data = data[None]  # one layer: the same bilinear code, no third axis
+            k0 = k1 = np.zeros_like(ix)
+            tk, step, fk = np.zeros_like(tx), 1.0, 0.0
+        elif g.space == "se2":
             step = 2 * math.pi / g.yaw_bins
             f = np.mod(np.asarray(yaw, float), 2 * math.pi) / step
             ik = np.floor(f).astype(int)
@@ -104,7 +101,7 @@ class Solm:
         b, bx, by = plane(k1)
         value = (1 - tk) * a + tk * b
         grad = np.stack([(1 - tk) * ax + tk * bx, (1 - tk) * ay + tk * by, (b - a) / step * fk], axis=-1)
-        return value, grad
+        return value, (grad[..., :2] if g.space == "r2" else grad)
 
 
 def _frac(v, origin, res, n):
