@@ -11,7 +11,6 @@ and DIR/table1.png.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
