@@ -14,6 +14,7 @@
 #include "lf3pm/parallel.hpp"
 #include "lf3pm/plane_fit.hpp"
 #include "lf3pm/scan_simulator.hpp"
+#include "lf3pm/yaw_sectors.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -325,6 +326,46 @@ NB_MODULE(_core, m) {
         "w2"_a = 0.5, "threads"_a = 0,
         "evaluate() at many 4x4 poses in parallel; pose i uses noise stream streams[i]. "
         "Returns a dict of per-pose columns (float64).");
+
+  m.def("evaluate_yaw_sectors",
+        [](const MapIndex& map, PointsIn positions, nb::ndarray<const std::uint64_t, nb::ndim<1>, nb::c_contig,
+           nb::device::cpu> streams, PointsIn sector_rays, int bins, int half_width, double min_range,
+           double max_range, double noise, std::uint64_t seed, double scan_voxel, int dof,
+           const std::string& association, double w1, double w2, int threads) {
+          const EvalParams p = eval_params(min_range, max_range, noise, seed, 0, scan_voxel, dof,
+                                           association, w1, w2, threads);
+          const std::size_t np = positions.shape(0);
+          if (streams.shape(0) != np) throw std::invalid_argument("streams must hold one value per position");
+          std::vector<Eigen::Vector3d> pos(np);
+          for (std::size_t i = 0; i < np; ++i) pos[i] = Eigen::Vector3d(positions.data() + 3 * i);
+          const std::vector<std::uint64_t> st(streams.data(), streams.data() + np);
+          std::vector<Metric> res;
+          {
+            nb::gil_scoped_release release;
+            res = evaluate_yaw_sectors(map, pos, st, sector_rays.data(), sector_rays.shape(0), bins,
+                                       half_width, p);
+          }
+          const std::size_t nb_ = static_cast<std::size_t>(bins);
+          auto column = [&](auto field) {
+            std::vector<double> v(res.size());
+            for (std::size_t i = 0; i < res.size(); ++i) v[i] = static_cast<double>(field(res[i]));
+            return to_numpy(std::move(v), {np, nb_});
+          };
+          nb::dict out;
+          out["sigma1"] = column([](const Metric& m) { return m.sigma1; });
+          out["q_min"] = column([](const Metric& m) { return m.q_min; });
+          out["q_n"] = column([](const Metric& m) { return m.q_n; });
+          out["q_max"] = column([](const Metric& m) { return m.q_max; });
+          out["step_norm"] = column([](const Metric& m) { return m.step_norm; });
+          out["m"] = column([](const Metric& m) { return m.m; });
+          out["degenerate"] = column([](const Metric& m) { return m.degenerate ? 1.0 : 0.0; });
+          return out;
+        },
+        "map"_a, "positions"_a, "streams"_a, "sector_rays"_a, "bins"_a, "half_width"_a, "min_range"_a,
+        "max_range"_a, "noise"_a = 0.0, "seed"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6,
+        "association"_a = "knn", "w1"_a = 0.5, "w2"_a = 0.5, "threads"_a = 0,
+        "SE(2) metric at every yaw bin from one scan per yaw sector (sums of sector Grams). "
+        "Returns per-position, per-bin columns.");
 
   m.def("metric_from_gram",
         [](MatIn gram, std::int64_t rows, double w1, double w2) {

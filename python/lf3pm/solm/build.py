@@ -13,6 +13,7 @@ from lf3pm.map import Map
 from lf3pm.sensors import Sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, TILE, open_or_create, tiles_shape
+from lf3pm.solm.yaw_reuse import sector_layout
 
 
 def column_ground(world: Map, grid: SolmGrid) -> np.ndarray:
@@ -28,10 +29,13 @@ def column_ground(world: Map, grid: SolmGrid) -> np.ndarray:
 def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = 0,
                noise: float | None = None, robot_radius: float = 0.3, floor_clearance: float = 0.2,
                association: str = "knn", w1: float = 0.5, threads: int = 0,
-               tile: int = TILE, max_tiles: int | None = None, progress=None) -> dict:
+               yaw_reuse: bool = False, tile: int = TILE, max_tiles: int | None = None,
+               progress=None) -> dict:
     """Builds (or resumes) the SOLM of ``world`` for ``sensor`` on ``grid`` into
     the Zarr store ``out``. Cell c (linear index over the channel's shape) uses
     noise stream c, so results do not depend on tiling or resumption.
+    ``yaw_reuse`` (se2 only) scans each yaw sector once and sums sector Grams
+    per bin (yaw_reuse.py): about 2F+1 times faster, approximate (docs/solm.md).
     ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
     after that many tiles (for tests of resumption)."""
     sigma = sensor.range_noise_sigma if noise is None else float(noise)
@@ -40,12 +44,17 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
     if sigma < 0 or robot_radius < 0 or floor_clearance < 0:
         raise Lf3pmError("noise, robot radius and floor clearance must be >= 0")
     ground_robot = grid.space != "r3"
+    if yaw_reuse and grid.space != "se2":
+        raise Lf3pmError("yaw reuse applies to se2 grids only")
+    sectors = sector_layout(sensor, grid.yaw_bins) if yaw_reuse else None
     attrs = {"lf3pm_version": __version__, "grid": grid.to_dict(), "sensor": sensor.name,
              "sensor_rays": sensor.num_rays, "noise": sigma, "seed": int(seed),
              "w1": w1, "w2": 1.0 - w1, "association": association, "robot_radius": robot_radius,
              "floor_clearance": floor_clearance, "map_sha256": world.sha256,
              "map_source": world.source, "channels": list(CHANNELS),
-             "noise_stream": "linear cell index over the channel shape", "tile": tile}
+             "noise_stream": "linear cell index over the channel shape (yaw reuse: "
+                             "2D cell index * yaw_bins + sector)", "tile": tile,
+             "yaw_reuse": bool(yaw_reuse)}
     ground = column_ground(world, grid) if ground_robot else None
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
     if ground_robot:
@@ -79,7 +88,20 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
                         indexing="ij"), (grid.layers, grid.ny, grid.nx))
         values = {name: np.full(layer_shape, np.nan, np.float32) for name in CHANNELS}
         degenerate = np.zeros(layer_shape, np.uint8)
-        if valid.any():
+        if valid.any() and sectors is not None:
+            # Validity depends on x, y only: every bin of a cell is valid or none is.
+            cell2d = valid[0]
+            positions = np.ascontiguousarray(np.stack([xx[cell2d], yy[cell2d], z[0][cell2d]], axis=1))
+            res = _core.evaluate_yaw_sectors(world.index, positions,
+                                             cell_index[0][cell2d].astype(np.uint64), sectors[0],
+                                             grid.yaw_bins, sectors[1], sensor.min_range,
+                                             sensor.max_range, noise=sigma, seed=int(seed),
+                                             association=association, w1=w1, w2=1.0 - w1,
+                                             threads=threads)
+            for name in CHANNELS:
+                values[name][:, cell2d] = res[name].T
+            degenerate[:, cell2d] = res["degenerate"].T.astype(np.uint8)
+        elif valid.any():
             poses = _pose_matrices(X[valid], Y[valid], z[valid], yaw[valid])
             res = _core.evaluate_many(world.index, poses, cell_index[valid].astype(np.uint64),
                                       sensor.directions, sensor.min_range, sensor.max_range,
