@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from lf3pm.map import Map
+from lf3pm.terrain import body_blocked, column_minimum
 
 #: Horizontal cell (m) of the ground-height grid.
 GROUND_CELL = 0.5
@@ -17,19 +18,17 @@ class GroundGrid:
     """Lowest map point per 0.5 m x 0.5 m column: the ground under a position."""
 
     def __init__(self, world: Map):
-        pts = world.points
-        self.lower = pts[:, :2].min(axis=0)
-        ij = np.floor((pts[:, :2] - self.lower) / GROUND_CELL).astype(np.int64)
-        self.shape = tuple(ij.max(axis=0) + 1)
-        self.z = np.full(self.shape, np.inf)
-        np.minimum.at(self.z, (ij[:, 0], ij[:, 1]), pts[:, 2])
+        lower, upper = world.bounds
+        self.lower = lower[:2]
+        self.nx, self.ny = (np.floor((upper[:2] - lower[:2]) / GROUND_CELL).astype(int) + 1)
+        self.z = column_minimum(world.points, lower[0], lower[1], GROUND_CELL, self.nx, self.ny)
 
     def height(self, x: float, y: float) -> float:
         """Ground z under (x, y), or inf where the map has no point in that column."""
         i, j = np.floor((np.array([x, y]) - self.lower) / GROUND_CELL).astype(int)
-        if not (0 <= i < self.shape[0] and 0 <= j < self.shape[1]):
+        if not (0 <= i < self.nx and 0 <= j < self.ny):
             return math.inf
-        return float(self.z[i, j])
+        return float(self.z[j, i])
 
 
 def random_free_poses(world: Map, count: int, rng: np.random.Generator, *, sensor_height: float,
@@ -51,9 +50,6 @@ def random_free_poses(world: Map, count: int, rng: np.random.Generator, *, senso
         if not math.isfinite(g):
             continue
         z = g + sensor_height
-        low = min(z, g + clearance + 0.1)
-        probes = np.array([[x, y, z], [x, y, 0.5 * (z + low)], [x, y, low]])
-        _, dist = world.index.nearest(np.ascontiguousarray(probes), 1, clearance)
-        if np.all(np.isinf(dist)):
+        if not body_blocked(world, x, y, min(z, g + clearance + 0.1), z, clearance):
             poses.append((x, y, z, rng.uniform(-math.pi, math.pi)))
     return poses

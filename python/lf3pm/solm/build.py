@@ -14,16 +14,7 @@ from lf3pm.sensors import Sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, TILE, open_or_create, tiles_shape
 from lf3pm.solm.yaw_reuse import sector_layout
-
-
-def column_ground(world: Map, grid: SolmGrid) -> np.ndarray:
-    """Lowest map point in each cell's column (ny x nx); inf where none."""
-    pts = world.points
-    ij = np.floor((pts[:, :2] - [grid.x0, grid.y0]) / grid.res).astype(np.int64)
-    inside = (ij[:, 0] >= 0) & (ij[:, 0] < grid.nx) & (ij[:, 1] >= 0) & (ij[:, 1] < grid.ny)
-    ground = np.full((grid.ny, grid.nx), np.inf)
-    np.minimum.at(ground, (ij[inside, 1], ij[inside, 0]), pts[inside, 2])
-    return ground
+from lf3pm.terrain import body_blocked, column_minimum
 
 
 def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = 0,
@@ -55,7 +46,8 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
              "noise_stream": "linear cell index over the channel shape (yaw reuse: "
                              "2D cell index * yaw_bins + sector)", "tile": tile,
              "yaw_reuse": bool(yaw_reuse)}
-    ground = column_ground(world, grid) if ground_robot else None
+    ground = (column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny)
+              if ground_robot else None)
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
     if ground_robot:
         group["ground_z"][...] = np.where(np.isfinite(ground), ground, np.nan).astype(np.float32)
@@ -80,8 +72,10 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
             unknown = np.zeros(layer_shape, bool)
             yaw = np.zeros(layer_shape)
         X, Y = np.broadcast_to(xx, layer_shape), np.broadcast_to(yy, layer_shape)
-        obstacle = _obstacles(world, X, Y, z, g if ground_robot else None, robot_radius, floor_clearance,
-                              unknown)
+        obstacle = np.zeros(layer_shape, bool)
+        known = ~unknown
+        low = z if not ground_robot else np.minimum(z, g + floor_clearance + robot_radius)
+        obstacle[known] = body_blocked(world, X[known], Y[known], low[known], z[known], robot_radius)
         valid = ~unknown & ~obstacle
         cell_index = np.ravel_multi_index(
             np.meshgrid(np.arange(grid.layers), np.arange(grid.ny)[ys_], np.arange(grid.nx)[xs_],
@@ -132,22 +126,3 @@ def _pose_matrices(x, y, z, yaw) -> np.ndarray:
     T[:, 2, 2] = T[:, 3, 3] = 1.0
     T[:, 0, 3], T[:, 1, 3], T[:, 2, 3] = x, y, z
     return np.ascontiguousarray(T)
-
-
-def _obstacles(world, X, Y, z, ground, radius, floor_clearance, unknown) -> np.ndarray:
-    """Cells whose robot body (a vertical cylinder of ``radius`` from the floor
-    clearance up to the sensor) holds a map point, probed at three heights."""
-    if radius <= 0:
-        return np.zeros(X.shape, bool)
-    low = z if ground is None else np.minimum(z, ground + floor_clearance + radius)
-    blocked = np.zeros(X.shape, bool)
-    ok = ~unknown
-    for frac in (0.0, 0.5, 1.0):
-        h = low[ok] + frac * (z[ok] - low[ok])
-        probes = np.ascontiguousarray(np.stack([X[ok], Y[ok], h], axis=1))
-        if len(probes):
-            _, dist = world.index.nearest(probes, 1, radius)
-            hit = np.zeros(X.shape, bool)
-            hit[ok] = np.isfinite(dist[:, 0])
-            blocked |= hit
-    return blocked
