@@ -99,8 +99,12 @@ const char* kScanArgsDoc =
 
 }  // namespace
 
+// Planner bindings live in their own files of cpp/bindings/ (one per concept).
+void bind_planner(nb::module_& m);
+
 NB_MODULE(_core, m) {
-  m.doc() = "lf3pm C++ core: map index, surfel ray casting, FAST-LIO observations, LF-3PM metric";
+  m.doc() = "lf3pm C++ core: map index, surfel ray casting, FAST-LIO observations, LF-3PM metric, planner";
+  bind_planner(m);
 
   nb::class_<MapIndex>(m, "MapIndex", "Per-map precomputation: voxel k-NN grid, point planes, surfel caster.")
       .def("__init__",

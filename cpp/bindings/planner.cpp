@@ -1,0 +1,7 @@
+// nanobind bindings of the planner kernels (graph search, trajectory optimisation).
+// Each kernel adds a `bind_<kernel>(m)` call here; the kernels live in cpp/lf3pm/.
+#include <nanobind/nanobind.h>
+
+namespace nb = nanobind;
+
+void bind_planner(nb::module_& m) { (void)m; }
