@@ -26,8 +26,15 @@ demo: build
 test: build
 	$(PY) -m pytest -q
 
+# The SOLM benchmark's baseline uses Open3D, whose import needs Debian's
+# libusb-1.0-0 (shared BUILD-NOTES): installed here when we may, else said why not.
 bench: build
+	$(PY) -m pip install -q "open3d>=0.18"
+	@$(PY) -c "import open3d" 2>/dev/null || { [ "$$(id -u)" = 0 ] && apt-get install -y -q libusb-1.0-0 >/dev/null; } \
+	  || { echo "open3d cannot load: install Debian's libusb-1.0-0 (as root) for bench/bench_solm.py"; exit 1; }
 	$(PY) bench/bench_evaluate.py
+	$(PY) bench/bench_solm.py
+	$(PY) bench/bench_solm_yaw_reuse.py
 
 clean:
 	rm -rf build out $(VENV)

@@ -16,6 +16,8 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
+from baseline_pipeline import association_and_metric
+
 import lf3pm
 from lf3pm import _core
 
@@ -41,29 +43,6 @@ def town_map(seed: int = 0) -> np.ndarray:
                 parts.append(np.c_[x0 + (x1 - x0) * ss.ravel(), y0 + (y1 - y0) * ss.ravel(), zz.ravel()])
     pts = np.vstack(parts)
     return np.ascontiguousarray(pts + rng.normal(scale=0.005, size=pts.shape))
-
-
-def baseline_association_and_metric(tree: cKDTree, map_points: np.ndarray, hits: np.ndarray,
-                                    position: np.ndarray) -> float:
-    """What a user writes with SciPy/NumPy: 5-NN, PCA planes, A, and the metric by SVD."""
-    dist, idx = tree.query(hits, k=5)
-    nb = map_points[idx]                                     # (m, 5, 3)
-    centroid = nb.mean(axis=1)
-    cov = np.einsum("mki,mkj->mij", nb - centroid[:, None], nb - centroid[:, None])
-    _, vecs = np.linalg.eigh(cov)
-    normal = vecs[:, :, 0]
-    off = np.abs(np.einsum("mkj,mj->mk", nb - centroid[:, None], normal)).max(axis=1)
-    ok = (dist[:, -1] <= np.sqrt(5.0)) & (off <= 0.1)
-    u, w, c = normal[ok], hits[ok], centroid[ok]
-    A = np.hstack([u, np.cross(w - position, u)])
-    b = -np.einsum("mj,mj->m", u, w - c)
-    s = np.linalg.svd(A, compute_uv=False)
-    dx, *_ = np.linalg.lstsq(A, b, rcond=None)
-    r = np.linalg.norm(A @ dx - b)
-    xi = np.linalg.norm(dx) + r / s[-1]
-    M = np.hstack([xi * A, b[:, None]])
-    g = np.linalg.eigvalsh(M.T @ M)
-    return float(np.sqrt(0.5 * g[1] + 0.5) / s[-1])
 
 
 def main() -> None:
@@ -105,7 +84,7 @@ def main() -> None:
     base = []
     for _ in range(max(3, args.repeat // 5)):
         t = time.perf_counter()
-        q_base = baseline_association_and_metric(tree, world.points, scan["world_points"], pose[:3, 3])
+        q_base = association_and_metric(tree, world.points, scan["world_points"], pose[:3, 3])
         base.append(time.perf_counter() - t)
 
     cast_s, base_s = np.median(cast), np.median(base)

@@ -14,6 +14,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.io import write_points
 from lf3pm.pose import pose_matrix
 from lf3pm.solm import Solm, build_solm, make_grid
+from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.scenes import build_scene
 
 BOUNDS = (-3.5, -3.5, 3.5, 3.5)
@@ -165,3 +166,41 @@ def test_se2_yaw_reuse_is_close_to_exact_per_yaw_evaluation(boxes, tmp_path):
     assert np.median(rel) < 0.2 and np.percentile(rel, 95) < 0.4
     with pytest.raises(Lf3pmError, match="se2"):
         build_solm(world, mid70, make_grid(world, "r2", 1.0), tmp_path / "r2.zarr", yaw_reuse=True)
+
+
+def test_thinned_rays_keep_whole_azimuth_columns_and_their_weight():
+    vlp16 = lf3pm.get_sensor("vlp16")
+    kept, weight = thin_rays(vlp16.directions, 4)
+    azimuths = np.round(np.arctan2(kept[:, 1], kept[:, 0]), 9)
+    _, per_column = np.unique(azimuths, return_counts=True)
+    assert np.all(per_column == 16)  # every ring survives
+    assert len(per_column) == 1800 // 4 and weight == pytest.approx(4.0)
+    assert thin_rays(vlp16.directions, 1)[1] == 1.0
+    with pytest.raises(Lf3pmError, match="stride"):
+        thin_rays(vlp16.directions, 0)
+
+
+def test_ray_weight_equals_casting_each_ray_that_many_times(boxes):
+    _, world, sensor = boxes
+    pose = pose_matrix((0.5, -0.5, 1.0, 0.3))[None]
+    dirs = np.ascontiguousarray(sensor.directions[::7])
+    args = (world.index, pose, np.zeros(1, np.uint64))
+    tripled = _core.evaluate_many(*args, np.ascontiguousarray(np.repeat(dirs, 3, axis=0)),
+                                  sensor.min_range, sensor.max_range)
+    weighted = _core.evaluate_many(*args, dirs, sensor.min_range, sensor.max_range, ray_weight=3.0)
+    for name in ("q_min", "q_n", "q_max", "sigma1", "m"):
+        assert weighted[name][0] == pytest.approx(tripled[name][0], rel=1e-9)
+
+
+def test_thinned_build_is_close_to_exact(boxes, built, tmp_path):
+    _, world, sensor = boxes
+    path, grid = built
+    build_solm(world, sensor, grid, tmp_path / "thin.zarr", ray_stride=4)
+    exact = Solm.open(path).channel("q_n")
+    thin = Solm.open(tmp_path / "thin.zarr")
+    assert thin.attrs["ray_stride"] == 4
+    q = thin.channel("q_n")
+    ok = np.isfinite(exact) & np.isfinite(q)
+    rel = np.abs(q[ok] / exact[ok] - 1)
+    # Measured on gobi (bench/bench_solm.py, stride 4): median 1.8 %, p95 4.4 %.
+    assert ok.sum() > 50 and np.median(rel) < 0.05 and np.percentile(rel, 95) < 0.15

@@ -292,9 +292,10 @@ NB_MODULE(_core, m) {
         [](const MapIndex& map, PosesIn poses, nb::ndarray<const std::uint64_t, nb::ndim<1>, nb::c_contig,
            nb::device::cpu> streams, PointsIn dirs, double min_range, double max_range, double noise,
            std::uint64_t seed, double scan_voxel, int dof, const std::string& association, double w1,
-           double w2, int threads) {
-          const EvalParams p = eval_params(min_range, max_range, noise, seed, 0, scan_voxel, dof,
-                                           association, w1, w2, threads);
+           double w2, int threads, double ray_weight) {
+          EvalParams p = eval_params(min_range, max_range, noise, seed, 0, scan_voxel, dof,
+                                     association, w1, w2, threads);
+          p.ray_weight = ray_weight;
           const std::size_t np = poses.shape(0);
           if (streams.shape(0) != np) throw std::invalid_argument("streams must hold one value per pose");
           std::vector<Pose> ps(np);
@@ -327,17 +328,19 @@ NB_MODULE(_core, m) {
         },
         "map"_a, "poses"_a, "streams"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0,
         "seed"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6, "association"_a = "knn", "w1"_a = 0.5,
-        "w2"_a = 0.5, "threads"_a = 0,
+        "w2"_a = 0.5, "threads"_a = 0, "ray_weight"_a = 1.0,
         "evaluate() at many 4x4 poses in parallel; pose i uses noise stream streams[i]. "
+        "ray_weight: each ray stands for that many rays of the full pattern (thinned builds). "
         "Returns a dict of per-pose columns (float64).");
 
   m.def("evaluate_yaw_sectors",
         [](const MapIndex& map, PointsIn positions, nb::ndarray<const std::uint64_t, nb::ndim<1>, nb::c_contig,
            nb::device::cpu> streams, PointsIn sector_rays, int bins, int half_width, double min_range,
            double max_range, double noise, std::uint64_t seed, double scan_voxel, int dof,
-           const std::string& association, double w1, double w2, int threads) {
-          const EvalParams p = eval_params(min_range, max_range, noise, seed, 0, scan_voxel, dof,
-                                           association, w1, w2, threads);
+           const std::string& association, double w1, double w2, int threads, double ray_weight) {
+          EvalParams p = eval_params(min_range, max_range, noise, seed, 0, scan_voxel, dof,
+                                     association, w1, w2, threads);
+          p.ray_weight = ray_weight;
           const std::size_t np = positions.shape(0);
           if (streams.shape(0) != np) throw std::invalid_argument("streams must hold one value per position");
           std::vector<Eigen::Vector3d> pos(np);
@@ -367,7 +370,7 @@ NB_MODULE(_core, m) {
         },
         "map"_a, "positions"_a, "streams"_a, "sector_rays"_a, "bins"_a, "half_width"_a, "min_range"_a,
         "max_range"_a, "noise"_a = 0.0, "seed"_a = 0, "scan_voxel"_a = 0.0, "dof"_a = 6,
-        "association"_a = "knn", "w1"_a = 0.5, "w2"_a = 0.5, "threads"_a = 0,
+        "association"_a = "knn", "w1"_a = 0.5, "w2"_a = 0.5, "threads"_a = 0, "ray_weight"_a = 1.0,
         "SE(2) metric at every yaw bin from one scan per yaw sector (sums of sector Grams). "
         "Returns per-position, per-bin columns.");
 

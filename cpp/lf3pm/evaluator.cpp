@@ -1,5 +1,7 @@
 #include "lf3pm/evaluator.hpp"
 
+#include <cmath>
+
 #include <stdexcept>
 
 #include "lf3pm/parallel.hpp"
@@ -64,12 +66,19 @@ Observations scan_observations(const MapIndex& map, const Pose& pose, const Simu
   return obs;
 }
 
+Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params) {
+  if (!(params.ray_weight >= 1.0)) throw std::invalid_argument("ray_weight must be >= 1");
+  if (params.ray_weight == 1.0) return metric_from_gram(gram.gram(), gram.rows(), params.weights);
+  return metric_from_gram(gram.gram() * params.ray_weight,
+                          std::llround(static_cast<double>(gram.rows()) * params.ray_weight), params.weights);
+}
+
 PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
                              std::size_t count, const EvalParams& params) {
   const SimulatedScan scan = simulate_scan(map, pose, directions, count, params.scan);
   const GramAccumulator gram = scan_gram(map, pose, scan, params);
   PoseEvaluation out;
-  out.metric = metric_from_gram(gram.gram(), gram.rows(), params.weights);
+  out.metric = weighted_metric(gram, params);
   out.rays = static_cast<std::int64_t>(count);
   out.hits = static_cast<std::int64_t>(scan.world_points.size());
   return out;

@@ -18,6 +18,10 @@ struct EvalParams {
   int dof = 6;
   Association association = Association::Surfel;
   MetricWeights weights;
+  // Each simulated ray stands for this many rays of the full pattern (thinned
+  // SOLM builds): the Gram and the row count are scaled by it before the metric,
+  // which makes the metric of the thinned scan an estimate of the full scan's.
+  double ray_weight = 1.0;
 };
 
 struct PoseEvaluation {
@@ -37,6 +41,9 @@ PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double
                              std::size_t count, const EvalParams& params);
 
 /// The Gram of [A | b] of a scan and its row count; deterministic for any thread count.
+/// The metric of an accumulated Gram, scaled by params.ray_weight.
+Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params);
+
 GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
                           const EvalParams& params);
 

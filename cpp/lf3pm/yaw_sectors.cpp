@@ -32,7 +32,7 @@ std::vector<Metric> evaluate_yaw_sectors(const MapIndex& map, const std::vector<
       for (int k = 0; k < bins; ++k) {
         GramAccumulator total(params.dof);
         for (int o = -half_width; o <= half_width; ++o) total.merge(sector[((k + o) % bins + bins) % bins]);
-        out[i * bins + k] = metric_from_gram(total.gram(), total.rows(), params.weights);
+        out[i * bins + k] = weighted_metric(total, params);
       }
     }
   });

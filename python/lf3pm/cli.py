@@ -279,6 +279,8 @@ def solm_build(
     yaw_bins: int = typer.Option(36, help="Yaw bins (se2)."),
     yaw_reuse: bool = typer.Option(False, help="se2: one scan per yaw sector, summed per bin "
                                                "(faster, approximate; docs/solm.md)."),
+    ray_stride: int = typer.Option(1, help="Cast every K-th azimuth column of the pattern and scale "
+                                           "the Gram (about K times faster, approximate; docs/solm.md)."),
     height: float = typer.Option(1.0, help="Sensor height above the local ground (r2, se2), m."),
     bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
         None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
@@ -301,7 +303,8 @@ def solm_build(
                 step(f"SOLM {space} {grid.shape} cells", total, cells)
 
             result = build_solm(world, lidar, grid, out, seed=seed, noise=noise,
-                                robot_radius=robot_radius, yaw_reuse=yaw_reuse, threads=threads,
+                                robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride,
+                                threads=threads,
                                 progress=advance)
         console.print(f"{out}: {grid.space} grid {grid.shape} at {res} m; tiles built now "
                       f"{result['built_now']} of {result['tiles']}; complete: {result['complete']}")

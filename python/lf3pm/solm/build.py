@@ -13,6 +13,7 @@ from lf3pm.map import Map
 from lf3pm.sensors import Sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, TILE, open_or_create, tiles_shape
+from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.yaw_reuse import sector_layout
 from lf3pm.terrain import body_blocked, column_minimum
 
@@ -20,13 +21,15 @@ from lf3pm.terrain import body_blocked, column_minimum
 def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = 0,
                noise: float | None = None, robot_radius: float = 0.3, floor_clearance: float = 0.2,
                association: str = "knn", w1: float = 0.5, threads: int = 0,
-               yaw_reuse: bool = False, tile: int = TILE, max_tiles: int | None = None,
+               yaw_reuse: bool = False, ray_stride: int = 1, tile: int = TILE, max_tiles: int | None = None,
                progress=None) -> dict:
     """Builds (or resumes) the SOLM of ``world`` for ``sensor`` on ``grid`` into
     the Zarr store ``out``. Cell c (linear index over the channel's shape) uses
     noise stream c, so results do not depend on tiling or resumption.
     ``yaw_reuse`` (se2 only) scans each yaw sector once and sums sector Grams
     per bin (yaw_reuse.py): about 2F+1 times faster, approximate (docs/solm.md).
+    ``ray_stride`` K casts every K-th azimuth column of the pattern and scales
+    the Gram up (ray_thinning.py): about K times faster, approximate.
     ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
     after that many tiles (for tests of resumption)."""
     sigma = sensor.range_noise_sigma if noise is None else float(noise)
@@ -38,6 +41,10 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
     if yaw_reuse and grid.space != "se2":
         raise Lf3pmError("yaw reuse applies to se2 grids only")
     sectors = sector_layout(sensor, grid.yaw_bins) if yaw_reuse else None
+    if sectors is not None:
+        sector_rays, ray_weight = thin_rays(sectors[0], ray_stride)
+    else:
+        directions, ray_weight = thin_rays(sensor.directions, ray_stride)
     attrs = {"lf3pm_version": __version__, "grid": grid.to_dict(), "sensor": sensor.name,
              "sensor_rays": sensor.num_rays, "noise": sigma, "seed": int(seed),
              "w1": w1, "w2": 1.0 - w1, "association": association, "robot_radius": robot_radius,
@@ -45,7 +52,7 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
              "map_source": world.source, "channels": list(CHANNELS),
              "noise_stream": "linear cell index over the channel shape (yaw reuse: "
                              "2D cell index * yaw_bins + sector)", "tile": tile,
-             "yaw_reuse": bool(yaw_reuse)}
+             "yaw_reuse": bool(yaw_reuse), "ray_stride": int(ray_stride)}
     ground = (column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny)
               if ground_robot else None)
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
@@ -87,20 +94,20 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
             cell2d = valid[0]
             positions = np.ascontiguousarray(np.stack([xx[cell2d], yy[cell2d], z[0][cell2d]], axis=1))
             res = _core.evaluate_yaw_sectors(world.index, positions,
-                                             cell_index[0][cell2d].astype(np.uint64), sectors[0],
+                                             cell_index[0][cell2d].astype(np.uint64), sector_rays,
                                              grid.yaw_bins, sectors[1], sensor.min_range,
                                              sensor.max_range, noise=sigma, seed=int(seed),
                                              association=association, w1=w1, w2=1.0 - w1,
-                                             threads=threads)
+                                             threads=threads, ray_weight=ray_weight)
             for name in CHANNELS:
                 values[name][:, cell2d] = res[name].T
             degenerate[:, cell2d] = res["degenerate"].T.astype(np.uint8)
         elif valid.any():
             poses = _pose_matrices(X[valid], Y[valid], z[valid], yaw[valid])
             res = _core.evaluate_many(world.index, poses, cell_index[valid].astype(np.uint64),
-                                      sensor.directions, sensor.min_range, sensor.max_range,
+                                      directions, sensor.min_range, sensor.max_range,
                                       noise=sigma, seed=int(seed), association=association,
-                                      w1=w1, w2=1.0 - w1, threads=threads)
+                                      w1=w1, w2=1.0 - w1, threads=threads, ray_weight=ray_weight)
             for name in CHANNELS:
                 values[name][valid] = res[name]
             degenerate[valid] = res["degenerate"].astype(np.uint8)
