@@ -4,4 +4,6 @@
 
 namespace nb = nanobind;
 
-void bind_planner(nb::module_& m) { (void)m; }
+void bind_graph_search(nb::module_& m);
+
+void bind_planner(nb::module_& m) { bind_graph_search(m); }

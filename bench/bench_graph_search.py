@@ -1,0 +1,119 @@
+"""Benchmark: the front end's grid search on a seeded synthetic map.
+
+r2, 1000 x 1000 cells: ours (Dijkstra and A*) against scipy.sparse.csgraph.dijkstra
+on the same explicit graph (8-connected, no corner cutting, edge cost
+length * (1 + lambda * mean cell cost)); scipy solves single-source shortest
+paths to every cell, ours stops at the goal, which lies in the far corner so
+Dijkstra closes nearly every cell either way. se2, 1000 x 1000 x 36: ours, A*
+and Dijkstra: time, expansions, peak memory.
+
+    .venv/bin/python bench/bench_graph_search.py [--size 1000] [--bins 36] [--no-se2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import resource
+import time
+
+import numpy as np
+from scipy.ndimage import gaussian_filter
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from lf3pm.planner.graph_search import search_path
+
+RES = 0.1
+WEIGHT = 1.0
+
+
+def synthetic_map(size: int, seed: int = 0):
+    """Random discs as obstacles (about a fifth of the area), a smooth positive
+    cost field, and the start and goal corners kept free."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:size, 0:size]
+    blocked = np.zeros((size, size), bool)
+    count = max(1, round(200 * (size / 1000) ** 2))
+    for cx, cy, r in zip(rng.integers(0, size, count), rng.integers(0, size, count), rng.integers(5, 30, count)):
+        x0, x1, y0, y1 = max(cx - r, 0), min(cx + r + 1, size), max(cy - r, 0), min(cy + r + 1, size)
+        blocked[y0:y1, x0:x1] |= np.hypot(xx[y0:y1, x0:x1] - cx, yy[y0:y1, x0:x1] - cy) <= r
+    blocked[:40, :40] = blocked[-40:, -40:] = False
+    cost = gaussian_filter(rng.random((size, size)), 8)
+    cost = 0.2 + 3.0 * (cost - cost.min()) / (cost.max() - cost.min())
+    angle = 2 * math.pi * gaussian_filter(rng.random((size, size)), 20) * 10
+    return ~blocked, cost, angle
+
+
+def explicit_graph(cost, trav):
+    """The same graph as the C++ search, written out as a CSR matrix."""
+    ny, nx = cost.shape
+    y, x = np.mgrid[0:ny, 0:nx]
+    rows, cols, weights = [], [], []
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            if dx == 0 and dy == 0:
+                continue
+            x2, y2 = np.clip(x + dx, 0, nx - 1), np.clip(y + dy, 0, ny - 1)
+            ok = trav & (x + dx == x2) & (y + dy == y2) & trav[y2, x2]
+            if dx and dy:
+                ok &= trav[y, x2] & trav[y2, x]
+            w = math.hypot(dx, dy) * RES * (1 + WEIGHT * 0.5 * (cost + cost[y2, x2]))
+            rows.append((y * nx + x)[ok]), cols.append((y2 * nx + x2)[ok]), weights.append(w[ok])
+    n = cost.size
+    return csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+
+
+def peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=1000)
+    parser.add_argument("--bins", type=int, default=36)
+    parser.add_argument("--no-se2", action="store_true")
+    args = parser.parse_args()
+    n = args.size
+    trav, cost, angle = synthetic_map(n)
+    grid = type("Grid", (), dict(x0=0.0, y0=0.0, res=RES, nx=n, ny=n))
+    start, goal = (1.05, 1.05, 0.0), ((n - 10.5) * RES, (n - 10.5) * RES, math.pi)
+    s_idx, g_idx = 10 * n + 10, (n - 11) * n + (n - 11)
+    print(f"map {n} x {n}, res {RES} m, {100 * (1 - trav.mean()):.1f} % blocked, lambda {WEIGHT}")
+
+    t = time.perf_counter()
+    graph = explicit_graph(cost, trav)
+    build_s = time.perf_counter() - t
+    t = time.perf_counter()
+    dist = dijkstra(graph, indices=s_idx)
+    scipy_s = time.perf_counter() - t
+    del graph
+    print(f"r2 scipy csgraph.dijkstra: {scipy_s:.2f} s (graph build {build_s:.2f} s not counted), "
+          f"cost {dist[g_idx]:.4f}")
+    for name, heuristic in (("Dijkstra", False), ("A*", True)):
+        p = search_path(cost, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
+        print(f"r2 ours {name:8s}: {p.time:.3f} s, {p.expanded} expanded, cost {p.cost:.4f}, "
+              f"scipy / ours {scipy_s / p.time:.1f}x")
+    if args.no_se2:
+        return
+
+    bins = args.bins
+    yaw = np.arange(bins)[:, None, None] * 2 * math.pi / bins
+    # Perception cost depends on heading: better when facing a direction that varies over the map.
+    cost3 = cost[None] * (1.0 + 0.5 * np.cos(yaw - angle[None]))
+    before = peak_mb()
+    print(f"se2 {n} x {n} x {bins} = {cost3.size / 1e6:.0f} M states, turn radius 0.5 m; "
+          f"process peak RSS before {before:.0f} MB")
+    for name, heuristic in (("A*", True), ("Dijkstra", False)):
+        t = time.perf_counter()
+        p = search_path(cost3, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
+        wall = time.perf_counter() - t
+        core_mb = (cost3.size * 9 + p.heap_peak * 16) / 2**20
+        print(f"se2 ours {name:8s}: {p.time:.2f} s search ({wall:.2f} s with input checks), "
+              f"{p.expanded} expanded, cost {p.cost:.4f}, heap peak {p.heap_peak}, "
+              f"search memory {core_mb:.0f} MB (g + state byte + heap), "
+              f"process peak RSS {peak_mb():.0f} MB")
+
+
+if __name__ == "__main__":
+    main()

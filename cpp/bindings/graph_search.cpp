@@ -1,0 +1,45 @@
+// nanobind bindings of the front end's grid search (cpp/lf3pm/graph_search.hpp).
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <vector>
+
+#include "lf3pm/graph_search.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+void bind_graph_search(nb::module_& m) {
+  using Flat = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+  using Mask = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+  m.def(
+      "grid_search",
+      [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t start,
+         std::uint32_t goal, double weight, double turn_length, bool turn_while_moving, bool heuristic) {
+        const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(layers);
+        if (cost.shape(0) != n || traversable.shape(0) != n)
+          throw std::invalid_argument("cost and traversable need nx * ny * layers values");
+        lf3pm::SearchGrid grid{nx, ny, layers, res};
+        lf3pm::SearchParams params{weight, turn_length, turn_while_moving, heuristic};
+        lf3pm::SearchResult r;
+        {
+          nb::gil_scoped_release release;
+          r = lf3pm::grid_search(cost.data(), traversable.data(), grid, start, goal, params);
+        }
+        auto* owned = new std::vector<std::uint32_t>(std::move(r.path));
+        nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<std::uint32_t>*>(p); });
+        nb::dict out;
+        out["found"] = r.found;
+        out["cost"] = r.cost;
+        out["path"] = nb::ndarray<nb::numpy, std::uint32_t>(owned->data(), {owned->size()}, free_when_done);
+        out["expanded"] = r.expanded;
+        out["pushed"] = r.pushed;
+        out["heap_peak"] = r.heap_peak;
+        return out;
+      },
+      "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "start"_a, "goal"_a,
+      "weight"_a = 1.0, "turn_length"_a = 0.0, "turn_while_moving"_a = true, "heuristic"_a = true,
+      "A* (heuristic=True) or Dijkstra over nx x ny x layers states (flat float64 cost, uint8 traversable, "
+      "index (y * nx + x) * layers + k: yaw innermost; layers > 1 are periodic yaw bins). Returns a dict: found, cost, path "
+      "(uint32 state indices), expanded, pushed, heap_peak.");
+}

@@ -1,0 +1,86 @@
+"""Perception cost layer: a SOLM channel made into a non-negative per-cell cost.
+
+Normalisation, so that one weight lambda means the same trade-off on any map:
+the channel is divided by its median over the evaluated cells (finite values;
+se2: over every yaw bin), so a typical cell costs 1 and an edge through it
+costs length * (1 + lambda). The median is robust to the long upper tail q
+has near degenerate places; a median of 0 falls back to the mean, and an
+all-zero channel gives zero cost.
+
+Cap: degenerate cells (q = +inf, or flagged ``degenerate`` in the SOLM) and
+finite values above it get the cap, the 99th percentile of the normalised
+finite values (``cap_percentile``), so one extreme cell cannot dominate a path
+and the layer stays finite. Cells the SOLM did not evaluate (obstacles,
+unknown ground: NaN) stay NaN in ``cost`` and hold the cap in ``filled``, the
+finite array the trajectory optimiser interpolates.
+
+Channel ``none`` gives zero cost: the planner then finds shortest paths.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lf3pm.errors import Lf3pmError
+
+COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
+
+
+@dataclass(frozen=True)
+class CostLayer:
+    """``cost``: float64 of the channel's shape, >= 0, NaN where not evaluated;
+    ``filled``: the same with NaN replaced by ``cap`` (finite everywhere);
+    ``scale``: the divisor applied to the channel; ``cap``: the largest cost."""
+
+    channel: str
+    cost: np.ndarray
+    filled: np.ndarray
+    scale: float
+    cap: float
+
+
+def cost_from_values(values, channel: str = "q_n", *, degenerate=None,
+                     cap_percentile: float = 99.0) -> CostLayer:
+    """The cost layer of one channel's array (NaN: not evaluated, +inf: degenerate);
+    ``degenerate`` optionally flags more cells to cap."""
+    if channel not in COST_CHANNELS:
+        raise Lf3pmError(f"unknown cost channel {channel!r}; use one of {', '.join(COST_CHANNELS)}")
+    if not 0 < cap_percentile <= 100:
+        raise Lf3pmError(f"cap percentile must be in (0, 100], got {cap_percentile}")
+    values = np.asarray(values, dtype=np.float64)
+    if channel == "none":
+        zeros = np.zeros(values.shape)
+        return CostLayer(channel, zeros, zeros.copy(), 1.0, 0.0)
+    finite = np.isfinite(values)
+    if degenerate is not None:
+        finite &= ~np.asarray(degenerate, dtype=bool)
+    if not finite.any():
+        raise Lf3pmError(f"channel {channel} has no finite value to normalise by")
+    if np.any(values[finite] < 0) or np.any(values == -np.inf):
+        raise Lf3pmError(f"channel {channel} has negative values; a cost must be >= 0")
+    scale = float(np.median(values[finite]))
+    if scale <= 0:
+        scale = float(np.mean(values[finite]))
+    if scale <= 0:
+        scale = 1.0  # all zero: no place is better than another
+    cost = np.where(finite, values / scale, np.inf)
+    cap = float(np.percentile(cost[finite], cap_percentile))
+    cost = np.minimum(cost, cap)
+    cost[np.isnan(values)] = np.nan
+    return CostLayer(channel, cost, np.where(np.isnan(cost), cap, cost), scale, cap)
+
+
+def cost_from_solm(solm, channel: str = "q_n", *, cap_percentile: float = 99.0) -> CostLayer:
+    """The cost layer of ``solm``'s ``channel`` (shape (ny, nx) for r2, (yaw_bins,
+    ny, nx) for se2), with the SOLM's degenerate mask capped."""
+    if solm.grid_spec.space not in ("r2", "se2"):
+        raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {solm.grid_spec.space}")
+    if channel == "none":
+        return cost_from_values(np.zeros(solm.grid_spec.shape), "none")
+    if channel not in COST_CHANNELS:
+        raise Lf3pmError(f"unknown cost channel {channel!r}; use one of {', '.join(COST_CHANNELS)}")
+    return cost_from_values(solm.channel(channel), channel,
+                            degenerate=np.asarray(solm.channel("degenerate")).astype(bool),
+                            cap_percentile=cap_percentile)
