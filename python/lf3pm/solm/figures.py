@@ -32,16 +32,30 @@ def reduced(solm: Solm, channel: str, reduce: str) -> np.ndarray:
 def heat_map(solm: Solm, path: Path, *, channel: str = "q_n", reduce: str = "mean",
              map_points: np.ndarray | None = None) -> None:
     """Writes a PNG of ``channel`` (log colour scale) over the map's top view."""
+    fig, ax = new_figure()
+    draw_heat_map(fig, ax, solm, channel=channel, reduce=reduce, map_points=map_points)
+    save_figure(fig, Path(path))
+
+
+def new_figure():
+    """A figure and axes sized for a map view (Agg backend: no display needed)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    return plt.subplots(figsize=(9, 7), dpi=110)
+
+
+def draw_heat_map(fig, ax, solm: Solm, *, channel: str = "q_n", reduce: str = "mean",
+                  map_points: np.ndarray | None = None) -> None:
+    """Draws ``channel`` (log colour scale), the obstacles in black and, under
+    unknown cells, the map's points, with a colour bar and axis labels."""
     from matplotlib.colors import LogNorm
 
     g = solm.grid_spec
     layer = reduced(solm, channel, reduce)
     extent = (g.x0, g.x0 + g.nx * g.res, g.y0, g.y0 + g.ny * g.res)
-    fig, ax = plt.subplots(figsize=(9, 7), dpi=110)
     if map_points is not None:
         step = max(1, len(map_points) // 300_000)
         ax.scatter(map_points[::step, 0], map_points[::step, 1], s=0.1, c="0.75", linewidths=0,
@@ -63,9 +77,6 @@ def heat_map(solm: Solm, path: Path, *, channel: str = "q_n", reduce: str = "mea
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal")
-    fig.tight_layout()
-    _save(fig, Path(path))
-    plt.close(fig)
 
 
 def export_ros(solm: Solm, folder: Path, *, reduce: str = "mean") -> list[Path]:
@@ -103,7 +114,12 @@ def export_ros(solm: Solm, folder: Path, *, reduce: str = "mean") -> list[Path]:
     return written
 
 
-def _save(fig, path: Path) -> None:
+def save_figure(fig, path: Path) -> None:
+    """Writes ``fig`` to ``path`` atomically and closes it."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
     tmp = path.with_name(f".{path.name}.tmp.png")
     fig.savefig(tmp)
     os.replace(tmp, path)
+    plt.close(fig)

@@ -1,0 +1,104 @@
+"""Perception-aware planning on a SOLM: the front end's least-cost grid path,
+then the back end's MINCO trajectory through it (paper, section "Planning").
+
+Both ends trade time against the same normalised cost layer c (a SOLM channel
+divided by its median, cost_map.py): the front end's edge cost is
+length * (1 + weight * c) and the back end integrates (rho_T + w_q * c) dt with
+w_q = weight * rho_T, which at constant speed is the same trade-off.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from lf3pm.errors import Lf3pmError
+from lf3pm.planner.cost_map import CostLayer, cost_from_solm
+from lf3pm.planner.esdf import Esdf
+from lf3pm.planner.graph_search import GraphPath, search_path
+from lf3pm.planner.grid import GridField
+from lf3pm.planner.optimizer import OptimizeResult, optimize_trajectory
+from lf3pm.planner.robots import Robot
+from lf3pm.planner.trajectory import Trajectory
+from lf3pm.solm.reader import Solm
+
+METRICS = ("q_n", "q_min", "step_norm", "none")
+
+# An ESDF with nothing blocked is +inf everywhere; the back end needs finite
+# values, and beyond this distance clearance never matters.
+_FAR = 1.0e3
+
+
+@dataclass
+class Plan:
+    """A planned motion: the front end's grid path and the optimised trajectory."""
+
+    metric: str
+    robot: Robot
+    path: GraphPath
+    optimization: OptimizeResult
+
+    @property
+    def trajectory(self) -> Trajectory:
+        return self.optimization.trajectory
+
+    def summary(self) -> dict:
+        """Plain numbers for reports: lengths, duration, timings, worst constraint values."""
+        samples = self.trajectory.sample(100.0)
+        length = float(np.hypot(np.diff(samples["x"]), np.diff(samples["y"])).sum())
+        return {"metric": self.metric, "robot": self.robot.kind, "path_length_m": self.path.length,
+                "trajectory_length_m": length, "duration_s": float(self.trajectory.duration),
+                "search_s": self.path.time, "optimize_s": self.optimization.wall_time,
+                "iterations": int(self.optimization.iterations),
+                "limits": {k: float(v) for k, v in self.optimization.limits.items()}}
+
+
+class Planner:
+    """Plans on one SOLM: the ESDF and cost layers are computed once and reused
+    for every (start, goal, metric) query."""
+
+    def __init__(self, solm: Solm, *, unknown_policy: str = "obstacle"):
+        if solm.grid_spec.space == "r3":
+            raise Lf3pmError("planning needs an r2 or se2 SOLM (ground robots); this one is r3")
+        self.solm = solm
+        self.esdf = Esdf.from_solm(solm, unknown_policy=unknown_policy)
+        g = self.esdf
+        self._esdf_field = GridField(np.minimum(self.esdf.values, _FAR), g.x0, g.y0, g.res)
+        self._layers: dict[str, CostLayer] = {}
+
+    def cost_layer(self, metric: str) -> CostLayer:
+        if metric not in METRICS:
+            raise Lf3pmError(f"metric must be one of {', '.join(METRICS)}, got {metric!r}")
+        if metric not in self._layers:
+            self._layers[metric] = cost_from_solm(self.solm, metric)
+        return self._layers[metric]
+
+    def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = "q_n", weight: float = 1.0,
+             rho_T: float = 1.0, heuristic: bool = True) -> Plan:
+        """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
+        (``none``: shortest and fastest only) with trade-off ``weight`` (lambda)."""
+        start, goal = _pose3(start, "start"), _pose3(goal, "goal")
+        if not (math.isfinite(rho_T) and rho_T > 0):
+            raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
+        layer = self.cost_layer(metric)
+        path = search_path(layer, self.esdf, self.solm.grid_spec, start, goal, weight=weight,
+                           heuristic=heuristic, r_safe=robot.r_safe)
+        waypoints = np.array(path.poses, dtype=np.float64)
+        # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
+        waypoints[0], waypoints[-1] = start, goal
+        waypoints[:, 2] = np.unwrap(waypoints[:, 2])  # exact end yaws may sit a turn away
+        g = self.esdf
+        cost = None if metric == "none" else GridField(layer.filled, g.x0, g.y0, g.res)
+        result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
+                                     rho_T=rho_T)
+        return Plan(metric, robot, path, result)
+
+
+def _pose3(value, name: str) -> np.ndarray:
+    pose = np.asarray(value, dtype=np.float64).reshape(-1)
+    if pose.shape != (3,) or not np.isfinite(pose).all():
+        raise Lf3pmError(f"{name} must be three finite numbers X Y YAW, got {value!r}")
+    return pose
+
