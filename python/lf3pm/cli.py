@@ -249,9 +249,76 @@ def experiment_correlation(
                       f"{summary['best_pooled']}; wrote {out}/summary.json, poses.csv, scatter.png")
 
 
+@experiment_app.command("gobi")
+def experiment_gobi(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM is resumed on a rerun)."),
+    reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
+    seed: int = typer.Option(0, help="Seed of the scene, the noise and the disturbances."),
+):
+    """Plans town -> warehouse guided by q_n, q_min, |dx*| and none; compares S and odometry."""
+    with user_errors():
+        from dataclasses import replace
+
+        from lf3pm.experiments import gobi
+
+        setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=seed)
+        with progress_bar() as step:
+            summary = gobi.run(out, setup, progress=step)
+        console.print((out / "gobi.md").read_text())
+        console.print(f"wrote {out}/summary.json, gobi.md, trajectories.png, along.png, trajectories/")
+
+
+@app.command()
+def plan(
+    solm_path: Path = typer.Option(..., "--solm", metavar="S.zarr", help="A built r2 or se2 SOLM."),
+    start: Tuple[float, float, float] = typer.Option(..., help="Start X Y YAW (m, rad)."),
+    goal: Tuple[float, float, float] = typer.Option(..., help="Goal X Y YAW (m, rad)."),
+    out: Path = typer.Option(..., "-o", "--out", metavar="TRAJ.csv",
+                             help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."),
+    robot: str = typer.Option("omni", help="omni, diff (differential drive) or car."),
+    metric: str = typer.Option("q_n", help="SOLM channel guiding the plan: q_n, q_min, step_norm or none."),
+    weight: float = typer.Option(1.0, help="lambda: cost of a median cell relative to path length/time."),
+    vmax_lon: float = typer.Option(1.0, help="Longitudinal speed limit (m/s)."),
+    vmax_lat: float = typer.Option(1.0, help="Lateral speed limit (m/s; omni)."),
+    wmax: float = typer.Option(1.0, help="Yaw rate limit (rad/s)."),
+    min_turn_radius: float = typer.Option(0.0, help="Minimum turning radius (m; car)."),
+    r_safe: float = typer.Option(0.3, help="Clearance beyond the SOLM's robot radius (m)."),
+    png: Optional[Path] = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
+    map_path: Optional[Path] = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
+    as_json: bool = typer.Option(False, "--json", help="Print the plan's summary as JSON."),
+):
+    """Plan a perception-aware trajectory on a SOLM (graph search, then MINCO + L-BFGS)."""
+    with user_errors():
+        from lf3pm.planner.plan import Planner
+        from lf3pm.planner.robots import Robot
+        from lf3pm.solm import Solm
+
+        vehicle = Robot(robot, vmax_lon=vmax_lon, vmax_lat=vmax_lat, wmax=wmax,
+                        min_turn_radius=min_turn_radius, r_safe=r_safe)
+        solm = Solm.open(solm_path)
+        result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight)
+        result.trajectory.to_csv(out)
+        if png is not None:
+            from lf3pm.map import load_map
+            from lf3pm.planner.figures import plans_figure
+
+            points = load_map(map_path).points if map_path is not None else None
+            plans_figure(solm, {metric: result}, png, map_points=points,
+                         title=f"{robot} plan guided by {metric} over the SOLM (dotted: grid path)")
+        summary = result.summary()
+        if as_json:
+            print(json.dumps(summary, indent=1))
+        else:
+            console.print(f"{out}: {summary['duration_s']:.1f} s, {summary['trajectory_length_m']:.1f} m "
+                          f"(grid path {summary['path_length_m']:.1f} m); search "
+                          f"{summary['search_s'] * 1e3:.0f} ms, optimisation "
+                          f"{summary['optimize_s'] * 1e3:.0f} ms")
+
+
 @contextmanager
 def progress_bar():
-    """A rich progress bar on stderr; yields step(label, total, advance=1)."""
+    """A rich progress bar on stderr; yields step(label, total, advance=1, restart=False)
+    (restart: a new phase, counted from zero)."""
     from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
 
     with Progress("[progress.description]{task.description}", BarColumn(),
@@ -259,7 +326,9 @@ def progress_bar():
                   console=err_console) as bar:
         task = bar.add_task("starting", total=None)
 
-        def step(label, total, advance=1):
+        def step(label, total, advance=1, restart=False):
+            if restart:
+                bar.reset(task, total=total, description=label)
             bar.update(task, description=label, total=total, advance=advance)
 
         yield step
