@@ -4,4 +4,6 @@
 
 namespace nb = nanobind;
 
-void bind_planner(nb::module_& m) { (void)m; }
+void bind_trajectory(nb::module_& m);
+
+void bind_planner(nb::module_& m) { bind_trajectory(m); }
