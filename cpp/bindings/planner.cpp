@@ -5,5 +5,9 @@
 namespace nb = nanobind;
 
 void bind_graph_search(nb::module_& m);
+void bind_trajectory(nb::module_& m);
 
-void bind_planner(nb::module_& m) { bind_graph_search(m); }
+void bind_planner(nb::module_& m) {
+  bind_graph_search(m);
+  bind_trajectory(m);
+}

@@ -1,0 +1,225 @@
+// nanobind bindings of the trajectory back end: grid fields, MINCO, L-BFGS and
+// the PHR trajectory optimiser (logic lives in cpp/lf3pm/).
+#include <nanobind/eigen/dense.h>
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/function.h>
+#include <nanobind/stl/string.h>
+
+#include <stdexcept>
+#include <vector>
+
+#include "lf3pm/grid_field.hpp"
+#include "lf3pm/lbfgs.hpp"
+#include "lf3pm/minco.hpp"
+#include "lf3pm/trajectory_cost.hpp"
+#include "lf3pm/trajectory_optimizer.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace lf3pm;
+
+namespace {
+
+using Vec = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+using Mat3 = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using Mat32 = nb::ndarray<const double, nb::shape<3, 2>, nb::c_contig, nb::device::cpu>;
+
+Eigen::VectorXd to_vector(Vec v) { return Eigen::Map<const Eigen::VectorXd>(v.data(), v.shape(0)); }
+
+Eigen::Matrix<double, 3, 2> to_state(Mat32 m) {
+  Eigen::Matrix<double, 3, 2> s;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 2; ++c) s(r, c) = m(r, c);
+  return s;
+}
+
+// (K, 3) row-major waypoints -> 3 x K.
+Eigen::Matrix3Xd to_points(Mat3 m) {
+  return Eigen::Map<const Eigen::Matrix3Xd>(m.data(), 3, static_cast<Eigen::Index>(m.shape(0)));
+}
+
+// 4N x 3 coefficients -> (N, 4, 3) numpy array.
+nb::ndarray<nb::numpy, double> coefficients_array(const Eigen::MatrixX3d& c) {
+  const std::size_t n = static_cast<std::size_t>(c.rows() / 4);
+  auto* flat = new std::vector<double>(c.rows() * 3);
+  for (Eigen::Index r = 0; r < c.rows(); ++r)
+    for (int d = 0; d < 3; ++d) (*flat)[3 * r + d] = c(r, d);
+  nb::capsule owner(flat, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
+  return nb::ndarray<nb::numpy, double>(flat->data(), {n, 4, 3}, owner);
+}
+
+RobotKind robot_kind(const std::string& kind) {
+  if (kind == "omni") return RobotKind::Omni;
+  if (kind == "diff") return RobotKind::Diff;
+  if (kind == "car") return RobotKind::Car;
+  throw std::invalid_argument("robot kind must be 'omni', 'diff' or 'car'");
+}
+
+nb::dict terms_dict(const CostTerms& t) {
+  nb::dict d;
+  d["q"] = t.q;
+  d["velocity"] = t.velocity;
+  d["omega"] = t.omega;
+  d["turn"] = t.turn;
+  d["esdf"] = t.esdf;
+  d["phr"] = t.phr;
+  d["time"] = t.time;
+  d["energy"] = t.energy;
+  d["total"] = t.total();
+  return d;
+}
+
+LbfgsParams lbfgs_params(int memory, double g_epsilon, int past, double delta, int max_iterations) {
+  LbfgsParams p;
+  p.memory = memory;
+  p.g_epsilon = g_epsilon;
+  p.past = past;
+  p.delta = delta;
+  p.max_iterations = max_iterations;
+  return p;
+}
+
+}  // namespace
+
+void bind_trajectory(nb::module_& m) {
+  nb::class_<GridField>(m, "GridField",
+                        "Regular (x, y[, periodic yaw]) grid with bilinear/trilinear interpolation and gradient.")
+      .def("__init__",
+           [](GridField* self, nb::ndarray<const double, nb::c_contig, nb::device::cpu> values, double x0, double y0,
+              double res) {
+             if (values.ndim() != 2 && values.ndim() != 3)
+               throw std::invalid_argument("grid values must be (ny, nx) or (yaw_bins, ny, nx)");
+             const bool three = values.ndim() == 3;
+             const int layers = three ? int(values.shape(0)) : 1;
+             const int ny = int(values.shape(three ? 1 : 0)), nx = int(values.shape(three ? 2 : 1));
+             std::vector<double> v(values.data(), values.data() + values.size());
+             new (self) GridField(std::move(v), nx, ny, layers, x0, y0, res);
+           },
+           "values"_a, "x0"_a, "y0"_a, "res"_a)
+      .def_prop_ro("layers", &GridField::layers)
+      .def("sample",
+           [](const GridField& f, Vec x, Vec y, Vec yaw) {
+             const std::size_t n = x.shape(0);
+             if (y.shape(0) != n || yaw.shape(0) != n) throw std::invalid_argument("x, y, yaw lengths differ");
+             Eigen::VectorXd value(n);
+             Eigen::Matrix<double, -1, 3, Eigen::RowMajor> grad(n, 3);
+             Eigen::Vector3d gr;
+             for (std::size_t i = 0; i < n; ++i) {
+               value(i) = f.sample(x(i), y(i), yaw(i), gr);
+               grad.row(i) = gr.transpose();
+             }
+             return nb::make_tuple(value, grad);
+           },
+           "x"_a, "y"_a, "yaw"_a, "Values (n,) and gradients (n, 3: d/dx, d/dy, d/dyaw) at the points.");
+
+  m.def("minco_s2",
+        [](Mat32 head, Mat32 tail, Mat3 waypoints, Vec durations) {
+          MincoS2 minco;
+          minco.set_conditions(to_state(head), to_state(tail), int(durations.shape(0)));
+          minco.set_parameters(to_points(waypoints), to_vector(durations));
+          return nb::make_tuple(coefficients_array(minco.coefficients()), minco.energy());
+        },
+        "head"_a, "tail"_a, "waypoints"_a, "durations"_a,
+        "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity), "
+        "intermediate waypoints (N-1, 3) and durations (N,).");
+
+  m.def("lbfgs_minimize",
+        [](const std::function<nb::tuple(const Eigen::VectorXd&)>& fun, Vec x0, int memory, double g_epsilon,
+           int past, double delta, int max_iterations) {
+          Eigen::VectorXd x = to_vector(x0);
+          const Objective f = [&fun](const Eigen::VectorXd& xv, Eigen::VectorXd& g) {
+            const nb::tuple r = fun(xv);
+            g = nb::cast<Eigen::VectorXd>(r[1]);
+            if (g.size() != xv.size()) throw std::invalid_argument("gradient has the wrong size");
+            return nb::cast<double>(r[0]);
+          };
+          const LbfgsResult r = lbfgs_minimize(f, x, lbfgs_params(memory, g_epsilon, past, delta, max_iterations));
+          nb::dict out;
+          out["x"] = x;
+          out["f"] = r.f;
+          out["iterations"] = r.iterations;
+          out["evaluations"] = r.evaluations;
+          out["gradient_norm"] = r.gradient_norm;
+          out["status"] = std::string(to_string(r.status));
+          return out;
+        },
+        "fun"_a, "x0"_a, "memory"_a = 8, "g_epsilon"_a = 1e-6, "past"_a = 3, "delta"_a = 1e-9,
+        "max_iterations"_a = 0, "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
+
+  nb::class_<TrajectoryProblem>(m, "TrajectoryProblem",
+                                "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece)].")
+      .def("__init__",
+           [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const std::string& kind,
+              double vmax_lon, double vmax_lat, double wmax, double min_turn_radius, double r_safe, double w_q,
+              double penalty, double esdf_margin, int samples, double rho_t, double w_energy, Mat32 head,
+              Mat32 tail, Mat3 waypoints, Vec durations) {
+             RobotLimits robot{robot_kind(kind), vmax_lon, vmax_lat, wmax, min_turn_radius, r_safe};
+             CostWeights weights{w_q, penalty, esdf_margin, samples};
+             TrajectoryCost tc(cost ? *cost : GridField(), esdf ? *esdf : GridField(), robot, weights);
+             new (self) TrajectoryProblem(std::move(tc), rho_t, w_energy, to_state(head), to_state(tail),
+                                          to_points(waypoints), to_vector(durations));
+           },
+           "cost"_a.none(), "esdf"_a.none(), "kind"_a, "vmax_lon"_a, "vmax_lat"_a, "wmax"_a, "min_turn_radius"_a,
+           "r_safe"_a, "w_q"_a, "penalty"_a, "esdf_margin"_a, "samples"_a, "rho_T"_a, "w_energy"_a, "head"_a,
+           "tail"_a, "waypoints"_a, "durations"_a)
+      .def_prop_ro("dimension", &TrajectoryProblem::dimension)
+      .def_prop_ro("equality_count", &TrajectoryProblem::equality_count)
+      .def_prop_ro("initial", &TrajectoryProblem::initial)
+      .def("set_multipliers", [](TrajectoryProblem& p, Vec lambda, double rho) {
+             p.set_multipliers(to_vector(lambda), rho);
+           }, "lambda_"_a, "rho"_a, "PHR multipliers (one per equality sample) and penalty used by evaluate().")
+      .def("evaluate",
+           [](TrajectoryProblem& p, Vec x) {
+             Eigen::VectorXd g;
+             const Eigen::VectorXd xv = to_vector(x);
+             double f;
+             {
+               nb::gil_scoped_release release;
+               f = p.evaluate(xv, g);
+             }
+             return nb::make_tuple(f, g);
+           },
+           "x"_a, "(objective, gradient) at x.")
+      .def("details",
+           [](TrajectoryProblem& p, Vec x) {
+             Eigen::VectorXd g, h;
+             CostTerms t;
+             p.evaluate(to_vector(x), g, &t, &h);
+             nb::dict d = terms_dict(t);
+             d["h"] = h;
+             return d;
+           },
+           "x"_a, "Objective terms and the equality residuals h at the samples.")
+      .def("trajectory",
+           [](TrajectoryProblem& p, Vec x) {
+             Eigen::MatrixX3d c;
+             Eigen::VectorXd T;
+             p.trajectory(to_vector(x), c, T);
+             return nb::make_tuple(coefficients_array(c), T);
+           },
+           "x"_a, "(coefficients (N, 4, 3), durations (N,)) at x.")
+      .def("optimize",
+           [](TrajectoryProblem& p, double rho0, double beta, double rho_max, double tol_h, int max_outer,
+              int memory, double g_epsilon, int past, double delta, int max_iterations) {
+             const PhrParams phr{rho0, beta, rho_max, tol_h, max_outer};
+             const LbfgsParams lb = lbfgs_params(memory, g_epsilon, past, delta, max_iterations);
+             OptimizeOutcome o;
+             {
+               nb::gil_scoped_release release;
+               o = optimize(p, phr, lb);
+             }
+             nb::dict out;
+             out["x"] = o.x;
+             out["iterations"] = o.iterations;
+             out["evaluations"] = o.evaluations;
+             out["outer_iterations"] = o.outer_iterations;
+             out["status"] = o.status;
+             out["max_h"] = o.max_h;
+             out["terms"] = terms_dict(o.terms);
+             return out;
+           },
+           "rho0"_a = 1.0, "beta"_a = 10.0, "rho_max"_a = 1e6, "tol_h"_a = 1e-4, "max_outer"_a = 12,
+           "memory"_a = 8, "g_epsilon"_a = 1e-6, "past"_a = 3, "delta"_a = 1e-4, "max_iterations"_a = 0,
+           "PHR outer loop around L-BFGS from the initial guess; dict of x, iterations, status, max_h, terms.");
+}

@@ -1,0 +1,81 @@
+// MINCO for s = 2 (minimum acceleration): a piecewise-cubic trajectory in
+// (x, y, yaw) fixed by its head and tail position + velocity, the N - 1
+// intermediate waypoints q_1..q_{N-1} and the N piece durations T_i.
+//
+// Piece i: p_i(t) = c_i0 + c_i1 t + c_i2 t^2 + c_i3 t^3, t in [0, T_i]. The 4N
+// coefficients solve one banded linear system A(T) c = b(q, head, tail):
+//   row 0, 1          p_0(0) = head position, p_0'(0) = head velocity
+//   per junction i    p_i''(T_i) = p_{i+1}''(0), p_i(T_i) = q_{i+1},
+//                     p_i(T_i) = p_{i+1}(0),     p_i'(T_i) = p_{i+1}'(0)
+//   rows 4N-2, 4N-1   p_{N-1}(T) = tail position, p_{N-1}'(T) = tail velocity
+// (this row order keeps every pivot non-zero, so the LU needs no pivoting).
+// The minimiser of sum_i int ||p_i''||^2 dt under those conditions is exactly
+// this C^2 cubic spline, so (q, T) is a complete, unconstrained parametrisation.
+// Gradients of any cost K(c, T) reach (q, T) through one adjoint solve
+// A^T G = dK/dc: dK/dq = G at the waypoint rows, dK/dT_i -= G^T (dA/dT_i) c.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace lf3pm {
+
+/// Square banded matrix with an in-place LU factorisation without pivoting.
+class BandedSystem {
+ public:
+  /// n x n, `lower` sub-diagonals and `upper` super-diagonals, all zero.
+  void reset(int n, int lower, int upper);
+  double& operator()(int i, int j) { return band_[index(i, j)]; }
+  double operator()(int i, int j) const { return band_[index(i, j)]; }
+  /// LU-factorise in place (Doolittle, unit lower triangle).
+  void factorize();
+  /// Solve A X = B in place (after factorize).
+  void solve(Eigen::MatrixX3d& b) const;
+  /// Solve A^T X = B in place (after factorize).
+  void solve_transposed(Eigen::MatrixX3d& b) const;
+
+ private:
+  std::size_t index(int i, int j) const { return std::size_t(i - j + upper_) * n_ + j; }
+  int n_ = 0, lower_ = 0, upper_ = 0;
+  std::vector<double> band_;
+};
+
+/// Cubic MINCO (GCOPTER's MINCO_S2NU class) in three dimensions (x, y, yaw).
+class MincoS2 {
+ public:
+  /// Head/tail conditions: column 0 position, column 1 velocity; `pieces` >= 1.
+  void set_conditions(const Eigen::Matrix<double, 3, 2>& head, const Eigen::Matrix<double, 3, 2>& tail, int pieces);
+  /// Intermediate waypoints (3 x (N-1)) and durations (N, all > 0): solves for the coefficients.
+  void set_parameters(const Eigen::Matrix3Xd& waypoints, const Eigen::VectorXd& durations);
+
+  int pieces() const { return n_; }
+  const Eigen::VectorXd& durations() const { return t1_; }
+  /// 4N x 3 coefficients; rows 4i..4i+3 are c_i0..c_i3 of piece i.
+  const Eigen::MatrixX3d& coefficients() const { return coef_; }
+
+  /// sum_i int_0^T_i ||p_i''(t)||^2 dt.
+  double energy() const;
+  /// Add weight * d(energy)/dc to grad_c (4N x 3) and weight * d(energy)/dT (partial) to grad_t.
+  void add_energy_gradient(double weight, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t) const;
+  /// Total gradients by waypoints (3 x (N-1)) and durations from the partial gradients by
+  /// coefficients (consumed: overwritten by the adjoint) and by durations.
+  void propagate_gradient(Eigen::MatrixX3d& grad_c, const Eigen::VectorXd& grad_t, Eigen::Matrix3Xd& grad_q,
+                          Eigen::VectorXd& grad_T) const;
+
+ private:
+  int n_ = 0;
+  Eigen::Matrix<double, 3, 2> head_, tail_;
+  Eigen::VectorXd t1_, t2_, t3_;
+  BandedSystem a_;
+  Eigen::MatrixX3d coef_;
+};
+
+/// GCOPTER's C^2 diffeomorphism from the real line to durations T > 0:
+/// T = (tau^2 / 2 + tau + 1) for tau > 0, 1 / (tau^2 / 2 - tau + 1) otherwise.
+double duration_from_tau(double tau);
+/// Its inverse.
+double tau_from_duration(double duration);
+/// dT / dtau.
+double duration_derivative(double tau);
+
+}  // namespace lf3pm

@@ -1,0 +1,53 @@
+"""A scalar field on a regular (x, y) grid, optionally with periodic yaw layers.
+
+The trajectory optimiser's cost map (a SOLM channel) and ESDF. Geometry follows
+the SOLM: cell (i, j) is centred at (x0 + (i + 0.5) res, y0 + (j + 0.5) res); yaw
+layer k of ``values`` shaped (yaw_bins, ny, nx) is centred on k 2 pi / yaw_bins.
+Interpolation is bilinear (trilinear with yaw, periodic), clamped at the borders.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lf3pm.errors import Lf3pmError
+
+
+@dataclass(frozen=True)
+class GridField:
+    """Values (ny, nx) or (yaw_bins, ny, nx), finite float64, with origin (x0, y0) and cell size res."""
+
+    values: np.ndarray
+    x0: float
+    y0: float
+    res: float
+    _core: object = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        values = np.ascontiguousarray(self.values, dtype=np.float64)
+        if values.ndim not in (2, 3) or 0 in values.shape:
+            raise Lf3pmError(f"a grid field must be (ny, nx) or (yaw_bins, ny, nx), got shape {values.shape}")
+        if not np.isfinite(values).all():
+            raise Lf3pmError("grid field values must be finite (fill NaN cells first)")
+        if not all(math.isfinite(v) for v in (self.x0, self.y0, self.res)) or self.res <= 0:
+            raise Lf3pmError(f"grid field geometry must be finite with res > 0, got x0={self.x0}, "
+                             f"y0={self.y0}, res={self.res}")
+        from lf3pm import _core
+
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "_core", _core.GridField(values, float(self.x0), float(self.y0), float(self.res)))
+
+    @property
+    def yaw_bins(self) -> int:
+        """Yaw layers (1 for an (x, y) field)."""
+        return self.values.shape[0] if self.values.ndim == 3 else 1
+
+    def sample(self, x, y, yaw=0.0):
+        """Interpolated values at the points and gradients (..., 3): d/dx, d/dy, d/dyaw."""
+        x, y, yaw = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, yaw)))
+        shape = x.shape
+        value, grad = self._core.sample(*(np.ascontiguousarray(v).ravel() for v in (x, y, yaw)))
+        return value.reshape(shape), grad.reshape(shape + (3,))

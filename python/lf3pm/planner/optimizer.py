@@ -1,0 +1,156 @@
+"""LF-3PM trajectory back end: front-end waypoints to a feasible, localisable trajectory.
+
+The trajectory is a cubic MINCO (minimum acceleration) in (x, y, yaw) with zero
+velocity at both ends; its free intermediate waypoints and piece durations
+(T = GCOPTER's C^2 map of a free tau) minimise, with L-BFGS in C++,
+
+    sum over samples of (w_q q(x, y, yaw) + feasibility penalties) dt
+        + rho_T * total time + w_energy * acceleration energy,
+
+with the nonholonomic equality of diff and car robots by a PHR augmented
+Lagrangian (docs/planner_backend.md has the math).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from lf3pm.errors import Lf3pmError
+from lf3pm.planner.grid import GridField
+from lf3pm.planner.robots import Robot
+from lf3pm.planner.trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class OptimizeResult:
+    """An optimised trajectory and how it was found.
+
+    ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
+    phr, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
+    max_v_lon_ratio, max_v_lat_ratio (omni), max_omega_ratio (<= 1 is within the
+    limit), max_turn_excess (car: max(R |omega| - |v_lon|) in m/s), max_h (|xdot
+    sin yaw - ydot cos yaw|, m/s; diff and car) and min_clearance (ESDF - r_safe, m).
+    """
+
+    trajectory: Trajectory
+    iterations: int
+    outer_iterations: int
+    evaluations: int
+    status: str
+    terms: dict
+    violations: dict
+    wall_time: float
+
+
+def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
+                 w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
+                 esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0):
+    """The C++ objective (``lf3pm._core.TrajectoryProblem``) and its initial guess from
+    front-end waypoints (K, 3: x, y, yaw), K >= 2. Arguments as in :func:`optimize_trajectory`."""
+    wp = np.asarray(waypoints, dtype=np.float64)
+    if wp.ndim != 2 or wp.shape[1] != 3 or len(wp) < 2:
+        raise Lf3pmError(f"waypoints must be a (K, 3) array of x, y, yaw with K >= 2, got shape {wp.shape}")
+    if not np.isfinite(wp).all():
+        raise Lf3pmError("waypoints must be finite")
+    if not isinstance(robot, Robot):
+        raise Lf3pmError("robot must be an lf3pm.planner.Robot")
+    for name, field in (("cost", cost), ("esdf", esdf)):
+        if field is not None and not isinstance(field, GridField):
+            raise Lf3pmError(f"{name} must be a GridField or None")
+    if esdf is not None and esdf.yaw_bins != 1:
+        raise Lf3pmError("the ESDF must be an (ny, nx) field")
+    for name, value in (("w_q", w_q), ("rho_T", rho_T), ("w_energy", w_energy), ("penalty", penalty),
+                        ("esdf_margin", esdf_margin)):
+        if not (math.isfinite(value) and value >= 0):
+            raise Lf3pmError(f"{name} must be a non-negative number, got {value!r}")
+    if not (isinstance(samples, int) and samples >= 1):
+        raise Lf3pmError(f"samples per piece must be an integer >= 1, got {samples!r}")
+    if not (math.isfinite(piece_length) and piece_length > 0):
+        raise Lf3pmError(f"piece_length must be positive, got {piece_length!r}")
+
+    points, durations = _initial_guess(wp, robot, piece_length)
+    head = np.zeros((3, 2))
+    tail = np.zeros((3, 2))
+    head[:, 0], tail[:, 0] = points[0], points[-1]
+    from lf3pm import _core
+
+    return _core.TrajectoryProblem(
+        cost._core if cost is not None else None, esdf._core if esdf is not None else None, robot.kind,
+        robot.vmax_lon, robot.vmax_lat, robot.wmax, robot.min_turn_radius, robot.r_safe, w_q, penalty,
+        esdf_margin, samples, rho_T, w_energy, head, tail, np.ascontiguousarray(points[1:-1]), durations)
+
+
+def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
+    """Resample the path into pieces of about piece_length (arc length, yaw counted at
+    0.5 m/rad so that turns on the spot get pieces too) and time them at half speed."""
+    wp = wp.copy()
+    wp[:, 2] = np.unwrap(wp[:, 2])
+    step = np.hypot(np.hypot(*np.diff(wp[:, :2], axis=0).T), 0.5 * np.diff(wp[:, 2]))
+    keep = np.concatenate([[True], step > 1e-9])
+    wp, u = wp[keep], np.concatenate([[0.0], np.cumsum(step[step > 1e-9])])
+    if len(wp) < 2:
+        raise Lf3pmError("start and goal coincide: nothing to optimise")
+    pieces = max(1, math.ceil(u[-1] / piece_length))
+    knots = np.linspace(0.0, u[-1], pieces + 1)
+    points = np.column_stack([np.interp(knots, u, wp[:, d]) for d in range(3)])
+    dist = np.hypot(*np.diff(points[:, :2], axis=0).T)
+    turn = np.abs(np.diff(points[:, 2]))
+    durations = np.maximum(np.maximum(dist / (0.5 * robot.vmax_lon), turn / (0.5 * robot.wmax)), 0.1)
+    return points, durations
+
+
+def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
+                        w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
+                        esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
+                        rho0: float = 1.0, beta: float = 10.0, rho_max: float = 1e6, tol_h: float = 1e-4,
+                        max_outer: int = 12, g_epsilon: float = 1e-6, rel_cost_tol: float = 1e-4,
+                        max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
+    """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
+
+    ``cost``: the localisability cost (a SOLM channel; None to leave it out), weighted
+    by ``w_q`` and integrated over time; ``esdf``: the obstacle distance field (None: no
+    clearance term); ``rho_T``: weight of the total time; ``w_energy``: weight of the
+    acceleration energy; ``penalty``: weight W of the cubic penalties on the velocity,
+    yaw rate, turning radius and clearance limits (clearance penalised from
+    r_safe + esdf_margin); ``samples``: K samples per piece; ``piece_length``: metres
+    per piece in the initial guess. PHR (diff, car): penalty from ``rho0``, times
+    ``beta`` per round up to ``rho_max``, until max |h| <= ``tol_h`` at the samples or
+    ``max_outer`` rounds. L-BFGS stops at ||g|| <= g_epsilon max(1, ||x||), when the
+    objective fell by less than ``rel_cost_tol`` (relative) over 3 iterations, or after
+    ``max_iterations`` (0: none). Single-threaded.
+    """
+    start = time.perf_counter()
+    problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
+                           penalty=penalty, esdf_margin=esdf_margin, samples=samples,
+                           piece_length=piece_length)
+    out = problem.optimize(rho0=rho0, beta=beta, rho_max=rho_max, tol_h=tol_h, max_outer=max_outer,
+                           g_epsilon=g_epsilon, delta=rel_cost_tol, max_iterations=max_iterations)
+    coefficients, durations = problem.trajectory(out["x"])
+    wall = time.perf_counter() - start
+    trajectory = Trajectory(coefficients, durations)
+    return OptimizeResult(trajectory, out["iterations"], out["outer_iterations"], out["evaluations"],
+                          out["status"], dict(out["terms"]), check_limits(trajectory, robot, esdf, check_rate),
+                          wall)
+
+
+def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = 100.0) -> dict:
+    """Worst constraint values on samples at ``rate`` Hz (see :class:`OptimizeResult`)."""
+    s = trajectory.sample(rate)
+    c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
+    v_lon = s["vx"] * c + s["vy"] * si
+    v_lat = -s["vx"] * si + s["vy"] * c
+    out = {"max_v_lon_ratio": float(np.max(np.abs(v_lon)) / robot.vmax_lon),
+           "max_omega_ratio": float(np.max(np.abs(s["omega"])) / robot.wmax)}
+    if robot.nonholonomic:
+        out["max_h"] = float(np.max(np.abs(v_lat)))
+    else:
+        out["max_v_lat_ratio"] = float(np.max(np.abs(v_lat)) / robot.vmax_lat)
+    if robot.kind == "car":
+        out["max_turn_excess"] = float(max(np.max(robot.min_turn_radius * np.abs(s["omega"]) - np.abs(v_lon)), 0.0))
+    if esdf is not None:
+        out["min_clearance"] = float(np.min(esdf.sample(s["x"], s["y"])[0]) - robot.r_safe)
+    return out

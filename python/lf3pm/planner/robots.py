@@ -1,0 +1,47 @@
+"""Robot kinds and their kinematic limits for trajectory optimisation."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from lf3pm.errors import Lf3pmError
+
+KINDS = ("omni", "diff", "car")
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A ground robot's kind and limits (SI units).
+
+    ``kind``: ``omni`` (holonomic: body-frame longitudinal and lateral speed limits),
+    ``diff`` (differential drive: no lateral motion) or ``car`` (diff plus a minimum
+    turning radius ``min_turn_radius``, |omega| <= |v_lon| / R). ``r_safe`` is the
+    clearance the trajectory keeps from obstacles (ESDF >= r_safe).
+    """
+
+    kind: str = "omni"
+    vmax_lon: float = 1.0
+    vmax_lat: float = 1.0
+    wmax: float = 1.0
+    min_turn_radius: float = 0.0
+    r_safe: float = 0.5
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise Lf3pmError(f"robot kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        for name in ("vmax_lon", "vmax_lat", "wmax"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise Lf3pmError(f"robot {name} must be a positive number, got {value!r}")
+        for name in ("min_turn_radius", "r_safe"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise Lf3pmError(f"robot {name} must be a non-negative number, got {value!r}")
+        if self.kind != "car" and self.min_turn_radius > 0:
+            raise Lf3pmError(f"a minimum turning radius applies to car robots only, not {self.kind!r}")
+
+    @property
+    def nonholonomic(self) -> bool:
+        """True for diff and car robots (no lateral velocity)."""
+        return self.kind != "omni"

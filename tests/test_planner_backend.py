@@ -1,0 +1,253 @@
+"""Trajectory back end: MINCO, L-BFGS, the objective's gradient, and optimised trajectories."""
+
+import math
+
+import numpy as np
+import pytest
+
+from lf3pm import _core
+from lf3pm.errors import Lf3pmError
+from lf3pm.planner import GridField, Robot, Trajectory, make_problem, optimize_trajectory
+
+RES, X0, Y0 = 0.25, -5.0, -10.0
+NX, NY = 140, 80
+
+
+def _centres():
+    xs = X0 + (np.arange(NX) + 0.5) * RES
+    ys = Y0 + (np.arange(NY) + 0.5) * RES
+    return np.meshgrid(xs, ys)
+
+
+def _smooth_se2_cost(seed=0, bins=8):
+    rng = np.random.default_rng(seed)
+    x, y = _centres()
+    layers = []
+    for k in range(bins):
+        a, b, c = rng.uniform(0.2, 0.6, 3)
+        layers.append(2.0 + np.sin(a * x + k) * np.cos(b * y) + 0.3 * np.sin(c * (x + y)))
+    return GridField(np.stack(layers), X0, Y0, RES)
+
+
+def _esdf_with_disc(cx, cy, radius):
+    x, y = _centres()
+    return GridField(np.hypot(x - cx, y - cy) - radius, X0, Y0, RES)
+
+
+def _straight(goal=(20.0, 0.0), yaw=0.0, n=21):
+    t = np.linspace(0.0, 1.0, n)
+    return np.column_stack([t * goal[0], t * goal[1], np.full(n, yaw)])
+
+
+def _bend(n=41):
+    """A 20 m path that turns by about 50 degrees."""
+    s = np.linspace(0.0, 20.0, n)
+    y = 4.0 / (1.0 + np.exp(-(s - 10.0) / 2.0))
+    yaw = np.arctan2(np.gradient(y, s), 1.0)
+    return np.column_stack([s, y, yaw])
+
+
+def _coefficient_value(c, t, order):
+    return sum(c[k] * math.factorial(k) / math.factorial(k - order) * t ** (k - order) for k in range(order, 4))
+
+
+# --- MINCO ---------------------------------------------------------------------------
+
+def test_minco_continuity_and_boundary_conditions():
+    rng = np.random.default_rng(1)
+    n = 6
+    head = np.array([[0.0, 0.3], [0.0, -0.2], [0.1, 0.05]])
+    tail = np.array([[10.0, 0.5], [2.0, 0.0], [1.0, -0.1]])
+    q = np.column_stack([np.linspace(1, 9, n - 1), rng.normal(size=n - 1), rng.normal(size=n - 1)])
+    durations = rng.uniform(0.3, 2.5, n)
+    coef, energy = _core.minco_s2(head, tail, q, durations)
+    assert coef.shape == (n, 4, 3) and energy > 0
+    for i in range(n - 1):
+        for order in range(3):  # position, velocity and acceleration continuous (C^2)
+            np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], order),
+                                       _coefficient_value(coef[i + 1], 0.0, order), atol=1e-9)
+        np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], 0), q[i], atol=1e-9)
+    np.testing.assert_allclose(_coefficient_value(coef[0], 0.0, 0), head[:, 0], atol=1e-12)
+    np.testing.assert_allclose(_coefficient_value(coef[0], 0.0, 1), head[:, 1], atol=1e-12)
+    np.testing.assert_allclose(_coefficient_value(coef[-1], durations[-1], 0), tail[:, 0], atol=1e-9)
+    np.testing.assert_allclose(_coefficient_value(coef[-1], durations[-1], 1), tail[:, 1], atol=1e-9)
+    # The energy is the integral of the squared acceleration (checked by quadrature).
+    quad = 0.0
+    for i in range(n):
+        t, w = np.polynomial.legendre.leggauss(6)
+        t = 0.5 * durations[i] * (t + 1)
+        acc = np.array([_coefficient_value(coef[i], ti, 2) for ti in t])
+        quad += 0.5 * durations[i] * np.sum(w * np.sum(acc**2, axis=1))
+    assert energy == pytest.approx(quad, rel=1e-10)
+
+
+def test_trajectory_evaluate_is_continuous_and_keeps_boundaries(tmp_path):
+    result = optimize_trajectory(_bend(), None, None, Robot("omni"), rho_T=1.0, samples=8)
+    traj = result.trajectory
+    junctions = np.cumsum(traj.durations)[:-1]
+    p_before, v_before = traj.evaluate(junctions - 1e-9)
+    p_after, v_after = traj.evaluate(junctions + 1e-9)
+    np.testing.assert_allclose(p_before, p_after, atol=1e-6)
+    np.testing.assert_allclose(v_before, v_after, atol=1e-6)
+    p, v = traj.evaluate([0.0, traj.duration])
+    np.testing.assert_allclose(p[0], _bend()[0], atol=1e-9)
+    np.testing.assert_allclose(p[1][:2], _bend()[-1][:2], atol=1e-9)
+    np.testing.assert_allclose(v, 0.0, atol=1e-9)
+    path = tmp_path / "traj.csv"
+    traj.to_csv(path)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "t,x,y,yaw,vx,vy,omega"
+    rows = np.loadtxt(path, delimiter=",", skiprows=1)
+    assert rows.shape[1] == 7 and rows[-1, 0] == pytest.approx(traj.duration)
+    assert len(rows) == pytest.approx(traj.duration * 100, abs=2)
+
+
+# --- L-BFGS ----------------------------------------------------------------------------
+
+def test_lbfgs_rosenbrock():
+    def rosen(x):
+        f = np.sum(100 * (x[1:] - x[:-1] ** 2) ** 2 + (1 - x[:-1]) ** 2)
+        g = np.zeros_like(x)
+        g[:-1] = -400 * x[:-1] * (x[1:] - x[:-1] ** 2) - 2 * (1 - x[:-1])
+        g[1:] += 200 * (x[1:] - x[:-1] ** 2)
+        return f, g
+
+    r = _core.lbfgs_minimize(rosen, np.array([-1.2, 1.0, -0.5, 0.8]), g_epsilon=1e-10)
+    assert r["status"] == "converged"
+    np.testing.assert_allclose(r["x"], 1.0, atol=1e-6)
+
+
+def test_lbfgs_convex_quadratic():
+    rng = np.random.default_rng(2)
+    m = rng.normal(size=(30, 30))
+    a = m @ m.T + 0.5 * np.eye(30)  # condition number in the hundreds
+    b = rng.normal(size=30)
+    r = _core.lbfgs_minimize(lambda x: (0.5 * x @ a @ x - b @ x, a @ x - b), np.zeros(30), g_epsilon=1e-7,
+                             delta=0.0)
+    assert r["status"] == "converged"
+    np.testing.assert_allclose(r["x"], np.linalg.solve(a, b), rtol=1e-6, atol=1e-7)
+
+
+# --- The objective's gradient ----------------------------------------------------------
+
+@pytest.mark.parametrize("kind", ["omni", "diff", "car"])
+def test_objective_gradient_matches_finite_differences(kind):
+    rng = np.random.default_rng(3)
+    robot = Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, min_turn_radius=30.0 if kind == "car" else 0.0,
+                  r_safe=1.0)
+    problem = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
+                           rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
+    if problem.equality_count:
+        problem.set_multipliers(rng.normal(size=problem.equality_count), 5.0)
+    x = problem.initial + rng.normal(size=problem.dimension) * 0.1
+    x[-(problem.dimension // 4):] -= 1.0  # shorter durations than the initial guess: limits violated
+    terms = problem.details(x)
+    active = ["q", "velocity", "omega", "esdf", "time", "energy"] + (["phr"] if kind != "omni" else [])
+    active += ["turn"] if kind == "car" else []
+    assert all(terms[name] != 0 for name in active), terms
+    _, grad = problem.evaluate(x)
+    step = 1e-6
+    fd = np.array([(problem.evaluate(x + step * e)[0] - problem.evaluate(x - step * e)[0]) / (2 * step)
+                   for e in np.eye(problem.dimension)])
+    assert np.linalg.norm(fd - grad) / np.linalg.norm(grad) <= 1e-5
+
+
+def test_grid_field_interpolation_and_gradient():
+    cost = _smooth_se2_cost(bins=6)
+    xs, ys = np.array([1.3, 7.77, 20.0]), np.array([-2.1, 3.3, 5.5])
+    yaws = np.array([0.3, -2.0, 7.5])  # unwrapped yaw is wrapped by the field
+    value, grad = cost.sample(xs, ys, yaws)
+    step = 1e-6
+    for axis in range(3):
+        d = np.zeros(3)
+        d[axis] = step
+        hi, _ = cost.sample(xs + d[0], ys + d[1], yaws + d[2])
+        lo, _ = cost.sample(xs - d[0], ys - d[1], yaws - d[2])
+        np.testing.assert_allclose((hi - lo) / (2 * step), grad[:, axis], rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(cost.sample(xs, ys, yaws + 2 * np.pi)[0], value, rtol=1e-12)
+    # At a cell centre the value is the stored one; beyond the border it is clamped.
+    assert cost.sample(X0 + 2.5 * RES, Y0 + 3.5 * RES, 0.0)[0] == pytest.approx(cost.values[0, 3, 2])
+    assert cost.sample(X0 - 50, Y0 + 0.5 * RES, 0.0)[0] == pytest.approx(cost.values[0, 0, 0])
+
+
+# --- Optimised trajectories ------------------------------------------------------------
+
+def _speeds(traj):
+    s = traj.sample(100.0)
+    c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
+    return s, s["vx"] * c + s["vy"] * si, -s["vx"] * si + s["vy"] * c
+
+
+@pytest.mark.parametrize("kind", ["omni", "diff", "car"])
+def test_optimised_trajectory_is_feasible(kind):
+    robot = Robot(kind, vmax_lon=1.0, vmax_lat=0.5, wmax=0.8, min_turn_radius=2.0 if kind == "car" else 0.0,
+                  r_safe=0.5)
+    # An obstacle 0.6 m beside the path's middle: closer than r_safe + its radius.
+    esdf = _esdf_with_disc(10.0, 0.6 + 2.0 + 0.0, 1.5)
+    result = optimize_trajectory(_bend(), _smooth_se2_cost(), esdf, robot, w_q=0.5, rho_T=2.0,
+                                 piece_length=1.5)
+    s, v_lon, v_lat = _speeds(result.trajectory)
+    assert np.max(np.abs(v_lon)) <= 1.02 * robot.vmax_lon
+    assert np.max(np.abs(s["omega"])) <= 1.02 * robot.wmax
+    if kind == "omni":
+        assert np.max(np.abs(v_lat)) <= 1.02 * robot.vmax_lat
+    else:
+        assert np.max(np.abs(v_lat)) < 1e-3  # |h|: no sideways motion
+    if kind == "car":
+        assert np.all(robot.min_turn_radius * np.abs(s["omega"]) <= 1.02 * np.abs(v_lon) + 1e-3)
+    assert np.min(esdf.sample(s["x"], s["y"])[0]) >= robot.r_safe
+    assert result.violations["min_clearance"] >= 0
+    assert result.trajectory.duration < 0.8 * sum(np.hypot(*np.diff(_bend()[:, :2], axis=0).T)) / 0.5
+
+
+def test_obstacle_on_the_straight_line_is_avoided():
+    esdf = _esdf_with_disc(10.0, 0.3, 1.0)  # the straight line passes 0.3 m from its centre
+    result = optimize_trajectory(_straight(), None, esdf, Robot("omni", r_safe=0.5), rho_T=1.0)
+    s = result.trajectory.sample(100.0)
+    assert np.min(esdf.sample(s["x"], s["y"])[0]) >= 0.5
+
+
+def test_trajectory_moves_to_the_low_cost_side():
+    x, y = _centres()
+    cost = GridField(3.0 + 2.0 * np.tanh(y / 2.0), X0, Y0, RES)  # high for y > 0, low for y < 0
+    result = optimize_trajectory(_straight(), cost, None, Robot("diff"), w_q=2.0, rho_T=1.0)
+    s = result.trajectory.sample(100.0)
+    assert np.mean(s["y"]) < -0.2 and np.mean(s["y"] < 0) > 0.8
+    # The same with the field mirrored moves to the other side.
+    mirrored = GridField(cost.values[::-1].copy(), X0, -Y0 - NY * RES, RES)
+    s = optimize_trajectory(_straight(), mirrored, None, Robot("diff"), w_q=2.0, rho_T=1.0).trajectory.sample()
+    assert np.mean(s["y"]) > 0.2
+
+
+# --- Bad input -------------------------------------------------------------------------
+
+def test_bad_input_raises_lf3pm_error():
+    cost = _smooth_se2_cost()
+    with pytest.raises(Lf3pmError, match="K >= 2"):
+        optimize_trajectory(_straight()[:1], cost, None, Robot())
+    bad = _straight()
+    bad[3, 1] = np.nan
+    with pytest.raises(Lf3pmError, match="finite"):
+        optimize_trajectory(bad, cost, None, Robot())
+    values = cost.values.copy()
+    values[0, 0, 0] = np.inf
+    with pytest.raises(Lf3pmError, match="finite"):
+        GridField(values, X0, Y0, RES)
+    with pytest.raises(Lf3pmError, match="res > 0"):
+        GridField(cost.values, X0, Y0, -1.0)
+    with pytest.raises(Lf3pmError, match="vmax_lon"):
+        Robot("omni", vmax_lon=-1.0)
+    with pytest.raises(Lf3pmError, match="r_safe"):
+        Robot("diff", r_safe=-0.1)
+    with pytest.raises(Lf3pmError, match="kind"):
+        Robot("tank")
+    with pytest.raises(Lf3pmError, match="start and goal coincide"):
+        optimize_trajectory(np.zeros((3, 3)), cost, None, Robot())
+    with pytest.raises(Lf3pmError, match="rho_T"):
+        optimize_trajectory(_straight(), cost, None, Robot(), rho_T=-1.0)
+
+
+def test_trajectory_sample_rate_must_be_positive():
+    traj = Trajectory(np.zeros((1, 4, 3)), np.ones(1))
+    with pytest.raises(Lf3pmError):
+        traj.sample(0.0)
