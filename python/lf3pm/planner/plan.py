@@ -52,7 +52,7 @@ class Plan:
                 "trajectory_length_m": length, "duration_s": float(self.trajectory.duration),
                 "search_s": self.path.time, "optimize_s": self.optimization.wall_time,
                 "iterations": int(self.optimization.iterations),
-                "limits": {k: float(v) for k, v in self.optimization.limits.items()}}
+                "violations": {k: float(v) for k, v in self.optimization.violations.items()}}
 
 
 class Planner:
