@@ -253,6 +253,8 @@ def experiment_correlation(
 def experiment_gobi(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM is resumed on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
+    weight: Optional[float] = typer.Option(None, help="lambda: cost of a median cell relative to time "
+                                                      "(default: the setup's)."),
     seed: int = typer.Option(0, help="Seed of the scene, the noise and the disturbances."),
 ):
     """Plans town -> warehouse guided by q_n, q_min, |dx*| and none; compares S and odometry."""
@@ -262,6 +264,8 @@ def experiment_gobi(
         from lf3pm.experiments import gobi
 
         setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=seed)
+        if weight is not None:
+            setup = replace(setup, weight=weight)
         with progress_bar() as step:
             summary = gobi.run(out, setup, progress=step)
         console.print((out / "gobi.md").read_text())

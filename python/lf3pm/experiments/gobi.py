@@ -53,7 +53,7 @@ class GobiSetup:
     vmax: float = 1.0              # m/s, longitudinal and lateral
     wmax: float = 1.0              # rad/s
     r_safe: float = 0.3            # m beyond the SOLM's robot radius
-    mde_every: float = 2.0         # s between MDE poses
+    mde_every: float = 1.0         # s between MDE poses
     mde_trials: int = 5
     sensor_height: float = 1.0
     seed: int = 0
@@ -63,7 +63,7 @@ FULL = GobiSetup(scene_params={})
 #: A smaller desert (115 x 90 m, warehouse 60 m east, 4 buildings) for the demo.
 REDUCED = GobiSetup(scene_params={"length": 115.0, "width": 90.0, "west": 25.0, "town_radius": 25.0,
                                   "warehouse_distance": 60.0, "buildings": 4, "stones": 150},
-                    mde_every=4.0, mde_trials=3)
+                    mde_every=2.0, mde_trials=3)
 
 
 def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
