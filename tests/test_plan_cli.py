@@ -1,0 +1,61 @@
+"""`lf3pm plan` from the command line: a trajectory CSV and PNG on a built SOLM,
+and one-line errors for bad requests."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import lf3pm
+from lf3pm.scenes import build_scene
+from lf3pm.solm import build_solm, make_grid
+
+
+@pytest.fixture(scope="module")
+def boxes_solm(tmp_path_factory):
+    scene = build_scene("boxes")
+    world = lf3pm.load_map(scene.points)
+    path = tmp_path_factory.mktemp("plan") / "boxes.zarr"
+    build_solm(world, lf3pm.get_sensor("vlp16"), make_grid(world, "r2", 0.5, height=1.0), path, ray_stride=4)
+    return path
+
+
+def run_plan(*args):
+    return subprocess.run([sys.executable, "-m", "lf3pm.cli", "plan", *map(str, args)],
+                          capture_output=True, text=True)
+
+
+def test_plan_writes_a_100_hz_trajectory_from_start_to_goal_and_a_png(boxes_solm, tmp_path):
+    csv, png = tmp_path / "traj.csv", tmp_path / "plan.png"
+    done = run_plan("--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57,
+                    "--r-safe", 0.05, "--weight", 3, "-o", csv, "--png", png)
+    assert done.returncode == 0, done.stderr
+    header = csv.read_text().splitlines()[0]
+    assert header == "t,x,y,yaw,vx,vy,omega"
+    data = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert np.allclose(np.diff(data[:-1, 0]), 0.01)
+    assert np.allclose(data[0, 1:4], (-2.5, -2.7, 0.0), atol=1e-6)
+    assert np.allclose(data[-1, 1:3], (6.2, 2.2), atol=1e-6)
+    assert np.allclose(data[[0, -1], 4:], 0.0, atol=1e-9)  # at rest at both ends
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, needle", [
+    (("--start", 50, 50, 0, "--goal", 6.2, 2.2, 0), "outside"),
+    (("--start", -4.0, -4.0, 0, "--goal", 6.2, 2.2, 0), "obstacle"),
+    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "tank"), "robot kind"),
+    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--metric", "q_best"), "metric"),
+])
+def test_bad_requests_get_one_line_and_exit_2(boxes_solm, tmp_path, args, needle):
+    csv = tmp_path / "traj.csv"
+    done = run_plan("--solm", boxes_solm, *args, "-o", csv)
+    assert done.returncode == 2
+    assert needle in done.stderr and "Traceback" not in done.stderr
+    assert not csv.exists()
+
+
+def test_a_missing_solm_is_refused(tmp_path):
+    done = run_plan("--solm", tmp_path / "none.zarr", "--start", 0, 0, 0, "--goal", 1, 1, 0,
+                    "-o", tmp_path / "t.csv")
+    assert done.returncode == 2 and "no such SOLM" in done.stderr
