@@ -138,7 +138,7 @@ def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = "vlp16", *,
     skipped, sim_time, reg_time = [], 0.0, 0.0
     for k in range(count):
         start = time.perf_counter()
-        scan = _core.simulate_scan(map.index, truth[k], sensor.directions, sensor.min_range,
+        scan = _core.simulate_scan(map.index, truth[k], sensor.scan_directions(k), sensor.min_range,
                                    sensor.max_range, noise=sigma, seed=int(seed), stream=k,
                                    threads=threads)
         points = np.ascontiguousarray(scan["sensor_points"], dtype=np.float64)

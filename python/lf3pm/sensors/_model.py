@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field as dataclass_field
 
 import numpy as np
 
@@ -39,6 +39,9 @@ class Sensor:
     horizontal_fov: float
     approximate: bool
     source: str
+    #: Non-repetitive sensors (Livox): the whole recorded azimuth/elevation
+    #: pattern, read as a ring buffer, so consecutive scans continue it.
+    pattern: np.ndarray | None = dataclass_field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         for field in ("name", "description", "source"):
@@ -84,6 +87,14 @@ class Sensor:
     def num_rays(self) -> int:
         """Number of rays in one scan (K)."""
         return int(self.directions.shape[0])
+
+    def scan_directions(self, index: int) -> np.ndarray:
+        """The rays of consecutive scan ``index`` (0: ``directions``). A non-repetitive
+        pattern goes on where the previous scan stopped, as the real sensor does; a
+        spinning sensor repeats its rays."""
+        if self.pattern is None or index == 0:
+            return self.directions
+        return pattern_directions(self.pattern, self.num_rays, index * self.num_rays)
 
     def angles(self) -> tuple[np.ndarray, np.ndarray]:
         """(azimuth, elevation) of every ray in radians; azimuth in (-pi, pi]."""
@@ -193,8 +204,8 @@ def ray_count(point_rate: float, integration_time: float, what: str) -> int:
     return count
 
 
-def pattern_directions(pattern: np.ndarray, count: int) -> np.ndarray:
-    """First ``count`` rays of an (N, 2) azimuth/elevation pattern, read as a ring buffer."""
-    idx = np.arange(count) % pattern.shape[0]
+def pattern_directions(pattern: np.ndarray, count: int, start: int = 0) -> np.ndarray:
+    """``count`` rays of an (N, 2) azimuth/elevation pattern from ray ``start``, read as a ring buffer."""
+    idx = (start + np.arange(count)) % pattern.shape[0]
     rows = pattern[idx]
     return directions_from_angles(rows[:, 0], rows[:, 1])

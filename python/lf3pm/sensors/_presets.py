@@ -68,10 +68,12 @@ def _livox_pattern(name: str, description: str, filename: str, point_rate: float
     def build(integration_time: float | None) -> Sensor:
         t = DEFAULT_INTEGRATION_TIME if integration_time is None else integration_time
         count = ray_count(point_rate, t, f"sensor '{name}'")
-        dirs = pattern_directions(load_pattern(filename), count)
+        pattern = load_pattern(filename)
+        dirs = pattern_directions(pattern, count)
         return Sensor(name=name, description=f"{description} {count} rays ({t:g} s at {point_rate:g} points/s).",
                       directions=dirs, min_range=min_range, max_range=max_range, range_noise_sigma=sigma,
-                      horizontal_fov=math.radians(fov_deg), approximate=False, source=source)
+                      horizontal_fov=math.radians(fov_deg), approximate=False, source=source,
+                      pattern=pattern)
     return build
 
 
