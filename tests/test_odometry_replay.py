@@ -133,7 +133,10 @@ def test_straight_drive_in_a_structured_scene_stays_within_a_few_cm(boxes):
     result = replay_odometry(world, t, poses, "mid70", voxel_size=0.25)
     assert result.scans == 21 and not result.skipped and result.hits.min() > 5000
     np.testing.assert_allclose(result.estimate[0], result.truth[0])       # anchored at the truth
-    assert result.ape["rmse"] < 0.05 and result.rpe_frame["translation"]["rmse"] < 0.02
+    # Measured 1.5 cm when every scan repeated the pattern's first 0.1 s, 9 cm now that
+    # scans continue the non-repetitive pattern (less overlap between consecutive scans;
+    # RPE per frame 9.8 cm, most of it in the first frames).
+    assert result.ape["rmse"] < 0.15 and result.rpe_frame["translation"]["rmse"] < 0.15
     assert result.params["kiss_icp"]["deskew"] is False and result.to_dict()["scans"] == 21
 
 
