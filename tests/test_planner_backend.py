@@ -142,8 +142,8 @@ def test_objective_gradient_matches_finite_differences(kind):
     x = problem.initial + rng.normal(size=problem.dimension) * 0.1
     x[-(problem.dimension // 4):] -= 1.0  # shorter durations than the initial guess: limits violated
     terms = problem.details(x)
-    active = ["q", "velocity", "omega", "esdf", "time", "energy"] + (["phr"] if kind != "omni" else [])
-    active += ["turn"] if kind == "car" else []
+    active = ["q", "velocity", "omega", "esdf", "time", "energy"]
+    active += ["turn", "heading"] if kind == "car" else []
     assert all(terms[name] != 0 for name in active), terms
     _, grad = problem.evaluate(x)
     step = 1e-6

@@ -64,6 +64,7 @@ nb::dict terms_dict(const CostTerms& t) {
   d["turn"] = t.turn;
   d["esdf"] = t.esdf;
   d["phr"] = t.phr;
+  d["heading"] = t.heading;
   d["time"] = t.time;
   d["energy"] = t.energy;
   d["total"] = t.total();

@@ -1,5 +1,6 @@
 #include "lf3pm/trajectory_cost.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,6 +15,25 @@ inline double cubic_penalty(double z, double weight, double& sum) {
   return 3.0 * weight * z * z;
 }
 
+// A car at rest (start or goal) with heading e, forward acceleration a and jerk j:
+// the direction of travel is that of a, so a must point along e and stay away from
+// zero, and the yaw rate there, (a x j) / (2 |a|^2), must vanish for a bounded
+// curvature. With a_min = `a_min`:
+//   W [ (a x e / a_min)^2 + max(1 - a.e / a_min, 0)^3 + (R (a x j) / (2 a_min^2 vmax))^2 ].
+// Adds to `sum`; gradients by a and j into ga, gj.
+inline void rest_heading_penalty(const Eigen::Vector2d& a, const Eigen::Vector2d& j, double yaw, double a_min,
+                                 double r_over_v, double weight, double& sum, Eigen::Vector2d& ga,
+                                 Eigen::Vector2d& gj) {
+  const Eigen::Vector2d e(std::cos(yaw), std::sin(yaw));
+  const double ia = 1.0 / a_min, cr = (a(0) * e(1) - a(1) * e(0)) * ia;
+  const double lag = std::max(1.0 - a.dot(e) * ia, 0.0);
+  const double k = 0.5 * r_over_v * ia * ia, rot = k * (a(0) * j(1) - a(1) * j(0));
+  sum += weight * (cr * cr + lag * lag * lag + rot * rot);
+  ga = weight * (2.0 * cr * ia * Eigen::Vector2d(e(1), -e(0)) - 3.0 * lag * lag * ia * e +
+                 2.0 * rot * k * Eigen::Vector2d(j(1), -j(0)));
+  gj = weight * 2.0 * rot * k * Eigen::Vector2d(-a(1), a(0));
+}
+
 }  // namespace
 
 TrajectoryCost::TrajectoryCost(GridField cost, GridField esdf, const RobotLimits& robot, const CostWeights& weights)
@@ -21,7 +41,7 @@ TrajectoryCost::TrajectoryCost(GridField cost, GridField esdf, const RobotLimits
   if (weights_.samples < 1) throw std::invalid_argument("samples per piece must be >= 1");
 }
 
-void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, double rho, Eigen::MatrixX3d& grad_c,
+void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, double /*rho*/, Eigen::MatrixX3d& grad_c,
                          Eigen::VectorXd& grad_t, CostTerms& terms, Eigen::VectorXd* h) const {
   const int n = minco.pieces(), k_max = weights_.samples;
   if (lambda.size() != equality_count(n)) throw std::invalid_argument("one multiplier per equality sample needed");
@@ -34,6 +54,8 @@ void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, do
   const double iw2 = 1.0 / (robot_.wmax * robot_.wmax), r2 = robot_.min_turn_radius * robot_.min_turn_radius;
   const double clearance = robot_.r_safe + weights_.esdf_margin;
   const bool car = robot_.kind == RobotKind::Car && robot_.min_turn_radius > 0.0;
+  const bool flat = robot_.nonholonomic();
+  const double eps = 1e-2 * robot_.vmax_lon * robot_.vmax_lon;  // (0.1 vmax_lon)^2
   Eigen::Vector3d field_grad;
 
   for (int i = 0; i < n; ++i) {
@@ -41,38 +63,69 @@ void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, do
     const double dur = minco.durations()(i), dt = dur / k_max;
     Eigen::Matrix<double, 4, 3> gc = Eigen::Matrix<double, 4, 3>::Zero();
     double gt = 0.0;
+    const Eigen::Vector3d jerk = 6.0 * c.row(3).transpose();
     for (int j = 0; j <= k_max; ++j) {
       const double alpha = double(j) / k_max, t = alpha * dur;
       const Eigen::Vector4d b0(1.0, t, t * t, t * t * t), b1(0.0, 1.0, 2.0 * t, 3.0 * t * t),
           b2(0.0, 0.0, 2.0, 6.0 * t);
       const Eigen::Vector3d p = c.transpose() * b0, v = c.transpose() * b1, a = c.transpose() * b2;
-      const double cy = std::cos(p(2)), sy = std::sin(p(2));
-      const double v_lon = v(0) * cy + v(1) * sy, v_lat = -v(0) * sy + v(1) * cy;
-
-      // Integrand f(p, v) and its gradients by p and v.
+      Eigen::Vector3d gp = Eigen::Vector3d::Zero(), gv = Eigen::Vector3d::Zero(), ga = Eigen::Vector3d::Zero();
       CostTerms f;
-      Eigen::Vector3d gp = Eigen::Vector3d::Zero(), gv = Eigen::Vector3d::Zero();
-      if (!cost_.empty() && weights_.w_q != 0.0) {
-        f.q = weights_.w_q * cost_.sample(p(0), p(1), p(2), field_grad);
-        gp += weights_.w_q * field_grad;
-      }
-      // d v_lon / d(xdot, ydot, yaw) = (cos, sin | v_lat); d v_lat = (-sin, cos | -v_lon).
-      double d = 2.0 * v_lon * ilon2 * cubic_penalty(v_lon * v_lon * ilon2 - 1.0, w, f.velocity);
-      gv(0) += d * cy, gv(1) += d * sy, gp(2) += d * v_lat;
-      if (!robot_.nonholonomic()) {
+      if (flat) {
+        // Flat output: yaw = atan2(ydot, xdot); s = |v|^2, cr = v x a (omega = cr / s).
+        const double s2 = v(0) * v(0) + v(1) * v(1), cr = v(0) * a(1) - v(1) * a(0);
+        if (!cost_.empty() && weights_.w_q != 0.0) {
+          // At rest (the ends) the direction of travel is that of +-a: the robot starts
+          // moving along a, and comes to rest moving along -a.
+          const bool rest = s2 < 1e-18;
+          const Eigen::Vector3d& u = rest ? a : v;
+          const double sign = rest && alpha > 0.5 ? -1.0 : 1.0, u2 = u(0) * u(0) + u(1) * u(1);
+          f.q = weights_.w_q * cost_.sample(p(0), p(1), std::atan2(sign * u(1), sign * u(0)), field_grad);
+          gp(0) += weights_.w_q * field_grad(0), gp(1) += weights_.w_q * field_grad(1);
+          if (u2 > 1e-18) {  // d yaw / d u = (-u_y, u_x) / |u|^2, whatever the sign
+            const double dy = weights_.w_q * field_grad(2) / u2;
+            Eigen::Vector3d& gu = rest ? ga : gv;
+            gu(0) -= dy * u(1), gu(1) += dy * u(0);
+          }
+        }
+        double d = ilon2 * cubic_penalty(s2 * ilon2 - 1.0, w, f.velocity);
+        gv(0) += 2.0 * d * v(0), gv(1) += 2.0 * d * v(1);
+        // Relative excesses, regularised at rest by eps (omega and curvature are
+        // undefined there): z = (cr^2 - wmax^2 s^2) / (wmax^2 (s + eps)^2) ~ omega^2 / wmax^2 - 1
+        // and z = (R^2 cr^2 - s^3) / (s + eps)^3 ~ R^2 curvature^2 - 1 when moving.
+        // dcr/dv = (ay, -ax), dcr/da = (-vy, vx), ds/dv = 2 v.
+        const Eigen::Vector2d dcr_dv(a(1), -a(0)), dcr_da(-v(1), v(0)), ds_dv(2.0 * v(0), 2.0 * v(1));
+        const double w2 = robot_.wmax * robot_.wmax, se = s2 + eps, se2 = se * se;
+        {
+          const double num = cr * cr - w2 * s2 * s2, den = w2 * se2;
+          const double dz = cubic_penalty(num / den, w, f.omega);
+          const Eigen::Vector2d gzv = (2.0 * cr * dcr_dv - 2.0 * w2 * s2 * ds_dv) / den - (num / den) * (2.0 / se) * ds_dv;
+          gv.head<2>() += dz * gzv, ga.head<2>() += dz * (2.0 * cr / den) * dcr_da;
+        }
+        if (car) {
+          const double num = r2 * cr * cr - s2 * s2 * s2, den = se2 * se;
+          const double dz = cubic_penalty(num / den, w, f.turn);
+          const Eigen::Vector2d gzv = (2.0 * r2 * cr * dcr_dv - 3.0 * s2 * s2 * ds_dv) / den - (num / den) * (3.0 / se) * ds_dv;
+          gv.head<2>() += dz * gzv, ga.head<2>() += dz * (2.0 * r2 * cr / den) * dcr_da;
+        }
+      } else {
+        const double cy = std::cos(p(2)), sy = std::sin(p(2));
+        const double v_lon = v(0) * cy + v(1) * sy, v_lat = -v(0) * sy + v(1) * cy;
+        if (!cost_.empty() && weights_.w_q != 0.0) {
+          f.q = weights_.w_q * cost_.sample(p(0), p(1), p(2), field_grad);
+          gp += weights_.w_q * field_grad;
+        }
+        // d v_lon / d(xdot, ydot, yaw) = (cos, sin | v_lat); d v_lat = (-sin, cos | -v_lon).
+        double d = 2.0 * v_lon * ilon2 * cubic_penalty(v_lon * v_lon * ilon2 - 1.0, w, f.velocity);
+        gv(0) += d * cy, gv(1) += d * sy, gp(2) += d * v_lat;
         d = 2.0 * v_lat * ilat2 * cubic_penalty(v_lat * v_lat * ilat2 - 1.0, w, f.velocity);
         gv(0) -= d * sy, gv(1) += d * cy, gp(2) -= d * v_lon;
-      }
-      gv(2) += 2.0 * v(2) * iw2 * cubic_penalty(v(2) * v(2) * iw2 - 1.0, w, f.omega);
-      if (car) {
-        d = ilon2 * cubic_penalty((r2 * v(2) * v(2) - v_lon * v_lon) * ilon2, w, f.turn);
-        gv(2) += d * 2.0 * r2 * v(2);
-        gv(0) -= d * 2.0 * v_lon * cy, gv(1) -= d * 2.0 * v_lon * sy, gp(2) -= d * 2.0 * v_lon * v_lat;
+        gv(2) += 2.0 * v(2) * iw2 * cubic_penalty(v(2) * v(2) * iw2 - 1.0, w, f.omega);
       }
       if (!esdf_.empty()) {
         const double dist = esdf_.sample(p(0), p(1), 0.0, field_grad);
-        d = cubic_penalty(clearance - dist, w, f.esdf);
-        gp(0) -= d * field_grad(0), gp(1) -= d * field_grad(1);
+        const double dc = cubic_penalty(clearance - dist, w, f.esdf);
+        gp(0) -= dc * field_grad(0), gp(1) -= dc * field_grad(1);
       }
 
       // Trapezoid weight wt = dt (dt / 2 at the ends); t = alpha T moves with T.
@@ -80,23 +133,28 @@ void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, do
       const double sum = f.q + f.velocity + f.omega + f.turn + f.esdf;
       terms.q += wt * f.q, terms.velocity += wt * f.velocity, terms.omega += wt * f.omega;
       terms.turn += wt * f.turn, terms.esdf += wt * f.esdf;
-      gc.noalias() += wt * (b0 * gp.transpose() + b1 * gv.transpose());
-      gt += sum * wt / dur + wt * alpha * (gp.dot(v) + gv.dot(a));
-
-      if (robot_.nonholonomic() && j >= 1) {
-        const int idx = i * k_max + j - 1;
-        const double hk = v(0) * sy - v(1) * cy;
-        if (h) (*h)(idx) = hk;
-        terms.phr += lambda(idx) * hk + 0.5 * rho * hk * hk;
-        const double dl = lambda(idx) + rho * hk;
-        // dh/d(xdot, ydot) = (sin, -cos), dh/dyaw = v_lon.
-        const Eigen::Vector3d hp(0.0, 0.0, dl * v_lon), hv(dl * sy, -dl * cy, 0.0);
-        gc.noalias() += b0 * hp.transpose() + b1 * hv.transpose();
-        gt += alpha * (hp.dot(v) + hv.dot(a));
-      }
+      gc.noalias() += wt * (b0 * gp.transpose() + b1 * gv.transpose() + b2 * ga.transpose());
+      gt += sum * wt / dur + wt * alpha * (gp.dot(v) + gv.dot(a) + ga.dot(jerk));
     }
     grad_c.middleRows<4>(4 * i) += gc;
     grad_t(i) += gt;
+  }
+
+  if (car) {
+    // Head: a = 2 c_02, j = 6 c_03. Tail, in reversed time: a = -(2 c_2 + 6 T c_3), j = 6 c_3.
+    const double a_min = 0.2 * robot_.vmax_lon, r_over_v = robot_.min_turn_radius / robot_.vmax_lon;
+    Eigen::Vector2d ga, gj;
+    rest_heading_penalty(2.0 * coef.block<1, 2>(2, 0).transpose(), 6.0 * coef.block<1, 2>(3, 0).transpose(),
+                         head_yaw_, a_min, r_over_v, w, terms.heading, ga, gj);
+    grad_c.block<1, 2>(2, 0) += 2.0 * ga.transpose();
+    grad_c.block<1, 2>(3, 0) += 6.0 * gj.transpose();
+    const int last = 4 * (n - 1);
+    const double dur = minco.durations()(n - 1);
+    const Eigen::Vector2d c2 = coef.block<1, 2>(last + 2, 0).transpose(), c3 = coef.block<1, 2>(last + 3, 0).transpose();
+    rest_heading_penalty(-(2.0 * c2 + 6.0 * dur * c3), 6.0 * c3, tail_yaw_, a_min, r_over_v, w, terms.heading, ga, gj);
+    grad_c.block<1, 2>(last + 2, 0) -= 2.0 * ga.transpose();
+    grad_c.block<1, 2>(last + 3, 0) += (6.0 * gj - 6.0 * dur * ga).transpose();
+    grad_t(n - 1) -= 6.0 * ga.dot(c3);
   }
 }
 

@@ -5,11 +5,23 @@
 //   W * P(omega^2 / wmax^2 - 1)
 //   W * P((R^2 omega^2 - v_lon^2) / vmax_lon^2)        car: turning radius >= R
 //   W * P(r_safe + margin - esdf(x, y))                clearance
-// with the cubic penalty P(z) = max(z, 0)^3 (C^2), and, for diff and car, the
-// PHR augmented-Lagrangian term of the nonholonomic equality at the samples
-// j = 1..K of every piece (pointwise, not time-weighted):
-//   lambda_k h_k + rho / 2 h_k^2,   h = xdot sin(yaw) - ydot cos(yaw).
-// v_lon = xdot cos(yaw) + ydot sin(yaw), v_lat = -xdot sin(yaw) + ydot cos(yaw).
+// with the cubic penalty P(z) = max(z, 0)^3 (C^2); v_lon = xdot cos(yaw) + ydot sin(yaw),
+// v_lat = -xdot sin(yaw) + ydot cos(yaw).
+//
+// Diff and car robots use the flat output instead: only (x, y) matter, the yaw is
+// the direction of travel, yaw = atan2(ydot, xdot), so the nonholonomic equality
+// h = xdot sin(yaw) - ydot cos(yaw) = 0 holds exactly (the MINCO's yaw column is
+// ignored). With s = |v|^2 and cr = xdot yddot - ydot xddot (omega = cr / s), the
+// limits are polynomial, with no singularity where the robot stands still:
+//   W * P(s / vmax_lon^2 - 1)
+//   W * P((cr^2 - wmax^2 s^2) / (wmax^2 vmax_lon^4))     |omega| <= wmax
+//   W * P((R^2 cr^2 - s^3) / vmax_lon^6)                 car: curvature <= 1 / R
+// and a car starts and ends at rest with the given yaw (it cannot turn on the spot):
+// there the direction of travel is that of the acceleration a (into rest, -a), so
+// with e the start (goal) heading, a_min = 0.2 vmax_lon / s and jerk j, not time-weighted,
+//   W [(a x e / a_min)^2 + P(1 - a.e / a_min) + (R (a x j) / (2 a_min^2 vmax_lon))^2]
+// (the last term: zero yaw rate at rest, (a x j) / (2 |a|^2), for a bounded curvature).
+// (Diff robots turn on the spot before and after: optimizer.py adds those pieces.)
 #pragma once
 
 #include <Eigen/Core>
@@ -38,9 +50,9 @@ struct CostWeights {
 
 /// The objective's terms (unweighted by nothing: each as it enters the objective).
 struct CostTerms {
-  double q = 0.0, velocity = 0.0, omega = 0.0, turn = 0.0, esdf = 0.0, phr = 0.0;
+  double q = 0.0, velocity = 0.0, omega = 0.0, turn = 0.0, esdf = 0.0, phr = 0.0, heading = 0.0;
   double time = 0.0, energy = 0.0;
-  double total() const { return q + velocity + omega + turn + esdf + phr + time + energy; }
+  double total() const { return q + velocity + omega + turn + esdf + phr + heading + time + energy; }
 };
 
 class TrajectoryCost {
@@ -50,8 +62,11 @@ class TrajectoryCost {
 
   const RobotLimits& robot() const { return robot_; }
   const CostWeights& weights() const { return weights_; }
-  /// Number of nonholonomic equality samples for N pieces (0 for omni robots).
-  int equality_count(int pieces) const { return robot_.nonholonomic() ? pieces * weights_.samples : 0; }
+  /// Number of equality samples for N pieces: 0 (the flat output needs none); kept
+  /// with the PHR multipliers for equality terms a cost may add.
+  int equality_count(int) const { return 0; }
+  /// Start and goal yaw (used by cars: the direction of travel at rest).
+  void set_end_headings(double head_yaw, double tail_yaw) { head_yaw_ = head_yaw, tail_yaw_ = tail_yaw; }
 
   /// Add every sampled term of the trajectory to `terms`, their partial gradients
   /// to grad_c (4N x 3) and grad_t (N). `lambda` (equality_count entries) and `rho`
@@ -63,6 +78,7 @@ class TrajectoryCost {
   GridField cost_, esdf_;
   RobotLimits robot_;
   CostWeights weights_;
+  double head_yaw_ = 0.0, tail_yaw_ = 0.0;
 };
 
 }  // namespace lf3pm

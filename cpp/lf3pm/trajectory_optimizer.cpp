@@ -12,6 +12,7 @@ TrajectoryProblem::TrajectoryProblem(TrajectoryCost cost, double rho_t, double w
     throw std::invalid_argument("trajectory: N durations need N-1 intermediate waypoints");
   if ((durations.array() <= 0.0).any()) throw std::invalid_argument("trajectory: durations must be positive");
   minco_.set_conditions(head, tail, pieces_);
+  cost_.set_end_headings(head(2, 0), tail(2, 0));
   x0_.resize(dimension());
   x0_.head(3 * (pieces_ - 1)) = Eigen::Map<const Eigen::VectorXd>(waypoints.data(), 3 * (pieces_ - 1));
   for (int i = 0; i < pieces_; ++i) x0_(3 * (pieces_ - 1) + i) = tau_from_duration(durations(i));

@@ -7,8 +7,11 @@ velocity at both ends; its free intermediate waypoints and piece durations
     sum over samples of (w_q q(x, y, yaw) + feasibility penalties) dt
         + rho_T * total time + w_energy * acceleration energy,
 
-with the nonholonomic equality of diff and car robots by a PHR augmented
-Lagrangian (docs/planner_backend.md has the math).
+Diff and car robots use the flat output: (x, y) only, the yaw follows the
+direction of travel, so there is no lateral motion at all; a diff robot turns on
+the spot to the optimised start heading and from the end heading to the goal's
+(pieces added after optimisation), a car must leave and arrive along its start
+and goal yaw (docs/planner_backend.md has the math).
 """
 
 from __future__ import annotations
@@ -76,6 +79,10 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
     head = np.zeros((3, 2))
     tail = np.zeros((3, 2))
     head[:, 0], tail[:, 0] = points[0], points[-1]
+    if robot.kind == "diff":
+        # The yaw column only unwraps the direction of travel (Trajectory.flat): start it
+        # on the first and end it on the last direction of travel, near the given yaws.
+        head[2, 0], tail[2, 0] = points[1, 2], points[-2, 2]
     from lf3pm import _core
 
     return _core.TrajectoryProblem(
@@ -85,29 +92,78 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
 
 
 def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
-    """Resample the path into pieces of about piece_length (arc length, yaw counted at
-    0.5 m/rad so that turns on the spot get pieces too) and time them at half speed."""
+    """Resample the path into pieces of about piece_length (arc length; omni: yaw
+    counted at 0.5 m/rad so that turns on the spot get pieces too; diff and car: in
+    (x, y) only, yaw the direction of travel) and time them at half speed."""
     wp = wp.copy()
     wp[:, 2] = np.unwrap(wp[:, 2])
-    step = np.hypot(np.hypot(*np.diff(wp[:, :2], axis=0).T), 0.5 * np.diff(wp[:, 2]))
+    step = np.hypot(*np.diff(wp[:, :2], axis=0).T)
+    if robot.nonholonomic:
+        wp[1:-1, 2] = _travel_yaw(wp)
+    else:
+        step = np.hypot(step, 0.5 * np.diff(wp[:, 2]))
     keep = np.concatenate([[True], step > 1e-9])
     wp, u = wp[keep], np.concatenate([[0.0], np.cumsum(step[step > 1e-9])])
     if len(wp) < 2:
-        raise Lf3pmError("start and goal coincide: nothing to optimise")
+        raise Lf3pmError("start and goal coincide in x and y: nothing to optimise"
+                         if robot.nonholonomic else "start and goal coincide: nothing to optimise")
     pieces = max(1, math.ceil(u[-1] / piece_length))
     knots = np.linspace(0.0, u[-1], pieces + 1)
     points = np.column_stack([np.interp(knots, u, wp[:, d]) for d in range(3)])
     dist = np.hypot(*np.diff(points[:, :2], axis=0).T)
-    turn = np.abs(np.diff(points[:, 2]))
+    turn = np.zeros(pieces) if robot.nonholonomic else np.abs(np.diff(points[:, 2]))
     durations = np.maximum(np.maximum(dist / (0.5 * robot.vmax_lon), turn / (0.5 * robot.wmax)), 0.1)
+    if robot.nonholonomic:
+        points[1:-1, 2] = np.interp(knots[1:-1], u, wp[:, 2])
     return points, durations
+
+
+def _travel_yaw(wp: np.ndarray) -> np.ndarray:
+    """Direction of travel at the interior waypoints (mean of the adjacent segments'),
+    unwrapped from the start's yaw."""
+    d = np.diff(wp[:, :2], axis=0)
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    heading = np.unwrap(np.concatenate([[wp[0, 2]], heading]))[1:]
+    return 0.5 * (heading[1:] + heading[:-1])
+
+
+def _turn_in_place(x: float, y: float, yaw0: float, yaw1: float, wmax: float):
+    """A cubic piece (4, 3) turning on the spot from yaw0 to yaw1 at rest at both ends,
+    its peak rate 1.5 |yaw1 - yaw0| / T equal to wmax, and its duration T."""
+    delta = yaw1 - yaw0
+    T = 1.5 * abs(delta) / wmax
+    c = np.zeros((4, 3))
+    c[0] = (x, y, yaw0)
+    c[2, 2], c[3, 2] = 3 * delta / T**2, -2 * delta / T**3
+    return c, T
+
+
+def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax: float) -> Trajectory:
+    """Diff robots: turn on the spot from start_yaw to the trajectory's first heading and
+    from its last heading to goal_yaw (the shorter way round)."""
+    # Unwrap the flat pieces (through their yaw column) to within half a turn of start_yaw.
+    c = trajectory.coefficients.copy()
+    c[:, 0, 2] += 2 * np.pi * np.round((start_yaw - trajectory.evaluate(0.0)[0][0, 2]) / (2 * np.pi))
+    trajectory = Trajectory(c, trajectory.durations, trajectory.flat)
+    (p0, p1), _ = trajectory.evaluate([0.0, trajectory.duration])
+    coefficients, durations = [trajectory.coefficients], [trajectory.durations]
+    flat = [np.asarray(trajectory.flat)]
+    if abs(p0[2] - start_yaw) > 1e-9:
+        c, T = _turn_in_place(p0[0], p0[1], start_yaw, p0[2], wmax)
+        coefficients.insert(0, c[None]), durations.insert(0, [T]), flat.insert(0, [False])
+    last = goal_yaw + 2 * np.pi * np.round((p1[2] - goal_yaw) / (2 * np.pi))
+    if abs(last - p1[2]) > 1e-9:
+        c, T = _turn_in_place(p1[0], p1[1], p1[2], last, wmax)
+        coefficients.append(c[None]), durations.append([T]), flat.append([False])
+    return Trajectory(np.concatenate(coefficients), np.concatenate(durations).astype(np.float64),
+                      np.concatenate(flat).astype(bool))
 
 
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                         w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
                         esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
                         rho0: float = 1.0, beta: float = 10.0, rho_max: float = 1e6, tol_h: float = 1e-4,
-                        max_outer: int = 12, g_epsilon: float = 1e-6, rel_cost_tol: float = 1e-4,
+                        max_outer: int = 12, g_epsilon: float = 1e-6, rel_cost_tol: float | None = None,
                         max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
@@ -120,10 +176,13 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     per piece in the initial guess. PHR (diff, car): penalty from ``rho0``, times
     ``beta`` per round up to ``rho_max``, until max |h| <= ``tol_h`` at the samples or
     ``max_outer`` rounds. L-BFGS stops at ||g|| <= g_epsilon max(1, ||x||), when the
-    objective fell by less than ``rel_cost_tol`` (relative) over 3 iterations, or after
-    ``max_iterations`` (0: none). Single-threaded.
+    objective fell by less than ``rel_cost_tol`` (relative) over 3 iterations (default
+    1e-4; 1e-5 for cars, whose rest-heading penalties make the problem stiffer and L-BFGS
+    slower to settle), or after ``max_iterations`` (0: none). Single-threaded.
     """
     start = time.perf_counter()
+    if rel_cost_tol is None:
+        rel_cost_tol = 1e-5 if robot.kind == "car" else 1e-4
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
                            penalty=penalty, esdf_margin=esdf_margin, samples=samples,
                            piece_length=piece_length)
@@ -131,7 +190,10 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
                            g_epsilon=g_epsilon, delta=rel_cost_tol, max_iterations=max_iterations)
     coefficients, durations = problem.trajectory(out["x"])
     wall = time.perf_counter() - start
-    trajectory = Trajectory(coefficients, durations)
+    trajectory = Trajectory(coefficients, durations, np.ones(len(durations), bool) if robot.nonholonomic else None)
+    if robot.kind == "diff":
+        wp = np.asarray(waypoints, dtype=np.float64)
+        trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax)
     return OptimizeResult(trajectory, out["iterations"], out["outer_iterations"], out["evaluations"],
                           out["status"], dict(out["terms"]), check_limits(trajectory, robot, esdf, check_rate),
                           wall)

@@ -21,6 +21,7 @@ from lf3pm.planner.graph_search import GraphPath, search_path
 from lf3pm.planner.grid import GridField
 from lf3pm.planner.optimizer import OptimizeResult, optimize_trajectory
 from lf3pm.planner.robots import Robot
+from lf3pm.planner.shortcut import shortcut_path
 from lf3pm.planner.trajectory import Trajectory
 from lf3pm.solm.reader import Solm
 
@@ -29,6 +30,8 @@ METRICS = ("q_n", "q_min", "step_norm", "none")
 # An ESDF with nothing blocked is +inf everywhere; the back end needs finite
 # values, and beyond this distance clearance never matters.
 _FAR = 1.0e3
+# The optimiser penalises clearance below r_safe + this margin (optimize_trajectory's default).
+_ESDF_MARGIN = 0.05
 
 
 @dataclass
@@ -88,11 +91,15 @@ class Planner:
         waypoints = np.array(path.poses, dtype=np.float64)
         # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
         waypoints[0], waypoints[-1] = start, goal
-        waypoints[:, 2] = np.unwrap(waypoints[:, 2])  # exact end yaws may sit a turn away
         g = self.esdf
         cost = None if metric == "none" else GridField(layer.filled, g.x0, g.y0, g.res)
+        # Straighten the staircase where that keeps the clearance the optimiser's penalty
+        # asks for and costs no more under the front end's own edge cost.
+        keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + _ESDF_MARGIN, cost, weight)
+        waypoints = waypoints[keep]
+        waypoints[:, 2] = np.unwrap(waypoints[:, 2])  # exact end yaws may sit a turn away
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
-                                     rho_T=rho_T)
+                                     rho_T=rho_T, esdf_margin=_ESDF_MARGIN)
         return Plan(metric, robot, path, result)
 
 

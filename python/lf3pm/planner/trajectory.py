@@ -16,10 +16,16 @@ CSV_COLUMNS = ("t", "x", "y", "yaw", "vx", "vy", "omega")
 @dataclass(frozen=True)
 class Trajectory:
     """N cubic pieces: ``coefficients`` (N, 4, 3), piece i is sum_k c[i, k] t^k for t in
-    [0, durations[i]], columns x, y, yaw (yaw unwrapped, continuous); world frame."""
+    [0, durations[i]], columns x, y, yaw (yaw unwrapped, continuous); world frame.
+
+    ``flat`` (N bools, default none): on those pieces the yaw is the direction of
+    travel, atan2(ydot, xdot) (diff and car robots: no lateral motion), and the yaw
+    column only picks the turn it is unwrapped to; where the robot is at rest, the
+    direction it starts or stops moving in."""
 
     coefficients: np.ndarray
     durations: np.ndarray
+    flat: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -38,9 +44,18 @@ class Trajectory:
         piece = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, self.pieces - 1)
         tau = t - starts[piece]
         c = self.coefficients[piece]  # (n, 4, 3)
-        powers = np.stack([np.ones_like(tau), tau, tau**2, tau**3], axis=1)
-        rates = np.stack([np.zeros_like(tau), np.ones_like(tau), 2 * tau, 3 * tau**2], axis=1)
-        return np.einsum("nk,nkd->nd", powers, c), np.einsum("nk,nkd->nd", rates, c)
+        p, v = _powers(c, tau, 0), _powers(c, tau, 1)
+        if self.flat is not None and np.any(self.flat[piece]):
+            f = np.asarray(self.flat)[piece]
+            # Heading from a time nudged off the ends of a piece, where the robot may be at rest.
+            eps = 1e-6 * self.durations[piece]
+            tn = np.clip(tau, eps, self.durations[piece] - eps)
+            vn, an = _powers(c, tn, 1), _powers(c, tn, 2)
+            yaw = np.arctan2(vn[:, 1], vn[:, 0])
+            yaw += 2 * np.pi * np.round((p[:, 2] - yaw) / (2 * np.pi))
+            omega = (vn[:, 0] * an[:, 1] - vn[:, 1] * an[:, 0]) / np.maximum(np.sum(vn[:, :2] ** 2, axis=1), 1e-300)
+            p[f, 2], v[f, 2] = yaw[f], omega[f]
+        return p, v
 
     def sample(self, rate: float = 100.0) -> dict:
         """Samples at ``rate`` Hz from 0 to the end (the end included): dict of arrays
@@ -61,3 +76,14 @@ class Trajectory:
                    header=",".join(CSV_COLUMNS), comments="")
         with atomic_write(path) as fp:
             fp.write(buf.getvalue().encode())
+
+
+def _powers(c, tau, order: int):
+    """The ``order``-th derivative of the pieces c (n, 4, 3) at times tau (n,)."""
+    if order == 0:
+        basis = [np.ones_like(tau), tau, tau**2, tau**3]
+    elif order == 1:
+        basis = [np.zeros_like(tau), np.ones_like(tau), 2 * tau, 3 * tau**2]
+    else:
+        basis = [np.zeros_like(tau), np.zeros_like(tau), np.full_like(tau, 2.0), 6 * tau]
+    return np.einsum("nk,nkd->nd", np.stack(basis, axis=1), c)
