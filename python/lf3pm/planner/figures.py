@@ -28,9 +28,9 @@ def plans_figure(solm: Solm, plans: dict, path: Path, *, channel: str = "q_n",
         every = max(1, len(samples["x"]) // 25)
         ax.quiver(samples["x"][::every], samples["y"][::every], np.cos(samples["yaw"][::every]),
                   np.sin(samples["yaw"][::every]), color=colour, scale=40, width=0.002, zorder=5)
-    first = next(iter(plans.values()))
-    ax.plot(*first.path.poses[0, :2], "o", color="k", mec="w", zorder=6)
-    ax.plot(*first.path.poses[-1, :2], "*", color="k", mec="w", ms=12, zorder=6)
+    ends = next(iter(plans.values())).trajectory.sample(10.0)
+    ax.plot(ends["x"][0], ends["y"][0], "o", color="k", mec="w", zorder=6)
+    ax.plot(ends["x"][-1], ends["y"][-1], "*", color="k", mec="w", ms=12, zorder=6)
     ax.legend(loc="lower right", fontsize=8, facecolor="0.6")
     if title:
         ax.set_title(title, fontsize=9)
