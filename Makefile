@@ -35,6 +35,9 @@ bench: build
 	$(PY) bench/bench_evaluate.py
 	$(PY) bench/bench_solm.py
 	$(PY) bench/bench_solm_yaw_reuse.py
+	$(PY) bench/bench_graph_search.py
+	$(PY) bench/bench_planner_backend.py
+	$(PY) bench/bench_odometry_replay.py
 
 clean:
 	rm -rf build out $(VENV)
