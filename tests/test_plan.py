@@ -10,6 +10,8 @@ import pytest
 from lf3pm.planner import Planner, Robot
 from lf3pm.solm.reader import Solm
 
+from kinematics import assert_kinematics_hold
+
 START, GOAL = (-2.5, -2.7, 0.0), (6.2, 2.2, 1.57)
 
 
@@ -29,17 +31,7 @@ def test_plan_on_boxes_is_feasible(planner, kind):
     robot = Robot(kind, min_turn_radius=0.5 if kind == "car" else 0.0, r_safe=0.05)
     plan = planner.plan(START, GOAL, robot=robot, metric="q_n", weight=3.0)
     traj = plan.trajectory
-    s = traj.sample(100.0)
-    c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
-    v_lon, v_lat = s["vx"] * c + s["vy"] * si, -s["vx"] * si + s["vy"] * c
-    assert np.max(np.abs(v_lon)) <= 1.02 * robot.vmax_lon
-    assert np.max(np.abs(s["omega"])) <= 1.02 * robot.wmax
-    if kind == "omni":
-        assert np.max(np.abs(v_lat)) <= 1.02 * robot.vmax_lat
-    else:
-        assert np.max(np.abs(v_lat)) < 1e-3  # |h|: no sideways motion
-    if kind == "car":  # turning radius: R |omega| <= |v_lon|, 2 % of vmax slack
-        assert np.max(robot.min_turn_radius * np.abs(s["omega"]) - np.abs(v_lon)) <= 0.02 * robot.vmax_lon
+    s = assert_kinematics_hold(traj, robot)
     clearance = planner.esdf.distance(s["x"], s["y"])[0]
     assert np.min(clearance) >= robot.r_safe
     # It starts and ends on the exact start and goal poses, at rest.
