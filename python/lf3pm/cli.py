@@ -267,7 +267,7 @@ def experiment_gobi(
         if weight is not None:
             setup = replace(setup, weight=weight)
         with progress_bar() as step:
-            summary = gobi.run(out, setup, progress=step)
+            gobi.run(out, setup, progress=step)
         console.print((out / "gobi.md").read_text())
         console.print(f"wrote {out}/summary.json, gobi.md, trajectories.png, along.png, trajectories/")
 

@@ -173,9 +173,11 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     acceleration energy; ``penalty``: weight W of the cubic penalties on the velocity,
     yaw rate, turning radius and clearance limits (clearance penalised from
     r_safe + esdf_margin); ``samples``: K samples per piece; ``piece_length``: metres
-    per piece in the initial guess. PHR (diff, car): penalty from ``rho0``, times
-    ``beta`` per round up to ``rho_max``, until max |h| <= ``tol_h`` at the samples or
-    ``max_outer`` rounds. L-BFGS stops at ||g|| <= g_epsilon max(1, ||x||), when the
+    per piece in the initial guess. PHR outer loop: penalty from ``rho0``, times
+    ``beta`` per round up to ``rho_max``, until max |h| <= ``tol_h`` or ``max_outer``
+    rounds; diff and car now satisfy h = 0 by flat outputs (yaw from the velocity),
+    so no equality reaches this loop and it runs one round (issue 6: use it for the
+    car's end conditions or remove it). L-BFGS stops at ||g|| <= g_epsilon max(1, ||x||), when the
     objective fell by less than ``rel_cost_tol`` (relative) over 3 iterations (default
     1e-4; 1e-5 for cars, whose rest-heading penalties make the problem stiffer and L-BFGS
     slower to settle), or after ``max_iterations`` (0: none). Single-threaded.
