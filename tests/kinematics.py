@@ -12,13 +12,15 @@ def body_speeds(trajectory):
 
 
 def assert_kinematics_hold(trajectory, robot, slack: float = 0.02):
-    """Speed and yaw-rate limits within ``slack``; no sideways motion (|h| < 1e-3 m/s)
+    """Speed (body-frame and, if set, |v|) and yaw-rate limits within ``slack``; no sideways motion (|h| < 1e-3 m/s)
     for diff and car; the car's turning radius within ``slack`` of its top speed."""
     s, v_lon, v_lat = body_speeds(trajectory)
     assert np.max(np.abs(v_lon)) <= (1 + slack) * robot.vmax_lon
     assert np.max(np.abs(s["omega"])) <= (1 + slack) * robot.wmax
     if robot.kind == "omni":
         assert np.max(np.abs(v_lat)) <= (1 + slack) * robot.vmax_lat
+        if robot.vmax_norm is not None:
+            assert np.max(np.hypot(s["vx"], s["vy"])) <= (1 + slack) * robot.vmax_norm
     else:
         assert np.max(np.abs(v_lat)) < 1e-3  # |h|: no sideways motion
     if robot.kind == "car":  # R |omega| <= |v_lon|

@@ -41,11 +41,21 @@ def test_plan_writes_a_100_hz_trajectory_from_start_to_goal_and_a_png(boxes_solm
     assert png.stat().st_size > 10_000
 
 
+def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
+    csv = tmp_path / "traj.csv"
+    done = run_plan("--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57,
+                    "--r-safe", 0.05, "--vmax-norm", 0.7, "-o", csv)
+    assert done.returncode == 0, done.stderr
+    data = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert np.max(np.hypot(data[:, 4], data[:, 5])) <= 1.02 * 0.7
+
+
 @pytest.mark.parametrize("args, needle", [
     (("--start", 50, 50, 0, "--goal", 6.2, 2.2, 0), "outside"),
     (("--start", -4.0, -4.0, 0, "--goal", 6.2, 2.2, 0), "obstacle"),
     (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "tank"), "robot kind"),
     (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--metric", "q_best"), "metric"),
+    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "diff", "--vmax-norm", 1), "omni robots only"),
 ])
 def test_bad_requests_get_one_line_and_exit_2(boxes_solm, tmp_path, args, needle):
     csv = tmp_path / "traj.csv"

@@ -132,21 +132,24 @@ def test_lbfgs_convex_quadratic():
 
 # --- The objective's gradient ----------------------------------------------------------
 
-@pytest.mark.parametrize("kind", ["omni", "diff", "car"])
-def test_objective_gradient_matches_finite_differences(kind):
+@pytest.mark.parametrize("kind, vmax_norm", [("omni", None), ("omni", 0.4), ("diff", None), ("car", None)])
+def test_objective_gradient_matches_finite_differences(kind, vmax_norm):
     rng = np.random.default_rng(3)
     robot = Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, min_turn_radius=30.0 if kind == "car" else 0.0,
-                  r_safe=1.0)
+                  r_safe=1.0, vmax_norm=vmax_norm)
     problem = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
                            rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
-    if problem.equality_count:
-        problem.set_multipliers(rng.normal(size=problem.equality_count), 5.0)
     x = problem.initial + rng.normal(size=problem.dimension) * 0.1
     x[-(problem.dimension // 4):] -= 1.0  # shorter durations than the initial guess: limits violated
     terms = problem.details(x)
     active = ["q", "velocity", "omega", "esdf", "time", "energy"]
     active += ["turn", "heading"] if kind == "car" else []
     assert all(terms[name] != 0 for name in active), terms
+    if vmax_norm is not None:  # the |v| limit adds to the velocity penalty
+        box = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0),
+                           Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, r_safe=1.0), w_q=1.3, rho_T=0.7,
+                           w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
+        assert terms["velocity"] > 1.01 * box.details(x)["velocity"]
     _, grad = problem.evaluate(x)
     step = 1e-6
     fd = np.array([(problem.evaluate(x + step * e)[0] - problem.evaluate(x - step * e)[0]) / (2 * step)
@@ -186,6 +189,22 @@ def test_optimised_trajectory_is_feasible(kind):
     assert np.min(esdf.sample(s["x"], s["y"])[0]) >= robot.r_safe
     assert result.violations["min_clearance"] >= 0
     assert result.trajectory.duration < 0.8 * sum(np.hypot(*np.diff(_bend()[:, :2], axis=0).T)) / 0.5
+
+
+def test_speed_norm_limit_holds_where_box_limits_allow_diagonal_motion():
+    # Time-weighted with equal box limits, an omni robot yaws 45 degrees to move at
+    # sqrt(2) vmax; a limit on |v| removes that. (The path's yaw is off the direction of
+    # travel: at exactly 0 the box limits' yaw gradient vanishes by symmetry.)
+    path = _straight(yaw=0.3)
+    box = Robot("omni", vmax_lon=1.0, vmax_lat=1.0, wmax=1.0, r_safe=0.5)
+    fast = optimize_trajectory(path, None, None, box, rho_T=5.0, rel_cost_tol=1e-6)
+    s = fast.trajectory.sample(100.0)
+    assert np.max(np.hypot(s["vx"], s["vy"])) > 1.2
+    normed = Robot("omni", vmax_lon=1.0, vmax_lat=1.0, wmax=1.0, r_safe=0.5, vmax_norm=1.0)
+    result = optimize_trajectory(path, None, None, normed, rho_T=5.0, rel_cost_tol=1e-6)
+    assert_kinematics_hold(result.trajectory, normed)
+    assert 0.95 <= result.violations["max_speed_ratio"] <= 1.02
+    assert result.trajectory.duration > fast.trajectory.duration
 
 
 def test_obstacle_on_the_straight_line_is_avoided():
@@ -229,6 +248,10 @@ def test_bad_input_raises_lf3pm_error():
         Robot("diff", r_safe=-0.1)
     with pytest.raises(Lf3pmError, match="kind"):
         Robot("tank")
+    with pytest.raises(Lf3pmError, match="omni robots only"):
+        Robot("diff", vmax_norm=1.0)
+    with pytest.raises(Lf3pmError, match="vmax_norm"):
+        Robot("omni", vmax_norm=0.0)
     with pytest.raises(Lf3pmError, match="start and goal coincide"):
         optimize_trajectory(np.zeros((3, 3)), cost, None, Robot())
     with pytest.raises(Lf3pmError, match="rho_T"):

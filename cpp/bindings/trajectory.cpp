@@ -1,5 +1,5 @@
 // nanobind bindings of the trajectory back end: grid fields, MINCO, L-BFGS and
-// the PHR trajectory optimiser (logic lives in cpp/lf3pm/).
+// the trajectory optimiser (logic lives in cpp/lf3pm/).
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -63,7 +63,6 @@ nb::dict terms_dict(const CostTerms& t) {
   d["omega"] = t.omega;
   d["turn"] = t.turn;
   d["esdf"] = t.esdf;
-  d["phr"] = t.phr;
   d["heading"] = t.heading;
   d["time"] = t.time;
   d["energy"] = t.energy;
@@ -152,24 +151,20 @@ void bind_trajectory(nb::module_& m) {
                                 "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece)].")
       .def("__init__",
            [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const std::string& kind,
-              double vmax_lon, double vmax_lat, double wmax, double min_turn_radius, double r_safe, double w_q,
+              double vmax_lon, double vmax_lat, double vmax_norm, double wmax, double min_turn_radius, double r_safe, double w_q,
               double penalty, double esdf_margin, int samples, double rho_t, double w_energy, Mat32 head,
               Mat32 tail, Mat3 waypoints, Vec durations) {
-             RobotLimits robot{robot_kind(kind), vmax_lon, vmax_lat, wmax, min_turn_radius, r_safe};
+             RobotLimits robot{robot_kind(kind), vmax_lon, vmax_lat, wmax, min_turn_radius, vmax_norm, r_safe};
              CostWeights weights{w_q, penalty, esdf_margin, samples};
              TrajectoryCost tc(cost ? *cost : GridField(), esdf ? *esdf : GridField(), robot, weights);
              new (self) TrajectoryProblem(std::move(tc), rho_t, w_energy, to_state(head), to_state(tail),
                                           to_points(waypoints), to_vector(durations));
            },
-           "cost"_a.none(), "esdf"_a.none(), "kind"_a, "vmax_lon"_a, "vmax_lat"_a, "wmax"_a, "min_turn_radius"_a,
+           "cost"_a.none(), "esdf"_a.none(), "kind"_a, "vmax_lon"_a, "vmax_lat"_a, "vmax_norm"_a, "wmax"_a, "min_turn_radius"_a,
            "r_safe"_a, "w_q"_a, "penalty"_a, "esdf_margin"_a, "samples"_a, "rho_T"_a, "w_energy"_a, "head"_a,
            "tail"_a, "waypoints"_a, "durations"_a)
       .def_prop_ro("dimension", &TrajectoryProblem::dimension)
-      .def_prop_ro("equality_count", &TrajectoryProblem::equality_count)
       .def_prop_ro("initial", &TrajectoryProblem::initial)
-      .def("set_multipliers", [](TrajectoryProblem& p, Vec lambda, double rho) {
-             p.set_multipliers(to_vector(lambda), rho);
-           }, "lambda_"_a, "rho"_a, "PHR multipliers (one per equality sample) and penalty used by evaluate().")
       .def("evaluate",
            [](TrajectoryProblem& p, Vec x) {
              Eigen::VectorXd g;
@@ -184,14 +179,12 @@ void bind_trajectory(nb::module_& m) {
            "x"_a, "(objective, gradient) at x.")
       .def("details",
            [](TrajectoryProblem& p, Vec x) {
-             Eigen::VectorXd g, h;
+             Eigen::VectorXd g;
              CostTerms t;
-             p.evaluate(to_vector(x), g, &t, &h);
-             nb::dict d = terms_dict(t);
-             d["h"] = h;
-             return d;
+             p.evaluate(to_vector(x), g, &t);
+             return terms_dict(t);
            },
-           "x"_a, "Objective terms and the equality residuals h at the samples.")
+           "x"_a, "The objective's terms at x.")
       .def("trajectory",
            [](TrajectoryProblem& p, Vec x) {
              Eigen::MatrixX3d c;
@@ -201,26 +194,21 @@ void bind_trajectory(nb::module_& m) {
            },
            "x"_a, "(coefficients (N, 4, 3), durations (N,)) at x.")
       .def("optimize",
-           [](TrajectoryProblem& p, double rho0, double beta, double rho_max, double tol_h, int max_outer,
-              int memory, double g_epsilon, int past, double delta, int max_iterations) {
-             const PhrParams phr{rho0, beta, rho_max, tol_h, max_outer};
+           [](TrajectoryProblem& p, int memory, double g_epsilon, int past, double delta, int max_iterations) {
              const LbfgsParams lb = lbfgs_params(memory, g_epsilon, past, delta, max_iterations);
              OptimizeOutcome o;
              {
                nb::gil_scoped_release release;
-               o = optimize(p, phr, lb);
+               o = optimize(p, lb);
              }
              nb::dict out;
              out["x"] = o.x;
              out["iterations"] = o.iterations;
              out["evaluations"] = o.evaluations;
-             out["outer_iterations"] = o.outer_iterations;
              out["status"] = o.status;
-             out["max_h"] = o.max_h;
              out["terms"] = terms_dict(o.terms);
              return out;
            },
-           "rho0"_a = 1.0, "beta"_a = 10.0, "rho_max"_a = 1e6, "tol_h"_a = 1e-4, "max_outer"_a = 12,
            "memory"_a = 8, "g_epsilon"_a = 1e-6, "past"_a = 3, "delta"_a = 1e-4, "max_iterations"_a = 0,
-           "PHR outer loop around L-BFGS from the initial guess; dict of x, iterations, status, max_h, terms.");
+           "L-BFGS from the initial guess; dict of x, iterations, evaluations, status, terms.");
 }

@@ -4,9 +4,9 @@
 // cleanly (LBFGS-Lite and LBFGSpp are header-only files to vendor), and scipy's
 // L-BFGS-B must call back into Python for every evaluation, so it cannot run
 // inside the C++ planner. It is not faster per se: bench/bench_planner_backend.py
-// (200 m, 409 variables, one thread) measured 13 ms (omni) and 68 ms (diff, PHR)
-// against 15 ms and 77 ms for scipy L-BFGS-B with Python callbacks, 1.1x; at a
-// tighter tolerance scipy was 1.1x faster. The objective dominates the time.
+// (206 m, 409 variables, one thread) measured 12.3 ms (omni) and 13.5 ms (diff)
+// against 13.5 ms and 13.9 ms for scipy L-BFGS-B with Python callbacks, 1.0-1.1x.
+// The objective dominates the time.
 //
 // The Lewis-Overton search (bisection on a bracket, doubling until one exists)
 // asks only for the weak Wolfe conditions, which keeps it robust on objectives

@@ -41,19 +41,18 @@ TrajectoryCost::TrajectoryCost(GridField cost, GridField esdf, const RobotLimits
   if (weights_.samples < 1) throw std::invalid_argument("samples per piece must be >= 1");
 }
 
-void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, double /*rho*/, Eigen::MatrixX3d& grad_c,
-                         Eigen::VectorXd& grad_t, CostTerms& terms, Eigen::VectorXd* h) const {
+void TrajectoryCost::add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t,
+                         CostTerms& terms) const {
   const int n = minco.pieces(), k_max = weights_.samples;
-  if (lambda.size() != equality_count(n)) throw std::invalid_argument("one multiplier per equality sample needed");
-  if (h) h->resize(equality_count(n));
   const Eigen::MatrixX3d& coef = minco.coefficients();
   const double w = weights_.penalty;
   // Speed limits are penalised relative to the limit (z = v^2 / vmax^2 - 1), so that
   // the same weight allows the same relative excess on every limit.
   const double ilon2 = 1.0 / (robot_.vmax_lon * robot_.vmax_lon), ilat2 = 1.0 / (robot_.vmax_lat * robot_.vmax_lat);
+  const double inorm2 = robot_.vmax_norm > 0.0 ? 1.0 / (robot_.vmax_norm * robot_.vmax_norm) : 0.0;
   const double iw2 = 1.0 / (robot_.wmax * robot_.wmax), r2 = robot_.min_turn_radius * robot_.min_turn_radius;
   const double clearance = robot_.r_safe + weights_.esdf_margin;
-  const bool car = robot_.kind == RobotKind::Car && robot_.min_turn_radius > 0.0;
+  const bool car = robot_.rest_headings();
   const bool flat = robot_.nonholonomic();
   const double eps = 1e-2 * robot_.vmax_lon * robot_.vmax_lon;  // (0.1 vmax_lon)^2
   Eigen::Vector3d field_grad;
@@ -120,6 +119,10 @@ void TrajectoryCost::add(const MincoS2& minco, const Eigen::VectorXd& lambda, do
         gv(0) += d * cy, gv(1) += d * sy, gp(2) += d * v_lat;
         d = 2.0 * v_lat * ilat2 * cubic_penalty(v_lat * v_lat * ilat2 - 1.0, w, f.velocity);
         gv(0) -= d * sy, gv(1) += d * cy, gp(2) -= d * v_lon;
+        if (inorm2 > 0.0) {
+          d = 2.0 * inorm2 * cubic_penalty((v(0) * v(0) + v(1) * v(1)) * inorm2 - 1.0, w, f.velocity);
+          gv(0) += d * v(0), gv(1) += d * v(1);
+        }
         gv(2) += 2.0 * v(2) * iw2 * cubic_penalty(v(2) * v(2) * iw2 - 1.0, w, f.omega);
       }
       if (!esdf_.empty()) {

@@ -2,6 +2,7 @@
 // samples per piece, trapezoid-weighted in time,
 //   w_q * q(x, y, yaw)                                 localisability cost (SOLM)
 //   W * P(v_lon^2 / vmax_lon^2 - 1), W * P(v_lat^2 / vmax_lat^2 - 1)  (lateral: omni only)
+//   W * P(|v|^2 / vmax_norm^2 - 1)                     omni with a speed limit on |v|
 //   W * P(omega^2 / wmax^2 - 1)
 //   W * P((R^2 omega^2 - v_lon^2) / vmax_lon^2)        car: turning radius >= R
 //   W * P(r_safe + margin - esdf(x, y))                clearance
@@ -16,12 +17,16 @@
 //   W * P(s / vmax_lon^2 - 1)
 //   W * P((cr^2 - wmax^2 s^2) / (wmax^2 vmax_lon^4))     |omega| <= wmax
 //   W * P((R^2 cr^2 - s^3) / vmax_lon^6)                 car: curvature <= 1 / R
-// and a car starts and ends at rest with the given yaw (it cannot turn on the spot):
-// there the direction of travel is that of the acceleration a (into rest, -a), so
-// with e the start (goal) heading, a_min = 0.2 vmax_lon / s and jerk j, not time-weighted,
-//   W [(a x e / a_min)^2 + P(1 - a.e / a_min) + (R (a x j) / (2 a_min^2 vmax_lon))^2]
-// (the last term: zero yaw rate at rest, (a x j) / (2 |a|^2), for a bounded curvature).
 // (Diff robots turn on the spot before and after: optimizer.py adds those pieces.)
+//
+// A car starts and ends at rest with the given yaw e (it cannot turn on the spot).
+// At rest the direction of travel is that of the acceleration a (into rest, -a),
+// and in an end piece (constant jerk j) the yaw rate there is (a x j) / (2 |a|^2),
+// which the turning radius needs to be zero. With a_min = 0.2 vmax_lon, penalties
+// (not time-weighted)
+//   W [(a x e / a_min)^2 + P(1 - a.e / a_min) + (R (a x j) / (2 a_min^2 vmax_lon))^2]
+// hold a along e, away from zero, and the yaw rate at rest near zero.
+// (Why penalties, not equalities by a PHR augmented Lagrangian: docs/planner_backend.md.)
 #pragma once
 
 #include <Eigen/Core>
@@ -37,8 +42,11 @@ struct RobotLimits {
   RobotKind kind = RobotKind::Omni;
   double vmax_lon = 1.0, vmax_lat = 1.0, wmax = 1.0;
   double min_turn_radius = 0.0;  ///< car only
+  double vmax_norm = 0.0;        ///< omni: limit on the speed |v| (0: none)
   double r_safe = 0.5;
   bool nonholonomic() const { return kind != RobotKind::Omni; }
+  /// A car with a turning radius: it must start and end along its given yaw.
+  bool rest_headings() const { return kind == RobotKind::Car && min_turn_radius > 0.0; }
 };
 
 struct CostWeights {
@@ -50,9 +58,9 @@ struct CostWeights {
 
 /// The objective's terms (unweighted by nothing: each as it enters the objective).
 struct CostTerms {
-  double q = 0.0, velocity = 0.0, omega = 0.0, turn = 0.0, esdf = 0.0, phr = 0.0, heading = 0.0;
+  double q = 0.0, velocity = 0.0, omega = 0.0, turn = 0.0, esdf = 0.0, heading = 0.0;
   double time = 0.0, energy = 0.0;
-  double total() const { return q + velocity + omega + turn + esdf + phr + heading + time + energy; }
+  double total() const { return q + velocity + omega + turn + esdf + heading + time + energy; }
 };
 
 class TrajectoryCost {
@@ -62,17 +70,12 @@ class TrajectoryCost {
 
   const RobotLimits& robot() const { return robot_; }
   const CostWeights& weights() const { return weights_; }
-  /// Number of equality samples for N pieces: 0 (the flat output needs none); kept
-  /// with the PHR multipliers for equality terms a cost may add.
-  int equality_count(int) const { return 0; }
   /// Start and goal yaw (used by cars: the direction of travel at rest).
   void set_end_headings(double head_yaw, double tail_yaw) { head_yaw_ = head_yaw, tail_yaw_ = tail_yaw; }
 
-  /// Add every sampled term of the trajectory to `terms`, their partial gradients
-  /// to grad_c (4N x 3) and grad_t (N). `lambda` (equality_count entries) and `rho`
-  /// are the PHR multipliers and penalty; `h`, if given, receives the equality residuals.
-  void add(const MincoS2& minco, const Eigen::VectorXd& lambda, double rho, Eigen::MatrixX3d& grad_c,
-           Eigen::VectorXd& grad_t, CostTerms& terms, Eigen::VectorXd* h = nullptr) const;
+  /// Add every term of the trajectory to `terms`, their partial gradients to grad_c
+  /// (4N x 3) and grad_t (N).
+  void add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t, CostTerms& terms) const;
 
  private:
   GridField cost_, esdf_;

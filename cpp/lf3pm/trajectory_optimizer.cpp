@@ -16,13 +16,6 @@ TrajectoryProblem::TrajectoryProblem(TrajectoryCost cost, double rho_t, double w
   x0_.resize(dimension());
   x0_.head(3 * (pieces_ - 1)) = Eigen::Map<const Eigen::VectorXd>(waypoints.data(), 3 * (pieces_ - 1));
   for (int i = 0; i < pieces_; ++i) x0_(3 * (pieces_ - 1) + i) = tau_from_duration(durations(i));
-  lambda_.setZero(equality_count());
-}
-
-void TrajectoryProblem::set_multipliers(const Eigen::VectorXd& lambda, double rho) {
-  if (lambda.size() != equality_count()) throw std::invalid_argument("one multiplier per equality sample needed");
-  lambda_ = lambda;
-  rho_ = rho;
 }
 
 void TrajectoryProblem::decode(const Eigen::VectorXd& x) {
@@ -34,13 +27,12 @@ void TrajectoryProblem::decode(const Eigen::VectorXd& x) {
   minco_.set_parameters(q_, durations_);
 }
 
-double TrajectoryProblem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g, CostTerms* terms,
-                                   Eigen::VectorXd* h) {
+double TrajectoryProblem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g, CostTerms* terms) {
   decode(x);
   CostTerms t;
   grad_c_.setZero(4 * pieces_, 3);
   grad_t_.setZero(pieces_);
-  cost_.add(minco_, lambda_, rho_, grad_c_, grad_t_, t, h);
+  cost_.add(minco_, grad_c_, grad_t_, t);
   t.energy = w_energy_ * minco_.energy();
   minco_.add_energy_gradient(w_energy_, grad_c_, grad_t_);
   t.time = rho_t_ * durations_.sum();
@@ -60,26 +52,16 @@ void TrajectoryProblem::trajectory(const Eigen::VectorXd& x, Eigen::MatrixX3d& c
   durations = durations_;
 }
 
-OptimizeOutcome optimize(TrajectoryProblem& problem, const PhrParams& phr, const LbfgsParams& lbfgs) {
+OptimizeOutcome optimize(TrajectoryProblem& problem, const LbfgsParams& lbfgs) {
   OptimizeOutcome out;
   out.x = problem.initial();
   const Objective f = [&problem](const Eigen::VectorXd& x, Eigen::VectorXd& g) { return problem.evaluate(x, g); };
-  Eigen::VectorXd lambda = Eigen::VectorXd::Zero(problem.equality_count()), h, g;
-  double rho = problem.equality_count() > 0 ? phr.rho0 : 0.0;
-  const int rounds = problem.equality_count() > 0 ? phr.max_outer : 1;
-  for (int k = 0; k < rounds; ++k) {
-    problem.set_multipliers(lambda, rho);
-    const LbfgsResult r = lbfgs_minimize(f, out.x, lbfgs);
-    out.iterations += r.iterations;
-    out.evaluations += r.evaluations;
-    out.outer_iterations = k + 1;
-    out.status = to_string(r.status);
-    problem.evaluate(out.x, g, &out.terms, &h);
-    out.max_h = h.size() ? h.cwiseAbs().maxCoeff() : 0.0;
-    if (out.max_h <= phr.tol_h) break;
-    lambda += rho * h;
-    rho = std::min(rho * phr.beta, phr.rho_max);
-  }
+  const LbfgsResult r = lbfgs_minimize(f, out.x, lbfgs);
+  out.iterations = r.iterations;
+  out.evaluations = r.evaluations;
+  out.status = to_string(r.status);
+  Eigen::VectorXd g;
+  problem.evaluate(out.x, g, &out.terms);
   return out;
 }
 

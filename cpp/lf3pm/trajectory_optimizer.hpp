@@ -1,12 +1,12 @@
-// LF-3PM trajectory back end: the full objective over the MINCO parameters and
-// the PHR augmented-Lagrangian outer loop around L-BFGS.
+// LF-3PM trajectory back end: the full objective over the MINCO parameters,
+// minimised by L-BFGS.
 //
 // Decision vector x = [q_1..q_{N-1} (3 each: x, y, yaw), tau_1..tau_N], durations
 // T_i = duration_from_tau(tau_i) (GCOPTER's C^2 map, so T > 0 without bounds).
 //   J(x) = sampled terms (trajectory_cost.hpp) + rho_T * sum T_i + w_e * energy
-// For diff and car robots the nonholonomic equality h = 0 at the samples is
-// enforced by PHR: minimise J with multipliers lambda and penalty rho, then
-// lambda += rho h, rho = min(beta rho, rho_max), until max |h| <= tol_h.
+// No equality is left to enforce: the flat output satisfies the nonholonomic one
+// exactly (trajectory_cost.hpp), so there is no PHR outer loop (the paper's;
+// docs/planner_backend.md has the measurements behind dropping it).
 #pragma once
 
 #include <Eigen/Core>
@@ -18,14 +18,6 @@
 
 namespace lf3pm {
 
-struct PhrParams {
-  double rho0 = 1.0;       ///< initial penalty
-  double beta = 10.0;      ///< penalty growth per outer iteration
-  double rho_max = 1e6;    ///< penalty cap
-  double tol_h = 1e-4;     ///< stop when max |h| at the samples is below (m/s)
-  int max_outer = 12;
-};
-
 class TrajectoryProblem {
  public:
   /// head/tail: (x, y, yaw) position in column 0, velocity in column 1; initial
@@ -36,18 +28,11 @@ class TrajectoryProblem {
 
   int pieces() const { return pieces_; }
   int dimension() const { return 3 * (pieces_ - 1) + pieces_; }
-  int equality_count() const { return cost_.equality_count(pieces_); }
   const Eigen::VectorXd& initial() const { return x0_; }
   const TrajectoryCost& cost() const { return cost_; }
 
-  /// PHR state used by evaluate().
-  void set_multipliers(const Eigen::VectorXd& lambda, double rho);
-  const Eigen::VectorXd& multipliers() const { return lambda_; }
-  double rho() const { return rho_; }
-
-  /// Objective at x, gradient into g; `terms` and `h` (equality residuals) if given.
-  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g, CostTerms* terms = nullptr,
-                  Eigen::VectorXd* h = nullptr);
+  /// Objective at x, gradient into g; its terms into `terms` if given.
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g, CostTerms* terms = nullptr);
   /// The trajectory's coefficients (4N x 3) and durations at x.
   void trajectory(const Eigen::VectorXd& x, Eigen::MatrixX3d& coefficients, Eigen::VectorXd& durations);
 
@@ -57,8 +42,7 @@ class TrajectoryProblem {
   double rho_t_, w_energy_;
   int pieces_;
   MincoS2 minco_;
-  Eigen::VectorXd x0_, lambda_;
-  double rho_ = 0.0;
+  Eigen::VectorXd x0_;
   // Work buffers reused by every evaluation.
   Eigen::Matrix3Xd q_, grad_q_;
   Eigen::VectorXd tau_, durations_, grad_t_, grad_T_;
@@ -67,15 +51,13 @@ class TrajectoryProblem {
 
 struct OptimizeOutcome {
   Eigen::VectorXd x;
-  int iterations = 0;        ///< L-BFGS iterations, all outer loops together
+  int iterations = 0;        ///< L-BFGS iterations
   int evaluations = 0;       ///< objective evaluations
-  int outer_iterations = 0;
-  std::string status;        ///< the last L-BFGS status
-  double max_h = 0.0;        ///< max |h| at the samples (0 for omni)
-  CostTerms terms;           ///< at the solution, with the last multipliers
+  std::string status;        ///< L-BFGS's status
+  CostTerms terms;           ///< at the solution
 };
 
-/// Minimise from problem.initial(): L-BFGS alone for omni robots, inside the PHR loop otherwise.
-OptimizeOutcome optimize(TrajectoryProblem& problem, const PhrParams& phr, const LbfgsParams& lbfgs);
+/// Minimise from problem.initial() with L-BFGS.
+OptimizeOutcome optimize(TrajectoryProblem& problem, const LbfgsParams& lbfgs);
 
 }  // namespace lf3pm

@@ -284,6 +284,8 @@ def plan(
     weight: float = typer.Option(1.0, help="lambda: cost of a median cell relative to path length/time."),
     vmax_lon: float = typer.Option(1.0, help="Longitudinal speed limit (m/s)."),
     vmax_lat: float = typer.Option(1.0, help="Lateral speed limit (m/s; omni)."),
+    vmax_norm: Optional[float] = typer.Option(
+        None, help="Limit on the speed |v| too (m/s; omni): without it the robot is fastest diagonally."),
     wmax: float = typer.Option(1.0, help="Yaw rate limit (rad/s)."),
     min_turn_radius: float = typer.Option(0.0, help="Minimum turning radius (m; car)."),
     r_safe: float = typer.Option(0.3, help="Clearance beyond the SOLM's robot radius (m)."),
@@ -298,7 +300,7 @@ def plan(
         from lf3pm.solm import Solm
 
         vehicle = Robot(robot, vmax_lon=vmax_lon, vmax_lat=vmax_lat, wmax=wmax,
-                        min_turn_radius=min_turn_radius, r_safe=r_safe)
+                        min_turn_radius=min_turn_radius, r_safe=r_safe, vmax_norm=vmax_norm)
         solm = Solm.open(solm_path)
         result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight)
         result.trajectory.to_csv(out)

@@ -11,7 +11,8 @@ Diff and car robots use the flat output: (x, y) only, the yaw follows the
 direction of travel, so there is no lateral motion at all; a diff robot turns on
 the spot to the optimised start heading and from the end heading to the goal's
 (pieces added after optimisation), a car must leave and arrive along its start
-and goal yaw (docs/planner_backend.md has the math).
+and goal yaw, with no yaw rate at rest (docs/planner_backend.md has the math,
+and why there is no PHR augmented-Lagrangian loop).
 """
 
 from __future__ import annotations
@@ -33,15 +34,15 @@ class OptimizeResult:
     """An optimised trajectory and how it was found.
 
     ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
-    phr, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
-    max_v_lon_ratio, max_v_lat_ratio (omni), max_omega_ratio (<= 1 is within the
-    limit), max_turn_excess (car: max(R |omega| - |v_lon|) in m/s), max_h (|xdot
-    sin yaw - ydot cos yaw|, m/s; diff and car) and min_clearance (ESDF - r_safe, m).
+    heading, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
+    max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
+    max_omega_ratio (<= 1 is within the limit), max_turn_excess (car: max(R |omega|
+    - |v_lon|) in m/s), max_h (|xdot sin yaw - ydot cos yaw|,
+    m/s; diff and car) and min_clearance (ESDF - r_safe, m).
     """
 
     trajectory: Trajectory
     iterations: int
-    outer_iterations: int
     evaluations: int
     status: str
     terms: dict
@@ -87,8 +88,8 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
 
     return _core.TrajectoryProblem(
         cost._core if cost is not None else None, esdf._core if esdf is not None else None, robot.kind,
-        robot.vmax_lon, robot.vmax_lat, robot.wmax, robot.min_turn_radius, robot.r_safe, w_q, penalty,
-        esdf_margin, samples, rho_T, w_energy, head, tail, np.ascontiguousarray(points[1:-1]), durations)
+        robot.vmax_lon, robot.vmax_lat, robot.vmax_norm or 0.0, robot.wmax, robot.min_turn_radius, robot.r_safe,
+        w_q, penalty, esdf_margin, samples, rho_T, w_energy, head, tail, np.ascontiguousarray(points[1:-1]), durations)
 
 
 def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
@@ -162,8 +163,7 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                         w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
                         esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
-                        rho0: float = 1.0, beta: float = 10.0, rho_max: float = 1e6, tol_h: float = 1e-4,
-                        max_outer: int = 12, g_epsilon: float = 1e-6, rel_cost_tol: float | None = None,
+                        g_epsilon: float = 1e-6, rel_cost_tol: float | None = None,
                         max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
@@ -171,16 +171,13 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     by ``w_q`` and integrated over time; ``esdf``: the obstacle distance field (None: no
     clearance term); ``rho_T``: weight of the total time; ``w_energy``: weight of the
     acceleration energy; ``penalty``: weight W of the cubic penalties on the velocity,
-    yaw rate, turning radius and clearance limits (clearance penalised from
-    r_safe + esdf_margin); ``samples``: K samples per piece; ``piece_length``: metres
-    per piece in the initial guess. PHR outer loop: penalty from ``rho0``, times
-    ``beta`` per round up to ``rho_max``, until max |h| <= ``tol_h`` or ``max_outer``
-    rounds; diff and car now satisfy h = 0 by flat outputs (yaw from the velocity),
-    so no equality reaches this loop and it runs one round (issue 6: use it for the
-    car's end conditions or remove it). L-BFGS stops at ||g|| <= g_epsilon max(1, ||x||), when the
-    objective fell by less than ``rel_cost_tol`` (relative) over 3 iterations (default
-    1e-4; 1e-5 for cars, whose rest-heading penalties make the problem stiffer and L-BFGS
-    slower to settle), or after ``max_iterations`` (0: none). Single-threaded.
+    yaw rate, speed norm, turning radius and clearance limits (clearance penalised
+    from r_safe + esdf_margin); ``samples``: K samples per piece; ``piece_length``:
+    metres per piece in the initial guess. L-BFGS stops at ||g|| <= g_epsilon
+    max(1, ||x||), when the objective fell by less than ``rel_cost_tol`` (relative)
+    over 3 iterations (default 1e-4; 1e-5 for cars, whose rest-heading penalties make
+    the problem stiffer and L-BFGS slower to settle), or after ``max_iterations``
+    (0: none). Single-threaded.
     """
     start = time.perf_counter()
     if rel_cost_tol is None:
@@ -188,17 +185,15 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
                            penalty=penalty, esdf_margin=esdf_margin, samples=samples,
                            piece_length=piece_length)
-    out = problem.optimize(rho0=rho0, beta=beta, rho_max=rho_max, tol_h=tol_h, max_outer=max_outer,
-                           g_epsilon=g_epsilon, delta=rel_cost_tol, max_iterations=max_iterations)
+    out = problem.optimize(g_epsilon=g_epsilon, delta=rel_cost_tol, max_iterations=max_iterations)
     coefficients, durations = problem.trajectory(out["x"])
     wall = time.perf_counter() - start
     trajectory = Trajectory(coefficients, durations, np.ones(len(durations), bool) if robot.nonholonomic else None)
     if robot.kind == "diff":
         wp = np.asarray(waypoints, dtype=np.float64)
         trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax)
-    return OptimizeResult(trajectory, out["iterations"], out["outer_iterations"], out["evaluations"],
-                          out["status"], dict(out["terms"]), check_limits(trajectory, robot, esdf, check_rate),
-                          wall)
+    return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], dict(out["terms"]),
+                          check_limits(trajectory, robot, esdf, check_rate), wall)
 
 
 def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = 100.0) -> dict:
@@ -213,6 +208,8 @@ def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, r
         out["max_h"] = float(np.max(np.abs(v_lat)))
     else:
         out["max_v_lat_ratio"] = float(np.max(np.abs(v_lat)) / robot.vmax_lat)
+    if robot.vmax_norm is not None:
+        out["max_speed_ratio"] = float(np.max(np.hypot(s["vx"], s["vy"])) / robot.vmax_norm)
     if robot.kind == "car":
         out["max_turn_excess"] = float(max(np.max(robot.min_turn_radius * np.abs(s["omega"]) - np.abs(v_lon)), 0.0))
     if esdf is not None:
