@@ -1,11 +1,15 @@
 """Benchmark: the front end's grid search on a seeded synthetic map.
 
-r2, 1000 x 1000 cells: ours (Dijkstra and A*) against scipy.sparse.csgraph.dijkstra
-on the same explicit graph (8-connected, no corner cutting, edge cost
-length * (1 + lambda * mean cell cost)); scipy solves single-source shortest
-paths to every cell, ours stops at the goal, which lies in the far corner so
-Dijkstra closes nearly every cell either way. se2, 1000 x 1000 x 36: ours, A*
-and Dijkstra: time, expansions, peak memory.
+r2, 1000 x 1000 cells: ours, Dijkstra and A* (octile heuristic), and
+scipy.sparse.csgraph.dijkstra on the same explicit graph (8-connected, no
+corner cutting, edge cost length * (1 + lambda * mean cell cost)); scipy
+solves single-source shortest paths to every cell, ours stops at the goal.
+se2, 1000 x 1000 x 36: ours, A* (heuristic: the x-y relaxation's cost-to-go
+from a lazy backward pass, plus the yaw term) and Dijkstra. Two routes: corner
+to corner (Dijkstra closes nearly every state) and a quarter of the map across
+the middle (about 27 m at 1000 cells).
+Prints time, expansions (A* se2 also the x-y cells its backward pass closed),
+peak memory, and Dijkstra / A*.
 
     .venv/bin/python bench/bench_graph_search.py [--size 1000] [--bins 36] [--no-se2]
 """
@@ -68,6 +72,20 @@ def peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
+def routes(trav) -> dict:
+    """Start and goal poses (x, y, yaw) per route name; the mid-map ones on the
+    free cells nearest to (0.5, 0.5) and (0.75, 0.6) of the map."""
+    n = trav.shape[0]
+    free = np.argwhere(trav)
+
+    def near(fx, fy, yaw):
+        iy, ix = free[np.argmin(np.hypot(free[:, 0] - fy * n, free[:, 1] - fx * n))]
+        return ((ix + 0.5) * RES, (iy + 0.5) * RES, yaw)
+
+    corner = ((1.05, 1.05, 0.0), ((n - 10.5) * RES, (n - 10.5) * RES, math.pi))
+    return {"corner to corner": corner, "mid-map": (near(0.5, 0.5, 0.0), near(0.75, 0.6, 0.5 * math.pi))}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000)
@@ -77,23 +95,25 @@ def main() -> None:
     n = args.size
     trav, cost, angle = synthetic_map(n)
     grid = type("Grid", (), dict(x0=0.0, y0=0.0, res=RES, nx=n, ny=n))
-    start, goal = (1.05, 1.05, 0.0), ((n - 10.5) * RES, (n - 10.5) * RES, math.pi)
-    s_idx, g_idx = 10 * n + 10, (n - 11) * n + (n - 11)
     print(f"map {n} x {n}, res {RES} m, {100 * (1 - trav.mean()):.1f} % blocked, lambda {WEIGHT}")
 
     t = time.perf_counter()
     graph = explicit_graph(cost, trav)
     build_s = time.perf_counter() - t
     t = time.perf_counter()
-    dist = dijkstra(graph, indices=s_idx)
+    dist = dijkstra(graph, indices=10 * n + 10)
     scipy_s = time.perf_counter() - t
     del graph
-    print(f"r2 scipy csgraph.dijkstra: {scipy_s:.2f} s (graph build {build_s:.2f} s not counted), "
-          f"cost {dist[g_idx]:.4f}")
-    for name, heuristic in (("Dijkstra", False), ("A*", True)):
-        p = search_path(cost, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
-        print(f"r2 ours {name:8s}: {p.time:.3f} s, {p.expanded} expanded, cost {p.cost:.4f}, "
-              f"scipy / ours {scipy_s / p.time:.1f}x")
+    print(f"r2 scipy csgraph.dijkstra from the first corner: {scipy_s:.2f} s (graph build {build_s:.2f} s "
+          f"not counted), cost to the other {dist[(n - 11) * n + (n - 11)]:.4f}")
+    for route, (start, goal) in routes(trav).items():
+        p = {}
+        for name, heuristic in (("Dijkstra", False), ("A*", True)):
+            p[name] = search_path(cost, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
+            print(f"r2 {route}, ours {name:8s}: {p[name].time:.3f} s, {p[name].expanded} expanded, "
+                  f"cost {p[name].cost:.4f}, scipy / ours {scipy_s / p[name].time:.1f}x")
+        print(f"r2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.2f}x time, "
+              f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded")
     if args.no_se2:
         return
 
@@ -101,18 +121,23 @@ def main() -> None:
     yaw = np.arange(bins)[:, None, None] * 2 * math.pi / bins
     # Perception cost depends on heading: better when facing a direction that varies over the map.
     cost3 = cost[None] * (1.0 + 0.5 * np.cos(yaw - angle[None]))
-    before = peak_mb()
     print(f"se2 {n} x {n} x {bins} = {cost3.size / 1e6:.0f} M states, turn radius 0.5 m; "
-          f"process peak RSS before {before:.0f} MB")
-    for name, heuristic in (("A*", True), ("Dijkstra", False)):
-        t = time.perf_counter()
-        p = search_path(cost3, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
-        wall = time.perf_counter() - t
-        core_mb = (cost3.size * 9 + p.heap_peak * 16) / 2**20
-        print(f"se2 ours {name:8s}: {p.time:.2f} s search ({wall:.2f} s with input checks), "
-              f"{p.expanded} expanded, cost {p.cost:.4f}, heap peak {p.heap_peak}, "
-              f"search memory {core_mb:.0f} MB (g + state byte + heap), "
-              f"process peak RSS {peak_mb():.0f} MB")
+          f"process peak RSS before {peak_mb():.0f} MB")
+    for route, (start, goal) in routes(trav).items():
+        p = {}
+        for name, heuristic in (("A*", True), ("Dijkstra", False)):
+            t = time.perf_counter()
+            p[name] = q = search_path(cost3, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
+            wall = time.perf_counter() - t
+            # g and the state byte per state, the heap; A*: the x-y pass's two doubles and two bytes per cell.
+            core_mb = (cost3.size * 9 + q.heap_peak * 16 + (n * n * 18 if heuristic else 0)) / 2**20
+            relaxed = f" (+ {q.relaxed_expanded} x-y cells backward)" if heuristic else ""
+            print(f"se2 {route}, ours {name:8s}: {q.time:.2f} s search ({wall:.2f} s with input checks), "
+                  f"{q.expanded} expanded{relaxed}, cost {q.cost:.4f}, heap peak {q.heap_peak}, "
+                  f"search memory {core_mb:.0f} MB, "
+                  f"process peak RSS {peak_mb():.0f} MB")
+        print(f"se2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.1f}x time, "
+              f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 """Planner front end: ESDF, cost layer, and A* / Dijkstra against scipy's Dijkstra
-on the same explicit graph."""
+on the same explicit graph; the A* heuristic against exact costs-to-go."""
 
 import math
 from types import SimpleNamespace
@@ -10,6 +10,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 import lf3pm
+from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import cost_from_solm, cost_from_values
 from lf3pm.planner.esdf import Esdf
@@ -110,6 +111,92 @@ def test_cost_equals_scipy_dijkstra_on_random_mazes(seed, layers, turn_while_mov
     assert tuple(astar.cells[0]) == tuple(s) and tuple(astar.cells[-1]) == tuple(t)
     check_path(astar, trav, cost, g, weight, turn_length)
     check_path(dij, trav, cost, g, weight, turn_length)
+
+
+def random_se2(seed, layers, ny=9, nx=11):
+    """Costs and traversability that differ between yaw bins (the heuristic's
+    x-y relaxation then differs from every bin), and two traversable states."""
+    rng = np.random.default_rng(seed)
+    trav = rng.random((layers, ny, nx)) >= 0.25
+    cost = rng.random((layers, ny, nx)) * 3.0
+    free = np.argwhere(trav)
+    (sk, sy, sx), (gk, gy, gx) = free[rng.choice(len(free), 2, replace=False)]
+    return cost, trav, (sx, sy, sk), (gx, gy, gk)
+
+
+SE2_CASES = [(1, True), (2, True), (3, False), (6, True), (6, False)]
+
+
+@pytest.mark.parametrize("layers,turn_while_moving", SE2_CASES)
+@pytest.mark.parametrize("seed", range(8))
+def test_astar_equals_dijkstra_and_scipy_on_random_se2_costs(seed, layers, turn_while_moving):
+    cost, trav, s, t = random_se2(seed, layers)
+    g = grid(cost.shape[2], cost.shape[1])
+    weight, turn_radius = [0.0, 1.0, 4.0, 0.5][seed % 4], [0.0, 0.3, 1.0][seed % 3]
+    turn_length = turn_radius * 2 * math.pi / layers
+    dist = dijkstra(explicit_graph(cost, trav, g.res, weight, turn_length, turn_while_moving),
+                    indices=np.ravel_multi_index((s[2], s[1], s[0]), cost.shape))
+    expected = dist[np.ravel_multi_index((t[2], t[1], t[0]), cost.shape)]
+    kwargs = dict(weight=weight, turn_radius=turn_radius, turn_while_moving=turn_while_moving)
+    start, goal = world(g, s, layers), world(g, t, layers)
+    assert np.isfinite(expected)  # a quarter of the states blocked leaves these grids connected
+    astar = search_path(cost, trav, g, start, goal, **kwargs)
+    dij = search_path(cost, trav, g, start, goal, heuristic=False, **kwargs)
+    assert astar.cost == pytest.approx(expected, rel=1e-9)
+    assert dij.cost == pytest.approx(expected, rel=1e-9)
+    assert astar.expanded <= dij.expanded
+    check_path(astar, trav, cost, g, weight, turn_length)
+
+
+def core_heuristic(cost, trav, res, goal, weight, turn_length):
+    """The core's A* heuristic at every state, as a (layers, ny, nx) array."""
+    layers, ny, nx = cost.shape
+    flat_cost = np.ascontiguousarray(np.moveaxis(cost, 0, -1)).ravel()
+    flat_trav = np.ascontiguousarray(np.moveaxis(trav, 0, -1), dtype=np.uint8).ravel()
+    gx, gy, gk = goal
+    h = _core.search_heuristic(flat_cost, flat_trav, nx, ny, layers, res, (gy * nx + gx) * layers + gk,
+                               weight=weight, turn_length=turn_length)
+    return np.moveaxis(h.reshape(ny, nx, layers), -1, 0)
+
+
+def exact_cost_to_go(graph, goal, shape):
+    """Cost from every state to ``goal`` (ix, iy, k): scipy's Dijkstra from the
+    goal on the reversed graph."""
+    gx, gy, gk = goal
+    return dijkstra(graph.T.tocsr(), indices=np.ravel_multi_index((gk, gy, gx), shape)).reshape(shape)
+
+
+@pytest.mark.parametrize("layers,turn_while_moving", SE2_CASES)
+@pytest.mark.parametrize("seed", range(6))
+def test_heuristic_is_admissible_and_consistent(seed, layers, turn_while_moving):
+    """h(s) <= the exact cost-to-go (scipy's Dijkstra from the goal on the
+    reversed graph) at every state, and h(a) <= c(a, b) + h(b) on every edge."""
+    cost, trav, _, t = random_se2(100 + seed, layers)
+    res, weight, turn_length = 0.5, [0.0, 1.0, 4.0][seed % 3], [0.0, 0.2, 0.7][seed % 3]
+    graph = explicit_graph(cost, trav, res, weight, turn_length, turn_while_moving)
+    to_go = exact_cost_to_go(graph, t, cost.shape)
+    h = core_heuristic(cost, trav, res, t, weight, turn_length)
+    assert h[t[2], t[1], t[0]] == 0.0
+    assert np.all(h[trav] <= to_go[trav] * (1 + 1e-12))
+    assert np.isfinite(to_go[trav]).sum() > 0.5 * trav.sum()  # most states reach the goal: a real check
+    edges = graph.tocoo()
+    ha, hb = h.ravel()[edges.row], h.ravel()[edges.col]
+    assert np.all((ha <= edges.data + hb + 1e-12) | np.isinf(hb))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_heuristic_is_exact_when_yaw_does_not_matter(seed):
+    """Equal yaw bins and free turns: the se2 cost-to-go is the x-y one, which
+    the heuristic's relaxation computes exactly."""
+    cost, trav, _, t = random_maze(200 + seed, 4)
+    cost[:] = cost[0]
+    graph = explicit_graph(cost, trav, 0.5, 1.0, 0.0, True)
+    to_go = exact_cost_to_go(graph, t, cost.shape)
+    h = core_heuristic(cost, trav, 0.5, t, 1.0, 0.0)
+    reach = np.isfinite(to_go)
+    assert reach[trav].sum() > 20
+    np.testing.assert_allclose(h[reach], to_go[reach], rtol=1e-12)
+    assert np.all(np.isinf(h[trav & ~reach]))
 
 
 def test_some_random_mazes_are_solved():

@@ -35,11 +35,35 @@ void bind_graph_search(nb::module_& m) {
         out["expanded"] = r.expanded;
         out["pushed"] = r.pushed;
         out["heap_peak"] = r.heap_peak;
+        out["relaxed_expanded"] = r.relaxed_expanded;
         return out;
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "start"_a, "goal"_a,
       "weight"_a = 1.0, "turn_length"_a = 0.0, "turn_while_moving"_a = true, "heuristic"_a = true,
       "A* (heuristic=True) or Dijkstra over nx x ny x layers states (flat float64 cost, uint8 traversable, "
       "index (y * nx + x) * layers + k: yaw innermost; layers > 1 are periodic yaw bins). Returns a dict: found, cost, path "
-      "(uint32 state indices), expanded, pushed, heap_peak.");
+      "(uint32 state indices), expanded, pushed, heap_peak, relaxed_expanded (cells the SE(2) heuristic's backward "
+      "pass closed).");
+  m.def(
+      "search_heuristic",
+      [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t goal, double weight,
+         double turn_length) {
+        const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(layers);
+        if (cost.shape(0) != n || traversable.shape(0) != n)
+          throw std::invalid_argument("cost and traversable need nx * ny * layers values");
+        lf3pm::SearchGrid grid{nx, ny, layers, res};
+        lf3pm::SearchParams params{weight, turn_length};
+        std::vector<double>* owned;
+        {
+          nb::gil_scoped_release release;
+          owned = new std::vector<double>(
+              lf3pm::search_heuristic(cost.data(), traversable.data(), grid, goal, params));
+        }
+        nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
+        return nb::ndarray<nb::numpy, double>(owned->data(), {owned->size()}, free_when_done);
+      },
+      "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "goal"_a,
+      "weight"_a = 1.0, "turn_length"_a = 0.0,
+      "grid_search's A* heuristic at every state (same layout and arguments; +inf where the goal is unreachable "
+      "even in the x-y relaxation). For tests and inspection.");
 }
