@@ -1,13 +1,18 @@
 """Benchmark: odometry replay (simulated scans + KISS-ICP) on the gobi scene.
 
-Prints the replay time per scan (scan simulation and KISS-ICP separately) for
-the VLP-16 and the Mid-70, and the APE / RPE of a straight drive of about
-100 m through the town and across the open desert with the Mid-70. Each drive
-follows the terrain at the scene's sensor height and runs at 1 m/s, 10 Hz.
-The town drive is the straight line through the origin, of the headings tried,
-with the most room around it; the desert drive runs along y = 50 m.
+Prints the replay time per scan (scan simulation and KISS-ICP separately) and
+the APE / RPE of a straight drive of about 100 m through the town with the
+VLP-16 and the Mid-70 and across the open desert with the Mid-70, each three
+ways: scans at one pose (no motion distortion, deskewing off), motion-distorted
+scans with KISS-ICP's deskewing (the default) and motion-distorted scans
+without it, with the ratios of the time per scan and of the APE rmse to the
+first. Before that, the cost of simulating one scan both ways, timed
+alternately (median over the first 100 scans of the town drive). Each drive follows the terrain at the scene's sensor height and runs at
+1 m/s, 10 Hz. The town drive is the straight line through the origin, of the
+headings tried, with the most room around it; the desert drive runs along
+y = 50 m.
 
-    .venv/bin/python bench/bench_odometry_replay.py [--length 100] [--speed 1.0]
+    .venv/bin/python bench/bench_odometry_replay.py [--length 100] [--speed 1.0] [--seed 0]
 """
 
 from __future__ import annotations
@@ -19,9 +24,14 @@ import time
 import numpy as np
 
 import lf3pm
+from lf3pm import _core
+from lf3pm.evaluation.moving_scan import simulate_moving_scan
 from lf3pm.evaluation.odometry import replay_odometry
+from lf3pm.evaluation.trajectory import interpolate_poses
 from lf3pm.experiments.free_poses import GroundGrid
+from lf3pm.pose import pose_matrix
 from lf3pm.scenes import build_scene
+from lf3pm.sensors import get_sensor
 
 
 def drive(ground: GroundGrid, start, heading: float, length: float, speed: float, height: float):
@@ -39,6 +49,34 @@ def room(world, poses, height: float) -> float:
     probes = np.concatenate([poses[:, :3] + [0.0, 0.0, dz - height] for dz in (1.5, 2.5)])
     _, dist = world.index.nearest(np.ascontiguousarray(probes), 1, 5.0)
     return float(np.min(np.where(np.isfinite(dist[:, 0]), dist[:, 0], 5.0)))
+
+
+#: (label, motion_distortion, deskew) of the replays run on every drive.
+MODES = (("one pose per scan", False, False), ("distorted + deskew", True, True),
+         ("distorted, no deskew", True, False))
+
+
+def simulation_cost(world, sensor_name: str, t, poses, rate: float = 10.0, scans: int = 100) -> None:
+    """Median time of one scan at one pose and of the same scan motion-distorted,
+    timed alternately over the first ``scans`` scans of the drive (t, poses)."""
+    sensor = get_sensor(sensor_name)
+    times = t[0] + np.arange(scans) / rate
+    times = times[times <= t[-1]]
+    truth = interpolate_poses(t, poses, times)
+    still, moving = [], []
+    for k in range(len(times)):
+        dirs = sensor.scan_directions(k)
+        start = time.perf_counter()
+        _core.simulate_scan(world.index, pose_matrix(truth[k]), dirs, sensor.min_range, sensor.max_range,
+                            noise=sensor.range_noise_sigma, stream=k)
+        still.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        simulate_moving_scan(world.index, t, poses, times[k], 1.0 / rate, dirs, sensor.min_range,
+                             sensor.max_range, noise=sensor.range_noise_sigma, stream=k)
+        moving.append(time.perf_counter() - start)
+    a, b = 1e3 * np.median(still), 1e3 * np.median(moving)
+    print(f"scan simulation, {sensor_name} ({sensor.num_rays} rays): one pose {a:.2f} ms, "
+          f"motion-distorted {b:.2f} ms, x{b / a:.2f}")
 
 
 def report(label: str, result, wall: float) -> None:
@@ -61,6 +99,7 @@ def main() -> None:
     parser.add_argument("--length", type=float, default=100.0)
     parser.add_argument("--speed", type=float, default=1.0)
     parser.add_argument("--voxel", type=float, default=1.0, help="KISS-ICP voxel size (m)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the range noise")
     args = parser.parse_args()
     scene = build_scene("gobi")
     world = lf3pm.load_map(scene.points)
@@ -82,12 +121,22 @@ def main() -> None:
     print(f"desert drive: along y = 50 m, {room(world, desert, height):.2f} m clear of the map")
 
     for sensor in ("vlp16", "mid70"):
-        start = time.perf_counter()
-        result = replay_odometry(world, t_town, town, sensor, voxel_size=args.voxel)
-        report(f"town, {sensor}", result, time.perf_counter() - start)
-    start = time.perf_counter()
-    result = replay_odometry(world, t_desert, desert, "mid70", voxel_size=args.voxel)
-    report("desert, mid70", result, time.perf_counter() - start)
+        simulation_cost(world, sensor, t_town, town)
+    for label, sensor, t, poses in (("town", "vlp16", t_town, town), ("town", "mid70", t_town, town),
+                                    ("desert", "mid70", t_desert, desert)):
+        baseline = None
+        for mode, distortion, deskew in MODES:
+            start = time.perf_counter()
+            result = replay_odometry(world, t, poses, sensor, voxel_size=args.voxel,
+                                     seed=args.seed, motion_distortion=distortion, deskew=deskew)
+            report(f"{label}, {sensor}, {mode}", result, time.perf_counter() - start)
+            sps = result.seconds_per_scan
+            cost = (sps["simulate"], sps["simulate"] + sps["register"], result.ape["rmse"])
+            if baseline is None:
+                baseline = cost
+            else:
+                print(f"  vs one pose per scan: simulate x{cost[0] / baseline[0]:.2f}, "
+                      f"simulate + KISS-ICP x{cost[1] / baseline[1]:.2f}, APE rmse x{cost[2] / baseline[2]:.2f}")
 
 
 if __name__ == "__main__":

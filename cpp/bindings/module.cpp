@@ -7,6 +7,8 @@
 #include <cstring>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "lf3pm/evaluator.hpp"
 #include "lf3pm/map_index.hpp"
@@ -245,6 +247,37 @@ NB_MODULE(_core, m) {
         "map"_a, "pose"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
         "stream"_a = 0, "scan_voxel"_a = 0.0, "threads"_a = 0,
         "Simulated scan at a 4x4 sensor-to-world pose: dict of sensor_points, world_points, surfel, ray.");
+
+  m.def("simulate_moving_scan",
+        [](const MapIndex& map, PosesIn ray_poses, PointsIn dirs, double min_range, double max_range, double noise,
+           std::uint64_t seed, std::uint64_t stream, double scan_voxel, int threads) {
+          const std::size_t n = dirs.shape(0);
+          if (ray_poses.shape(0) != n)
+            throw std::invalid_argument("one pose per ray: got " + std::to_string(ray_poses.shape(0)) +
+                                        " poses for " + std::to_string(n) + " rays");
+          const EvalParams p = eval_params(min_range, max_range, noise, seed, stream, scan_voxel, 6, "surfel",
+                                           0.5, 0.5, threads);
+          std::vector<Pose> poses(n);
+          for (std::size_t k = 0; k < n; ++k) poses[k] = pose_from_matrix(ray_poses.data() + 16 * k);
+          const double* d = dirs.data();
+          SimulatedScan scan;
+          {
+            nb::gil_scoped_release release;
+            scan = simulate_scan(map, poses.data(), d, n, p.scan);
+          }
+          nb::dict out;
+          out["sensor_points"] = points_to_numpy(scan.sensor_points);
+          out["world_points"] = points_to_numpy(scan.world_points);
+          const std::size_t h = scan.surfel.size();
+          out["surfel"] = to_numpy(std::move(scan.surfel), {h});
+          out["ray"] = to_numpy(std::move(scan.ray), {h});
+          return out;
+        },
+        "map"_a, "ray_poses"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
+        "stream"_a = 0, "scan_voxel"_a = 0.0, "threads"_a = 0,
+        "Simulated scan of a moving sensor: ray k cast from the 4x4 sensor-to-world pose ray_poses[k] "
+        "(K x 4 x 4, one per direction). Dict as simulate_scan's; sensor_points in each ray's own frame, "
+        "noise per ray as simulate_scan's.");
 
   m.def("evaluate",
         [](const MapIndex& map, nb::ndarray<const double, nb::shape<4, 4>, nb::c_contig, nb::device::cpu> pose,

@@ -3,28 +3,30 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <unordered_set>
 
 #include "lf3pm/parallel.hpp"
 #include "lf3pm/random.hpp"
 
 namespace lf3pm {
+namespace {
 
-SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions,
-                            std::size_t count, const ScanParams& params) {
+// The scan of both overloads: pose_of(k) is the sensor pose ray k is cast from.
+template <typename PoseOf>
+SimulatedScan simulate(const MapIndex& map, PoseOf pose_of, const double* directions, std::size_t count,
+                       const ScanParams& params) {
   if (!(params.max_range > params.min_range) || params.min_range < 0)
     throw std::invalid_argument("ranges must satisfy 0 <= min_range < max_range");
   if (!(params.noise_sigma >= 0)) throw std::invalid_argument("range noise sigma must be >= 0");
-  if (!pose.rotation.allFinite() || !pose.position.allFinite())
-    throw std::invalid_argument("the pose is not finite");
   std::vector<double> range(count);
   std::vector<std::uint32_t> hit(count);
-  const Eigen::Vector3d& t = pose.position;
   parallel_for(count, 2048, params.threads, [&](std::size_t b, std::size_t e) {
     // Rays are cast one ahead of their refinement: the hit point's plane is in
     // two arrays of map size, mostly not in cache, and prefetching it while the
     // next ray is cast hides that latency.
     auto refine = [&](std::size_t k, const Eigen::Vector3d& d, const RayHit& h) {
+      const Eigen::Vector3d& t = pose_of(k).position;
       hit[k] = h.surfel;
       if (h.surfel == kNoHit) return;
       // Refine the float range of the caster in float64 on the disc's own plane,
@@ -44,8 +46,9 @@ SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double*
     Eigen::Vector3d pending_d;
     RayHit pending;
     for (std::size_t k = b; k < e; ++k) {
+      const Pose& pose = pose_of(k);
       const Eigen::Vector3d d = pose.rotation * Eigen::Vector3d(directions + 3 * k);
-      const RayHit h = map.caster().cast(t, d, params.max_range);
+      const RayHit h = map.caster().cast(pose.position, d, params.max_range);
       if (h.surfel != kNoHit) {
         __builtin_prefetch(&map.normal(h.surfel));
         __builtin_prefetch(&map.points()[h.surfel]);
@@ -72,12 +75,30 @@ SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double*
       const std::uint64_t key = q(p.x()) | (q(p.y()) << 21) | (q(p.z()) << 42);
       if (!kept_voxels.insert(key).second) continue;
     }
+    const Pose& pose = pose_of(k);
     scan.sensor_points.push_back(p);
-    scan.world_points.push_back(pose.rotation * p + t);
+    scan.world_points.push_back(pose.rotation * p + pose.position);
     scan.surfel.push_back(hit[k]);
     scan.ray.push_back(static_cast<std::uint32_t>(k));
   }
   return scan;
+}
+
+bool finite(const Pose& pose) { return pose.rotation.allFinite() && pose.position.allFinite(); }
+
+}  // namespace
+
+SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions,
+                            std::size_t count, const ScanParams& params) {
+  if (!finite(pose)) throw std::invalid_argument("the pose is not finite");
+  return simulate(map, [&](std::size_t) -> const Pose& { return pose; }, directions, count, params);
+}
+
+SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions,
+                            std::size_t count, const ScanParams& params) {
+  for (std::size_t k = 0; k < count; ++k)
+    if (!finite(ray_poses[k])) throw std::invalid_argument("the pose of ray " + std::to_string(k) + " is not finite");
+  return simulate(map, [&](std::size_t k) -> const Pose& { return ray_poses[k]; }, directions, count, params);
 }
 
 }  // namespace lf3pm

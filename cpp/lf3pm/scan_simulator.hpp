@@ -1,5 +1,6 @@
-// Simulated LiDAR scans on a point-cloud map: a pose and the sensor's ray
-// directions in, the hit points out (emission order, rays without a return dropped).
+// Simulated LiDAR scans on a point-cloud map: a pose (or one pose per ray, for a
+// moving sensor) and the sensor's ray directions in, the hit points out
+// (emission order, rays without a return dropped).
 #pragma once
 
 #include <Eigen/Core>
@@ -34,6 +35,13 @@ struct SimulatedScan {
 
 /// directions: `count` unit vectors (x, y, z) in the sensor frame, row-major.
 SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions,
+                            std::size_t count, const ScanParams& params);
+
+/// A scan taken while the sensor moves (motion distortion): ray k is cast from
+/// ray_poses[k], the sensor pose at its firing time (`count` poses). sensor_points
+/// are then each in its own ray's sensor frame (what the sensor measured), and
+/// scan_voxel keys on those. The noise of ray k is the same as in simulate_scan.
+SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions,
                             std::size_t count, const ScanParams& params);
 
 }  // namespace lf3pm

@@ -41,6 +41,18 @@ def pose_matrix(pose) -> np.ndarray:
     return np.ascontiguousarray(matrix)
 
 
+def pose_matrices(poses) -> np.ndarray:
+    """(M, 4, 4) sensor-to-world matrices of (M, 4) poses x y z yaw, as
+    ``pose_matrix`` of each row (unchecked: for many poses at once)."""
+    poses = np.asarray(poses, dtype=np.float64)
+    c, s = np.cos(poses[:, 3]), np.sin(poses[:, 3])
+    out = np.zeros((len(poses), 4, 4))
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = c, -s, s, c
+    out[:, 2, 2] = out[:, 3, 3] = 1.0
+    out[:, :3, 3] = poses[:, :3]
+    return out
+
+
 def quaternion_to_rotation(q) -> np.ndarray:
     """Rotation matrix of the unit quaternion (qw, qx, qy, qz)."""
     w, x, y, z = q

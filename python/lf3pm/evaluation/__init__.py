@@ -4,7 +4,8 @@
   (small_gicp, independent of lf3pm's own code) started from disturbed poses.
 - :func:`mde_along` -- MDE at every pose of a trajectory and S, their sum.
 - :func:`replay_odometry` -- simulated scans along a trajectory through KISS-ICP,
-  with APE / RPE against the truth (docs/odometry_replay.md).
+  with APE / RPE against the truth (docs/odometry_replay.md); the scans are
+  motion-distorted (moving_scan.py) unless asked otherwise.
 """
 
 from lf3pm.evaluation.mde import MdeResult, RegistrationTarget, mde

@@ -2,11 +2,14 @@
 PyPI package ``kiss-icp``, an odometry independent of lf3pm's own code), and
 the estimate compared with the truth by APE and RPE (trajectory_metrics.py).
 
-Scans: one per pose at ``rate`` Hz, poses interpolated from the given time
-series; every scan is taken at a single pose (no motion distortion), so
-KISS-ICP runs with deskewing off. Scan k uses noise stream k of ``seed``. The
-estimate is anchored at the true first pose: estimate_k = T_0 K_k, with K_k
-KISS-ICP's pose of scan k relative to its first frame.
+Scans: one every 1/``rate`` s, poses interpolated from the given time series.
+With motion distortion (the default) the rays of scan k fire over the 1/rate s
+that end at its time, each from the pose at its own firing time, and KISS-ICP
+deskews them from per-point timestamps (moving_scan.py); without, every scan is
+taken at a single pose and KISS-ICP's deskewing is off. Scan k uses noise
+stream k of ``seed``. The estimate is anchored at the true first pose:
+estimate_k = T_0 K_k, with K_k KISS-ICP's pose of scan k relative to its first
+frame, compared with the true pose at scan k's time (its last ray).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
+from lf3pm.evaluation.moving_scan import simulate_moving_scan
 from lf3pm.evaluation.trajectory import check_trajectory, interpolate_poses
 from lf3pm.evaluation.trajectory_metrics import ape_translation, rpe
 from lf3pm.map import Map, load_map
@@ -80,28 +84,34 @@ class OdometryResult:
         return out
 
 
-def kiss_icp_config(sensor: Sensor, *, voxel_size: float = 1.0, threads: int = 0):
-    """KISS-ICP configuration for ``sensor``: its range limits, deskewing off
-    (scans are taken at one pose), ``voxel_size`` for the local map (KISS-ICP's
-    own choice for outdoor 100 m LiDARs is 1 m; smaller suits rooms)."""
+def kiss_icp_config(sensor: Sensor, *, voxel_size: float = 1.0, deskew: bool = False, threads: int = 0):
+    """KISS-ICP configuration for ``sensor``: its range limits, ``deskew`` (on
+    for motion-distorted scans with per-point timestamps), ``voxel_size`` for
+    the local map (KISS-ICP's own choice for outdoor 100 m LiDARs is 1 m;
+    smaller suits rooms)."""
     from kiss_icp.config import KISSConfig
     from kiss_icp.config.config import DataConfig, MappingConfig, RegistrationConfig
 
-    return KISSConfig(data=DataConfig(max_range=sensor.max_range, min_range=sensor.min_range, deskew=False),
+    return KISSConfig(data=DataConfig(max_range=sensor.max_range, min_range=sensor.min_range, deskew=bool(deskew)),
                       mapping=MappingConfig(voxel_size=float(voxel_size)),
                       registration=RegistrationConfig(max_num_threads=int(threads)))
 
 
 def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = "vlp16", *, rate: float = 10.0,
                     seed: int = 0, noise: float | None = None, voxel_size: float = 1.0,
-                    min_points: int = 100, threads: int = 0, progress=None) -> OdometryResult:
+                    min_points: int = 100, motion_distortion: bool = True, deskew: bool | None = None,
+                    threads: int = 0, progress=None) -> OdometryResult:
     """Replays the trajectory (t (N,), poses (N, 4) of x y z yaw, z absolute) on
     ``map`` with simulated ``sensor`` scans at ``rate`` Hz through KISS-ICP.
 
     Scans are taken at t[0] + k / rate up to t[-1]. noise: range noise sigma in
     metres (default: the sensor's). A scan with fewer than ``min_points`` hits
     is not given to KISS-ICP (its estimate stays where it was) and is listed in
-    ``skipped``. ``progress``, if given, is called as progress(done, total).
+    ``skipped``. ``motion_distortion``: each ray cast from the pose at its own
+    firing time (scan k's rays spread over the 1/rate s ending at its time);
+    False: each scan at one pose. ``deskew``: KISS-ICP's deskewing from the
+    per-point timestamps (default: on exactly when ``motion_distortion`` is).
+    ``progress``, if given, is called as progress(done, total).
     Raises Lf3pmError for a malformed trajectory, a pose outside the map's x-y
     extent or bad parameters.
     """
@@ -132,32 +142,43 @@ def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = "vlp16", *,
 
     times = t[0] + np.arange(count) / rate
     truth = np.stack([pose_matrix(p) for p in interpolate_poses(t, poses, np.minimum(times, t[-1]))])
-    odometry = KissICP(kiss_icp_config(sensor, voxel_size=voxel_size, threads=threads))
+    deskew = bool(motion_distortion) if deskew is None else bool(deskew)
+    odometry = KissICP(kiss_icp_config(sensor, voxel_size=voxel_size, deskew=deskew, threads=threads))
     estimate = np.empty_like(truth)
     hits = np.zeros(count, dtype=np.int64)
     skipped, sim_time, reg_time = [], 0.0, 0.0
     for k in range(count):
         start = time.perf_counter()
-        scan = _core.simulate_scan(map.index, truth[k], sensor.scan_directions(k), sensor.min_range,
-                                   sensor.max_range, noise=sigma, seed=int(seed), stream=k,
-                                   threads=threads)
-        points = np.ascontiguousarray(scan["sensor_points"], dtype=np.float64)
+        if motion_distortion:
+            scan = simulate_moving_scan(map.index, t, poses, times[k], 1.0 / rate, sensor.scan_directions(k),
+                                        sensor.min_range, sensor.max_range, noise=sigma, seed=seed, stream=k,
+                                        threads=threads)
+            # KISS-ICP rescales the timestamps by their spread, which one point lacks.
+            points, stamps = scan.points, scan.timestamps if len(scan.ray) > 1 else np.empty(0)
+        else:
+            scan = _core.simulate_scan(map.index, truth[k], sensor.scan_directions(k), sensor.min_range,
+                                       sensor.max_range, noise=sigma, seed=int(seed), stream=k,
+                                       threads=threads)
+            points = scan["sensor_points"]
+            stamps = np.empty(0)  # no per-point times: KISS-ICP leaves the scan as it is
+        points = np.ascontiguousarray(points, dtype=np.float64)
         sim_time += time.perf_counter() - start
         hits[k] = len(points)
         start = time.perf_counter()
         if len(points) < min_points:
             skipped.append(k)
         else:
-            odometry.register_frame(points, np.zeros(len(points)))
+            odometry.register_frame(points, stamps)
         reg_time += time.perf_counter() - start
         estimate[k] = truth[0] @ odometry.last_pose
         if progress is not None:
             progress(k + 1, count)
 
     params = {"rate": rate, "seed": int(seed), "noise_stream": "scan index", "noise": sigma,
-              "min_points": min_points, "map_sha256": map.sha256,
+              "min_points": min_points, "motion_distortion": bool(motion_distortion),
+              "map_sha256": map.sha256,
               "kiss_icp": {"voxel_size": voxel_size, "max_range": sensor.max_range,
-                           "min_range": sensor.min_range, "deskew": False,
+                           "min_range": sensor.min_range, "deskew": deskew,
                            "version": _kiss_icp_version()}}
     return OdometryResult(times=times, truth=truth, estimate=estimate, hits=hits, skipped=skipped,
                           ape=ape_translation(truth, estimate),

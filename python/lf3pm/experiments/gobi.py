@@ -58,6 +58,8 @@ class GobiSetup:
     # KISS-ICP's voxel: its outdoor default (max range / 100 = 1.3 m) lost track of
     # a Mid-70 moving sideways in the town (APE 5.3 m over 20 m); 0.5 m: 1.6 m.
     odometry_voxel: float = 0.5
+    # Scans taken while the robot moves, deskewed by KISS-ICP (docs/odometry_replay.md).
+    odometry_motion_distortion: bool = True
     sensor_height: float = 1.0
     seed: int = 0
 
@@ -112,7 +114,8 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
         step(f"odometry replay along the {metric} trajectory", phases)
         full_poses = np.stack([samples["x"], samples["y"], z, samples["yaw"]], axis=1)
         odometry = replay_odometry(world, samples["t"], full_poses, mid70, seed=setup.seed,
-                                   voxel_size=setup.odometry_voxel)
+                                   voxel_size=setup.odometry_voxel,
+                                   motion_distortion=setup.odometry_motion_distortion)
         step(f"{metric} done", phases)
         results[metric] = {**plan.summary(), "S": along.s, "mde_poses": len(poses),
                            "mde_refused": len(along.refused), "mde": _finite_list(along.mde),
