@@ -86,6 +86,13 @@ def check_path(path, trav, cost, g, weight, turn_length):
     assert path.length == pytest.approx(np.hypot(*np.diff(path.poses[:, :2], axis=0).T).sum())
 
 
+def scipy_cost(cost, trav, g, s, t, weight, turn_length, turn_while_moving):
+    """Least cost from cell s to cell t (x, y, k) by scipy's Dijkstra on the explicit graph."""
+    dist = dijkstra(explicit_graph(cost, trav, g.res, weight, turn_length, turn_while_moving),
+                    indices=np.ravel_multi_index((s[2], s[1], s[0]), cost.shape))
+    return dist[np.ravel_multi_index((t[2], t[1], t[0]), cost.shape)]
+
+
 @pytest.mark.parametrize("layers,turn_while_moving", [(1, True), (2, True), (6, True), (6, False)])
 @pytest.mark.parametrize("seed", range(6))
 def test_cost_equals_scipy_dijkstra_on_random_mazes(seed, layers, turn_while_moving):
@@ -93,9 +100,7 @@ def test_cost_equals_scipy_dijkstra_on_random_mazes(seed, layers, turn_while_mov
     g = grid(cost.shape[2], cost.shape[1])
     weight, turn_radius = [0.0, 1.0, 4.0][seed % 3], 0.3
     turn_length = turn_radius * 2 * math.pi / layers
-    dist = dijkstra(explicit_graph(cost, trav, g.res, weight, turn_length, turn_while_moving),
-                    indices=np.ravel_multi_index((s[2], s[1], s[0]), cost.shape))
-    expected = dist[np.ravel_multi_index((t[2], t[1], t[0]), cost.shape)]
+    expected = scipy_cost(cost, trav, g, s, t, weight, turn_length, turn_while_moving)
     kwargs = dict(weight=weight, turn_radius=turn_radius, turn_while_moving=turn_while_moving)
     start, goal = world(g, s, layers), world(g, t, layers)
     arr = cost[0] if layers == 1 else cost
@@ -134,9 +139,7 @@ def test_astar_equals_dijkstra_and_scipy_on_random_se2_costs(seed, layers, turn_
     g = grid(cost.shape[2], cost.shape[1])
     weight, turn_radius = [0.0, 1.0, 4.0, 0.5][seed % 4], [0.0, 0.3, 1.0][seed % 3]
     turn_length = turn_radius * 2 * math.pi / layers
-    dist = dijkstra(explicit_graph(cost, trav, g.res, weight, turn_length, turn_while_moving),
-                    indices=np.ravel_multi_index((s[2], s[1], s[0]), cost.shape))
-    expected = dist[np.ravel_multi_index((t[2], t[1], t[0]), cost.shape)]
+    expected = scipy_cost(cost, trav, g, s, t, weight, turn_length, turn_while_moving)
     kwargs = dict(weight=weight, turn_radius=turn_radius, turn_while_moving=turn_while_moving)
     start, goal = world(g, s, layers), world(g, t, layers)
     assert np.isfinite(expected)  # a quarter of the states blocked leaves these grids connected

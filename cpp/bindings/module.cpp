@@ -99,6 +99,17 @@ const char* kScanArgsDoc =
     "association: 'knn' (FAST-LIO k-NN plane at each hit) or 'surfel' (precomputed plane of the hit map point), "
     "w1/w2: metric weights, threads: 0 = all cores.";
 
+// A simulated scan as the dict simulate_scan and simulate_moving_scan return.
+nb::dict scan_dict(SimulatedScan&& scan) {
+  nb::dict out;
+  out["sensor_points"] = points_to_numpy(scan.sensor_points);
+  out["world_points"] = points_to_numpy(scan.world_points);
+  const std::size_t h = scan.surfel.size();
+  out["surfel"] = to_numpy(std::move(scan.surfel), {h});
+  out["ray"] = to_numpy(std::move(scan.ray), {h});
+  return out;
+}
+
 }  // namespace
 
 // Planner bindings live in their own files of cpp/bindings/ (one per concept).
@@ -236,13 +247,7 @@ NB_MODULE(_core, m) {
             nb::gil_scoped_release release;
             scan = simulate_scan(map, ps, d, n, p.scan);
           }
-          nb::dict out;
-          out["sensor_points"] = points_to_numpy(scan.sensor_points);
-          out["world_points"] = points_to_numpy(scan.world_points);
-          const std::size_t h = scan.surfel.size();
-          out["surfel"] = to_numpy(std::move(scan.surfel), {h});
-          out["ray"] = to_numpy(std::move(scan.ray), {h});
-          return out;
+          return scan_dict(std::move(scan));
         },
         "map"_a, "pose"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
         "stream"_a = 0, "scan_voxel"_a = 0.0, "threads"_a = 0,
@@ -265,13 +270,7 @@ NB_MODULE(_core, m) {
             nb::gil_scoped_release release;
             scan = simulate_scan(map, poses.data(), d, n, p.scan);
           }
-          nb::dict out;
-          out["sensor_points"] = points_to_numpy(scan.sensor_points);
-          out["world_points"] = points_to_numpy(scan.world_points);
-          const std::size_t h = scan.surfel.size();
-          out["surfel"] = to_numpy(std::move(scan.surfel), {h});
-          out["ray"] = to_numpy(std::move(scan.ray), {h});
-          return out;
+          return scan_dict(std::move(scan));
         },
         "map"_a, "ray_poses"_a, "directions"_a, "min_range"_a, "max_range"_a, "noise"_a = 0.0, "seed"_a = 0,
         "stream"_a = 0, "scan_voxel"_a = 0.0, "threads"_a = 0,
