@@ -37,8 +37,8 @@ class OptimizeResult:
     heading, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
     max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
     max_omega_ratio (<= 1 is within the limit), max_turn_excess (car: max(R |omega|
-    - |v_lon|) in m/s), max_h (|xdot sin yaw - ydot cos yaw|,
-    m/s; diff and car) and min_clearance (ESDF - r_safe, m).
+    - |v_lon|) in m/s), max_h (|xdot sin yaw - ydot cos yaw|, m/s; diff and car)
+    and min_clearance (ESDF - r_safe, m).
     """
 
     trajectory: Trajectory
