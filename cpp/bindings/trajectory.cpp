@@ -63,7 +63,6 @@ nb::dict terms_dict(const CostTerms& t) {
   d["omega"] = t.omega;
   d["turn"] = t.turn;
   d["esdf"] = t.esdf;
-  d["heading"] = t.heading;
   d["time"] = t.time;
   d["energy"] = t.energy;
   d["total"] = t.total();
@@ -148,7 +147,7 @@ void bind_trajectory(nb::module_& m) {
         "max_iterations"_a = 0, "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
 
   nb::class_<TrajectoryProblem>(m, "TrajectoryProblem",
-                                "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece)].")
+                                "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece), car: 2 x 3 straight-end parameters].")
       .def("__init__",
            [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const std::string& kind,
               double vmax_lon, double vmax_lat, double vmax_norm, double wmax, double min_turn_radius, double r_safe, double w_q,
@@ -164,6 +163,7 @@ void bind_trajectory(nb::module_& m) {
            "r_safe"_a, "w_q"_a, "penalty"_a, "esdf_margin"_a, "samples"_a, "rho_T"_a, "w_energy"_a, "head"_a,
            "tail"_a, "waypoints"_a, "durations"_a)
       .def_prop_ro("dimension", &TrajectoryProblem::dimension)
+      .def_prop_ro("pieces", &TrajectoryProblem::pieces, "MINCO pieces N (a car adds its two straight ends).")
       .def_prop_ro("initial", &TrajectoryProblem::initial)
       .def("evaluate",
            [](TrajectoryProblem& p, Vec x) {

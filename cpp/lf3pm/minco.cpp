@@ -100,28 +100,37 @@ void MincoS2::set_parameters(const Eigen::Matrix3Xd& q, const Eigen::VectorXd& d
   a_.solve(coef_);
 }
 
-double MincoS2::energy() const {
+double MincoS2::energy() const { return acceleration_energy(coef_, t1_); }
+
+double acceleration_energy(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations) {
   double e = 0.0;
-  for (int i = 0; i < n_; ++i) {
-    const Eigen::RowVector3d c2 = coef_.row(4 * i + 2), c3 = coef_.row(4 * i + 3);
-    e += 4.0 * c2.squaredNorm() * t1_(i) + 12.0 * c2.dot(c3) * t2_(i) + 12.0 * c3.squaredNorm() * t3_(i);
+  for (Eigen::Index i = 0; i < durations.size(); ++i) {
+    const Eigen::RowVector3d c2 = coef.row(4 * i + 2), c3 = coef.row(4 * i + 3);
+    const double t = durations(i);
+    e += 4.0 * c2.squaredNorm() * t + 12.0 * c2.dot(c3) * t * t + 12.0 * c3.squaredNorm() * t * t * t;
   }
   return e;
 }
 
-void MincoS2::add_energy_gradient(double weight, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t) const {
-  for (int i = 0; i < n_; ++i) {
-    const Eigen::RowVector3d c2 = coef_.row(4 * i + 2), c3 = coef_.row(4 * i + 3);
-    grad_c.row(4 * i + 2) += weight * (8.0 * t1_(i) * c2 + 12.0 * t2_(i) * c3);
-    grad_c.row(4 * i + 3) += weight * (12.0 * t2_(i) * c2 + 24.0 * t3_(i) * c3);
-    grad_t(i) += weight * (4.0 * c2.squaredNorm() + 24.0 * c2.dot(c3) * t1_(i) + 36.0 * c3.squaredNorm() * t2_(i));
+void add_acceleration_energy_gradient(double weight, const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations,
+                                      Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t) {
+  for (Eigen::Index i = 0; i < durations.size(); ++i) {
+    const Eigen::RowVector3d c2 = coef.row(4 * i + 2), c3 = coef.row(4 * i + 3);
+    const double t = durations(i), t2 = t * t;
+    grad_c.row(4 * i + 2) += weight * (8.0 * t * c2 + 12.0 * t2 * c3);
+    grad_c.row(4 * i + 3) += weight * (12.0 * t2 * c2 + 24.0 * t2 * t * c3);
+    grad_t(i) += weight * (4.0 * c2.squaredNorm() + 24.0 * c2.dot(c3) * t + 36.0 * c3.squaredNorm() * t2);
   }
 }
 
 void MincoS2::propagate_gradient(Eigen::MatrixX3d& grad_c, const Eigen::VectorXd& grad_t, Eigen::Matrix3Xd& grad_q,
-                                 Eigen::VectorXd& grad_T) const {
+                                 Eigen::VectorXd& grad_T, Eigen::Matrix<double, 3, 2>* grad_head,
+                                 Eigen::Matrix<double, 3, 2>* grad_tail) const {
   a_.solve_transposed(grad_c);  // the adjoint: G = A^-T dK/dc
   const Eigen::MatrixX3d& g = grad_c;
+  // The head and tail conditions are the right-hand side's first and last two rows.
+  if (grad_head) *grad_head << g.row(0).transpose(), g.row(1).transpose();
+  if (grad_tail) *grad_tail << g.row(4 * n_ - 2).transpose(), g.row(4 * n_ - 1).transpose();
   grad_q.resize(3, n_ - 1);
   grad_T = grad_t;
   for (int i = 0; i < n_; ++i) {

@@ -55,12 +55,12 @@ class MincoS2 {
 
   /// sum_i int_0^T_i ||p_i''(t)||^2 dt.
   double energy() const;
-  /// Add weight * d(energy)/dc to grad_c (4N x 3) and weight * d(energy)/dT (partial) to grad_t.
-  void add_energy_gradient(double weight, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t) const;
   /// Total gradients by waypoints (3 x (N-1)) and durations from the partial gradients by
-  /// coefficients (consumed: overwritten by the adjoint) and by durations.
+  /// coefficients (consumed: overwritten by the adjoint) and by durations; if given,
+  /// also by the head and tail conditions (3 x 2: position, velocity).
   void propagate_gradient(Eigen::MatrixX3d& grad_c, const Eigen::VectorXd& grad_t, Eigen::Matrix3Xd& grad_q,
-                          Eigen::VectorXd& grad_T) const;
+                          Eigen::VectorXd& grad_T, Eigen::Matrix<double, 3, 2>* grad_head = nullptr,
+                          Eigen::Matrix<double, 3, 2>* grad_tail = nullptr) const;
 
  private:
   int n_ = 0;
@@ -69,6 +69,12 @@ class MincoS2 {
   BandedSystem a_;
   Eigen::MatrixX3d coef_;
 };
+
+/// sum_i int_0^T_i ||p_i''(t)||^2 dt of any piecewise cubic (4N x 3 coefficients, N durations).
+double acceleration_energy(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations);
+/// Add weight * d(energy)/dc to grad_c (4N x 3) and weight * d(energy)/dT (partial) to grad_t.
+void add_acceleration_energy_gradient(double weight, const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations,
+                                      Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t);
 
 /// GCOPTER's C^2 diffeomorphism from the real line to durations T > 0:
 /// T = (tau^2 / 2 + tau + 1) for tau > 0, 1 / (tau^2 / 2 - tau + 1) otherwise.

@@ -15,25 +15,6 @@ inline double cubic_penalty(double z, double weight, double& sum) {
   return 3.0 * weight * z * z;
 }
 
-// A car at rest (start or goal) with heading e, forward acceleration a and jerk j:
-// the direction of travel is that of a, so a must point along e and stay away from
-// zero, and the yaw rate there, (a x j) / (2 |a|^2), must vanish for a bounded
-// curvature. With a_min = `a_min`:
-//   W [ (a x e / a_min)^2 + max(1 - a.e / a_min, 0)^3 + (R (a x j) / (2 a_min^2 vmax))^2 ].
-// Adds to `sum`; gradients by a and j into ga, gj.
-inline void rest_heading_penalty(const Eigen::Vector2d& a, const Eigen::Vector2d& j, double yaw, double a_min,
-                                 double r_over_v, double weight, double& sum, Eigen::Vector2d& ga,
-                                 Eigen::Vector2d& gj) {
-  const Eigen::Vector2d e(std::cos(yaw), std::sin(yaw));
-  const double ia = 1.0 / a_min, cr = (a(0) * e(1) - a(1) * e(0)) * ia;
-  const double lag = std::max(1.0 - a.dot(e) * ia, 0.0);
-  const double k = 0.5 * r_over_v * ia * ia, rot = k * (a(0) * j(1) - a(1) * j(0));
-  sum += weight * (cr * cr + lag * lag * lag + rot * rot);
-  ga = weight * (2.0 * cr * ia * Eigen::Vector2d(e(1), -e(0)) - 3.0 * lag * lag * ia * e +
-                 2.0 * rot * k * Eigen::Vector2d(j(1), -j(0)));
-  gj = weight * 2.0 * rot * k * Eigen::Vector2d(-a(1), a(0));
-}
-
 }  // namespace
 
 TrajectoryCost::TrajectoryCost(GridField cost, GridField esdf, const RobotLimits& robot, const CostWeights& weights)
@@ -41,10 +22,9 @@ TrajectoryCost::TrajectoryCost(GridField cost, GridField esdf, const RobotLimits
   if (weights_.samples < 1) throw std::invalid_argument("samples per piece must be >= 1");
 }
 
-void TrajectoryCost::add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t,
-                         CostTerms& terms) const {
-  const int n = minco.pieces(), k_max = weights_.samples;
-  const Eigen::MatrixX3d& coef = minco.coefficients();
+void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations, Eigen::MatrixX3d& grad_c,
+                         Eigen::VectorXd& grad_t, CostTerms& terms) const {
+  const int n = static_cast<int>(durations.size()), k_max = weights_.samples;
   const double w = weights_.penalty;
   // Speed limits are penalised relative to the limit (z = v^2 / vmax^2 - 1), so that
   // the same weight allows the same relative excess on every limit.
@@ -52,14 +32,19 @@ void TrajectoryCost::add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::
   const double inorm2 = robot_.vmax_norm > 0.0 ? 1.0 / (robot_.vmax_norm * robot_.vmax_norm) : 0.0;
   const double iw2 = 1.0 / (robot_.wmax * robot_.wmax), r2 = robot_.min_turn_radius * robot_.min_turn_radius;
   const double clearance = robot_.r_safe + weights_.esdf_margin;
-  const bool car = robot_.rest_headings();
+  const bool car = robot_.kind == RobotKind::Car && robot_.min_turn_radius > 0.0;
   const bool flat = robot_.nonholonomic();
   const double eps = 1e-2 * robot_.vmax_lon * robot_.vmax_lon;  // (0.1 vmax_lon)^2
+  // A car keeps moving between its straight ends (pieces 0 and n - 1): at least
+  // v_min = 0.1 vmax_lon, where the regularised limits above lose their grip. Slower,
+  // it could reverse through a cusp, its heading flipping between two samples.
+  const bool keep_moving = robot_.straight_ends();
+  const double ivmin2 = 1.0 / eps;
   Eigen::Vector3d field_grad;
 
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 4, 3> c = coef.middleRows<4>(4 * i);
-    const double dur = minco.durations()(i), dt = dur / k_max;
+    const double dur = durations(i), dt = dur / k_max;
     Eigen::Matrix<double, 4, 3> gc = Eigen::Matrix<double, 4, 3>::Zero();
     double gt = 0.0;
     const Eigen::Vector3d jerk = 6.0 * c.row(3).transpose();
@@ -88,6 +73,7 @@ void TrajectoryCost::add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::
           }
         }
         double d = ilon2 * cubic_penalty(s2 * ilon2 - 1.0, w, f.velocity);
+        if (keep_moving && i > 0 && i < n - 1) d -= ivmin2 * cubic_penalty(1.0 - s2 * ivmin2, w, f.velocity);
         gv(0) += 2.0 * d * v(0), gv(1) += 2.0 * d * v(1);
         // Relative excesses, regularised at rest by eps (omega and curvature are
         // undefined there): z = (cr^2 - wmax^2 s^2) / (wmax^2 (s + eps)^2) ~ omega^2 / wmax^2 - 1
@@ -141,23 +127,6 @@ void TrajectoryCost::add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::
     }
     grad_c.middleRows<4>(4 * i) += gc;
     grad_t(i) += gt;
-  }
-
-  if (car) {
-    // Head: a = 2 c_02, j = 6 c_03. Tail, in reversed time: a = -(2 c_2 + 6 T c_3), j = 6 c_3.
-    const double a_min = 0.2 * robot_.vmax_lon, r_over_v = robot_.min_turn_radius / robot_.vmax_lon;
-    Eigen::Vector2d ga, gj;
-    rest_heading_penalty(2.0 * coef.block<1, 2>(2, 0).transpose(), 6.0 * coef.block<1, 2>(3, 0).transpose(),
-                         head_yaw_, a_min, r_over_v, w, terms.heading, ga, gj);
-    grad_c.block<1, 2>(2, 0) += 2.0 * ga.transpose();
-    grad_c.block<1, 2>(3, 0) += 6.0 * gj.transpose();
-    const int last = 4 * (n - 1);
-    const double dur = minco.durations()(n - 1);
-    const Eigen::Vector2d c2 = coef.block<1, 2>(last + 2, 0).transpose(), c3 = coef.block<1, 2>(last + 3, 0).transpose();
-    rest_heading_penalty(-(2.0 * c2 + 6.0 * dur * c3), 6.0 * c3, tail_yaw_, a_min, r_over_v, w, terms.heading, ga, gj);
-    grad_c.block<1, 2>(last + 2, 0) -= 2.0 * ga.transpose();
-    grad_c.block<1, 2>(last + 3, 0) += (6.0 * gj - 6.0 * dur * ga).transpose();
-    grad_t(n - 1) -= 6.0 * ga.dot(c3);
   }
 }
 

@@ -13,26 +13,22 @@
 // the direction of travel, yaw = atan2(ydot, xdot), so the nonholonomic equality
 // h = xdot sin(yaw) - ydot cos(yaw) = 0 holds exactly (the MINCO's yaw column is
 // ignored). With s = |v|^2 and cr = xdot yddot - ydot xddot (omega = cr / s), the
-// limits are polynomial, with no singularity where the robot stands still:
+// limits are rational, regular where the robot stands still (eps = (0.1 vmax_lon)^2):
 //   W * P(s / vmax_lon^2 - 1)
-//   W * P((cr^2 - wmax^2 s^2) / (wmax^2 vmax_lon^4))     |omega| <= wmax
-//   W * P((R^2 cr^2 - s^3) / vmax_lon^6)                 car: curvature <= 1 / R
+//   W * P((cr^2 - wmax^2 s^2) / (wmax^2 (s + eps)^2))    |omega| <= wmax
+//   W * P((R^2 cr^2 - s^3) / (s + eps)^3)                car: curvature <= 1 / R
 // (Diff robots turn on the spot before and after: optimizer.py adds those pieces.)
 //
-// A car starts and ends at rest with the given yaw e (it cannot turn on the spot).
-// At rest the direction of travel is that of the acceleration a (into rest, -a),
-// and in an end piece (constant jerk j) the yaw rate there is (a x j) / (2 |a|^2),
-// which the turning radius needs to be zero. With a_min = 0.2 vmax_lon, penalties
-// (not time-weighted)
-//   W [(a x e / a_min)^2 + P(1 - a.e / a_min) + (R (a x j) / (2 a_min^2 vmax_lon))^2]
-// hold a along e, away from zero, and the yaw rate at rest near zero.
-// (Why penalties, not equalities by a PHR augmented Lagrangian: docs/planner_backend.md.)
+// A car starts and ends at rest along the given yaws, on straight end pieces
+// (straight_end.hpp) that the optimiser puts first and last; between them it keeps
+// moving, W * P(1 - s / v_min^2) with v_min = 0.1 vmax_lon: near rest the
+// regularised limits lose their grip, and a flat output that stops can reverse
+// through a cusp, its heading flipping by pi between two samples.
 #pragma once
 
 #include <Eigen/Core>
 
 #include "lf3pm/grid_field.hpp"
-#include "lf3pm/minco.hpp"
 
 namespace lf3pm {
 
@@ -45,8 +41,8 @@ struct RobotLimits {
   double vmax_norm = 0.0;        ///< omni: limit on the speed |v| (0: none)
   double r_safe = 0.5;
   bool nonholonomic() const { return kind != RobotKind::Omni; }
-  /// A car with a turning radius: it must start and end along its given yaw.
-  bool rest_headings() const { return kind == RobotKind::Car && min_turn_radius > 0.0; }
+  /// A car with a turning radius: it must leave and reach rest straight along its given yaws.
+  bool straight_ends() const { return kind == RobotKind::Car && min_turn_radius > 0.0; }
 };
 
 struct CostWeights {
@@ -58,9 +54,9 @@ struct CostWeights {
 
 /// The objective's terms (unweighted by nothing: each as it enters the objective).
 struct CostTerms {
-  double q = 0.0, velocity = 0.0, omega = 0.0, turn = 0.0, esdf = 0.0, heading = 0.0;
+  double q = 0.0, velocity = 0.0, omega = 0.0, turn = 0.0, esdf = 0.0;
   double time = 0.0, energy = 0.0;
-  double total() const { return q + velocity + omega + turn + esdf + heading + time + energy; }
+  double total() const { return q + velocity + omega + turn + esdf + time + energy; }
 };
 
 class TrajectoryCost {
@@ -70,18 +66,16 @@ class TrajectoryCost {
 
   const RobotLimits& robot() const { return robot_; }
   const CostWeights& weights() const { return weights_; }
-  /// Start and goal yaw (used by cars: the direction of travel at rest).
-  void set_end_headings(double head_yaw, double tail_yaw) { head_yaw_ = head_yaw, tail_yaw_ = tail_yaw; }
 
-  /// Add every term of the trajectory to `terms`, their partial gradients to grad_c
-  /// (4N x 3) and grad_t (N).
-  void add(const MincoS2& minco, Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t, CostTerms& terms) const;
+  /// Add every sampled term of the piecewise cubic (4N x 3 coefficients, N durations)
+  /// to `terms`, their partial gradients to grad_c (4N x 3) and grad_t (N).
+  void add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations, Eigen::MatrixX3d& grad_c,
+           Eigen::VectorXd& grad_t, CostTerms& terms) const;
 
  private:
   GridField cost_, esdf_;
   RobotLimits robot_;
   CostWeights weights_;
-  double head_yaw_ = 0.0, tail_yaw_ = 0.0;
 };
 
 }  // namespace lf3pm

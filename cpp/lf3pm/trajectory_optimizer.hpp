@@ -2,11 +2,14 @@
 // minimised by L-BFGS.
 //
 // Decision vector x = [q_1..q_{N-1} (3 each: x, y, yaw), tau_1..tau_N], durations
-// T_i = duration_from_tau(tau_i) (GCOPTER's C^2 map, so T > 0 without bounds).
-//   J(x) = sampled terms (trajectory_cost.hpp) + rho_T * sum T_i + w_e * energy
+// T_i = duration_from_tau(tau_i) (GCOPTER's C^2 map, so T > 0 without bounds);
+// for a car, then 3 parameters of each straight end piece (straight_end.hpp: lead-in,
+// lead-out), whose junction states become the spline's head and tail.
+//   J(x) = sampled terms (trajectory_cost.hpp) + rho_T * total time + w_e * energy
 // No equality is left to enforce: the flat output satisfies the nonholonomic one
-// exactly (trajectory_cost.hpp), so there is no PHR outer loop (the paper's;
-// docs/planner_backend.md has the measurements behind dropping it).
+// exactly (trajectory_cost.hpp) and the straight end pieces the car's rest headings,
+// so there is no PHR outer loop (the paper's; docs/planner_backend.md has the
+// measurements behind dropping it).
 #pragma once
 
 #include <Eigen/Core>
@@ -14,26 +17,29 @@
 
 #include "lf3pm/lbfgs.hpp"
 #include "lf3pm/minco.hpp"
+#include "lf3pm/straight_end.hpp"
 #include "lf3pm/trajectory_cost.hpp"
 
 namespace lf3pm {
 
 class TrajectoryProblem {
  public:
-  /// head/tail: (x, y, yaw) position in column 0, velocity in column 1; initial
-  /// intermediate waypoints (3 x (N-1)) and durations (N, > 0) give x0.
+  /// head/tail: (x, y, yaw) position in column 0, velocity in column 1 (a car: at
+  /// rest, the yaw its straight end piece runs along); initial intermediate
+  /// waypoints (3 x (N-1)) and durations (N, > 0) give x0.
   TrajectoryProblem(TrajectoryCost cost, double rho_t, double w_energy, const Eigen::Matrix<double, 3, 2>& head,
                     const Eigen::Matrix<double, 3, 2>& tail, const Eigen::Matrix3Xd& waypoints,
                     const Eigen::VectorXd& durations);
 
+  /// MINCO pieces (a car's trajectory has two more: its straight ends).
   int pieces() const { return pieces_; }
-  int dimension() const { return 3 * (pieces_ - 1) + pieces_; }
+  int dimension() const { return 3 * (pieces_ - 1) + pieces_ + (straight_ends_ ? 6 : 0); }
   const Eigen::VectorXd& initial() const { return x0_; }
   const TrajectoryCost& cost() const { return cost_; }
 
   /// Objective at x, gradient into g; its terms into `terms` if given.
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g, CostTerms* terms = nullptr);
-  /// The trajectory's coefficients (4N x 3) and durations at x.
+  /// The whole trajectory's coefficients (4M x 3) and durations (M) at x.
   void trajectory(const Eigen::VectorXd& x, Eigen::MatrixX3d& coefficients, Eigen::VectorXd& durations);
 
  private:
@@ -41,12 +47,15 @@ class TrajectoryProblem {
   TrajectoryCost cost_;
   double rho_t_, w_energy_;
   int pieces_;
+  bool straight_ends_;
+  Eigen::Matrix<double, 3, 2> head_, tail_;
+  StraightEnd lead_in_, lead_out_;
   MincoS2 minco_;
   Eigen::VectorXd x0_;
-  // Work buffers reused by every evaluation.
+  // Work buffers reused by every evaluation; *_all_ span the whole trajectory.
   Eigen::Matrix3Xd q_, grad_q_;
-  Eigen::VectorXd tau_, durations_, grad_t_, grad_T_;
-  Eigen::MatrixX3d grad_c_;
+  Eigen::VectorXd tau_, durations_, grad_T_, durations_all_, grad_t_all_;
+  Eigen::MatrixX3d coef_all_, grad_c_all_, grad_c_;
 };
 
 struct OptimizeOutcome {

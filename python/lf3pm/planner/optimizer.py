@@ -10,9 +10,10 @@ velocity at both ends; its free intermediate waypoints and piece durations
 Diff and car robots use the flat output: (x, y) only, the yaw follows the
 direction of travel, so there is no lateral motion at all; a diff robot turns on
 the spot to the optimised start heading and from the end heading to the goal's
-(pieces added after optimisation), a car must leave and arrive along its start
-and goal yaw, with no yaw rate at rest (docs/planner_backend.md has the math,
-and why there is no PHR augmented-Lagrangian loop).
+(pieces added after optimisation); a car leaves and reaches rest on straight
+pieces along its start and goal yaw, which the C++ problem puts around the
+spline (docs/planner_backend.md has the math, and why there is no PHR
+augmented-Lagrangian loop).
 """
 
 from __future__ import annotations
@@ -163,7 +164,7 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                         w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
                         esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
-                        g_epsilon: float = 1e-6, rel_cost_tol: float | None = None,
+                        g_epsilon: float = 1e-6, rel_cost_tol: float = 1e-4,
                         max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
@@ -175,13 +176,9 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     from r_safe + esdf_margin); ``samples``: K samples per piece; ``piece_length``:
     metres per piece in the initial guess. L-BFGS stops at ||g|| <= g_epsilon
     max(1, ||x||), when the objective fell by less than ``rel_cost_tol`` (relative)
-    over 3 iterations (default 1e-4; 1e-5 for cars, whose rest-heading penalties make
-    the problem stiffer and L-BFGS slower to settle), or after ``max_iterations``
-    (0: none). Single-threaded.
+    over 3 iterations, or after ``max_iterations`` (0: none). Single-threaded.
     """
     start = time.perf_counter()
-    if rel_cost_tol is None:
-        rel_cost_tol = 1e-5 if robot.kind == "car" else 1e-4
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
                            penalty=penalty, esdf_margin=esdf_margin, samples=samples,
                            piece_length=piece_length)

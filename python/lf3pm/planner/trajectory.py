@@ -47,13 +47,8 @@ class Trajectory:
         p, v = _powers(c, tau, 0), _powers(c, tau, 1)
         if self.flat is not None and np.any(self.flat[piece]):
             f = np.asarray(self.flat)[piece]
-            # Heading from a time nudged off the ends of a piece, where the robot may be at rest.
-            eps = 1e-6 * self.durations[piece]
-            tn = np.clip(tau, eps, self.durations[piece] - eps)
-            vn, an = _powers(c, tn, 1), _powers(c, tn, 2)
-            yaw = np.arctan2(vn[:, 1], vn[:, 0])
+            yaw, omega = _travel_heading(c, tau, self.durations[piece])
             yaw += 2 * np.pi * np.round((p[:, 2] - yaw) / (2 * np.pi))
-            omega = (vn[:, 0] * an[:, 1] - vn[:, 1] * an[:, 0]) / np.maximum(np.sum(vn[:, :2] ** 2, axis=1), 1e-300)
             p[f, 2], v[f, 2] = yaw[f], omega[f]
         return p, v
 
@@ -76,6 +71,28 @@ class Trajectory:
                    header=",".join(CSV_COLUMNS), comments="")
         with atomic_write(path) as fp:
             fp.write(buf.getvalue().encode())
+
+
+def _travel_heading(c, tau, durations):
+    """Direction of travel atan2(ydot, xdot) and its rate (v x a) / |v|^2 on pieces c
+    (n, 4, 3) at times tau (n,). Where a piece is at rest (|v| below 1e-6 of the
+    piece's velocity scale; rounding would decide the direction there), their limits:
+    the robot starts moving along a and comes to rest moving along -a, turning at
+    (a x j) / (2 |a|^2) (from v = a t + j t^2 / 2; into rest, in reverse time)."""
+    v, a = _powers(c, tau, 1)[:, :2], _powers(c, tau, 2)[:, :2]
+    j = 6.0 * c[:, 3, :2]
+    scale = (np.linalg.norm(c[:, 1, :2], axis=1) + 2 * np.linalg.norm(c[:, 2, :2], axis=1) * durations
+             + 3 * np.linalg.norm(c[:, 3, :2], axis=1) * durations**2)
+    speed2 = np.sum(v**2, axis=1)
+    rest = speed2 <= (1e-6 * scale) ** 2
+    sign = np.where(tau > 0.5 * durations, -1.0, 1.0)[:, None]
+    u = np.where(rest[:, None], sign * a, v)
+    yaw = np.arctan2(u[:, 1], u[:, 0])
+    cross = lambda x, y: x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]
+    a2 = np.sum(a**2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        omega = np.where(rest, np.where(a2 > 0, cross(a, j) / (2 * a2), 0.0), cross(v, a) / speed2)
+    return yaw, omega
 
 
 def _powers(c, tau, order: int):
