@@ -195,6 +195,48 @@ def test_optimised_trajectory_is_feasible(kind):
     assert result.trajectory.duration < 0.8 * sum(np.hypot(*np.diff(_bend()[:, :2], axis=0).T)) / 0.5
 
 
+def test_car_leaves_and_reaches_rest_straight_along_the_given_yaws():
+    # The start and goal yaws are 40 degrees off the path's direction: the car must
+    # still leave and arrive along them, with no yaw rate at rest (turning radius).
+    path = _bend()
+    path[0, 2], path[-1, 2] = 0.7, -0.7
+    robot = Robot("car", vmax_lon=1.0, wmax=0.8, min_turn_radius=2.0, r_safe=0.5)
+    traj = optimize_trajectory(path, None, None, robot, rho_T=2.0, piece_length=1.5).trajectory
+    assert traj.pieces >= 3 and np.all(traj.flat)
+    for piece, yaw in ((0, 0.7), (-1, -0.7)):
+        c, normal = traj.coefficients[piece], np.array([-np.sin(yaw), np.cos(yaw)])
+        np.testing.assert_allclose(c[1:, :2] @ normal, 0.0, atol=1e-12)  # moves along e only
+    (p0, p1), (v0, v1) = traj.evaluate([0.0, traj.duration])
+    assert p0[2] == pytest.approx(0.7, abs=1e-12) and p1[2] == pytest.approx(-0.7, abs=1e-12)
+    np.testing.assert_allclose([v0, v1], 0.0, atol=1e-9)  # at rest, no yaw rate
+    s = assert_kinematics_hold(traj, robot)
+    np.testing.assert_allclose([s["x"][-1], s["y"][-1]], path[-1, :2], atol=1e-9)
+    # Between its straight ends the car keeps moving (no cusp where it could reverse).
+    inner = (s["t"] > traj.durations[0] + 1e-9) & (s["t"] < traj.duration - traj.durations[-1] - 1e-9)
+    assert np.min(np.hypot(s["vx"], s["vy"])[inner]) > 0.09 * robot.vmax_lon
+
+
+def test_flat_heading_at_rest_is_the_limit_of_the_direction_of_travel():
+    # A flat piece from rest: p = a t^2 / 2 + j t^3 / 6. At t = 0 the heading is a's
+    # direction and the yaw rate (a x j) / (2 |a|^2), the limits of atan2(v) and
+    # (v x a) / |v|^2 (exact, where rounding would decide from the coefficients).
+    a, j = np.array([0.6, -0.2]), np.array([-0.5, 0.9])
+    c = np.zeros((1, 4, 3))
+    c[0, 2, :2], c[0, 3, :2] = a / 2, j / 6
+    traj = Trajectory(c, np.array([2.0]), np.array([True]))
+    p, v = traj.evaluate([0.0, 1e-4])
+    assert p[0, 2] == pytest.approx(math.atan2(a[1], a[0]), abs=1e-12)
+    assert v[0, 2] == pytest.approx((a[0] * j[1] - a[1] * j[0]) / (2 * a @ a), rel=1e-12)
+    assert v[1, 2] == pytest.approx(v[0, 2], rel=1e-3)  # and continuous with its neighbourhood
+    # Into rest (the piece reversed in time) the heading is -a's direction.
+    back = np.zeros((1, 4, 3))
+    T = 2.0
+    for k in range(4):  # p(T - t) expanded in t
+        back[0, :, :2] += c[0, k, :2] * np.array([[math.comb(k, m) * T ** (k - m) * (-1) ** m] for m in range(4)])
+    p, v = Trajectory(back, np.array([T]), np.array([True])).evaluate([T])
+    assert p[0, 2] == pytest.approx(math.atan2(-a[1], -a[0]), abs=1e-9)
+
+
 def test_speed_norm_limit_holds_where_box_limits_allow_diagonal_motion():
     # Time-weighted with equal box limits, an omni robot yaws 45 degrees to move at
     # sqrt(2) vmax; a limit on |v| removes that. (The path's yaw is off the direction of
