@@ -206,19 +206,22 @@ class Search {
     return true;
   }
 
-  // The heuristic's backward pass: octile distances to the goal's cell over cells a
+  // The heuristic's backward pass: octile distances to the goal's cell over the cells a
   // collision-free sample could lie in.
   void relax() {
+    // A sample in the quadrant (si, sj) of cell (i, j) interpolates the centres of the cell,
+    // its neighbours a (along x) and b (along y) and d (diagonal), with the cell's weight
+    // at least 1/4: bilinear, so its largest value is at one of the quadrant's corners.
     std::vector<std::uint8_t> open(std::size_t(nx_) * ny_, 0);
+    auto v = [&](int i, int j) { return esdf_.at(0, std::clamp(j, 0, ny_ - 1), std::clamp(i, 0, nx_ - 1)); };
     for (int j = 0; j < ny_; ++j)
-      for (int i = 0; i < nx_; ++i) {
-        if (esdf_.at(0, j, i) < p_.clearance) continue;
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const int a = i + di, b = j + dj;
-            if (a >= 0 && b >= 0 && a < nx_ && b < ny_) open[std::size_t(b) * nx_ + a] = 1;
+      for (int i = 0; i < nx_; ++i)
+        for (const int si : {-1, 1})
+          for (const int sj : {-1, 1}) {
+            const double c = v(i, j), a = v(i + si, j), b = v(i, j + sj), d = v(i + si, j + sj);
+            const double top = std::max({c, 0.5 * (c + a), 0.5 * (c + b), 0.25 * (c + a + b + d)});
+            if (top >= p_.clearance) open[std::size_t(j) * nx_ + i] = 1;
           }
-      }
     relaxed_.assign(open.size(), kInf);
     using Entry = std::pair<double, std::size_t>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;

@@ -27,8 +27,8 @@
 //     is shorter (Dubins' theorem);
 //   - G ignores heading: D / kappa - sqrt 2 res, D the 8-connected octile distance to
 //     the goal's cell (diagonals need no corner cells) through cells where a sample
-//     could be collision-free (one of the 3 x 3 cell centres around it at ESDF >=
-//     clearance, as bilinear interpolation mixes only those), kappa = sqrt(4 - 2
+//     could be collision-free (the bilinear ESDF reaches `clearance` somewhere in the
+//     cell: at a corner of one of its quadrants), kappa = sqrt(4 - 2
 //     sqrt 2) the most an octile distance exceeds the Euclidean one (at 22.5
 //     degrees), and sqrt 2 res for the start and goal lying off their cell centres.
 //     G is a lower bound of a path's length (up to the samples' spacing) rather
