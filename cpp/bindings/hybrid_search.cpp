@@ -75,9 +75,9 @@ void bind_hybrid_search(nb::module_& m) {
       "hybrid_search",
       [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, nb::handle start, nb::handle goal, double radius,
          double weight, double clearance, int yaw_bins, double step, double sample_step, int analytic_every,
-         std::uint64_t max_expansions, bool heuristic) {
+         std::uint64_t max_expansions, bool heuristic, double heuristic_weight) {
         const lf3pm::HybridParams p{radius, weight, clearance, yaw_bins, step, sample_step, analytic_every,
-                                    max_expansions, heuristic};
+                                    max_expansions, heuristic, heuristic_weight};
         const lf3pm::Pose2 a = pose(start), b = pose(goal);
         lf3pm::HybridResult r;
         {
@@ -100,7 +100,7 @@ void bind_hybrid_search(nb::module_& m) {
       },
       "esdf"_a, "cost"_a.none(), "start"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
       "yaw_bins"_a = 72, "step"_a = 0.0, "sample_step"_a = 0.0, "analytic_every"_a = 5,
-      "max_expansions"_a = 2000000, "heuristic"_a = true,
+      "max_expansions"_a = 2000000, "heuristic"_a = true, "heuristic_weight"_a = 1.0,
       "Hybrid-A* forward search for a car (cpp/lf3pm/hybrid_search.hpp) on GridField ESDF and cost (or None). Returns "
       "a dict: found, reason, segments (K x 2: signed curvature, length, from the start), length, cost, expanded, "
       "analytic_tries, relaxed_cells.");

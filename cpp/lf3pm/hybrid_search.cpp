@@ -33,6 +33,8 @@ class Search {
     if (p.yaw_bins < 4) throw std::invalid_argument("hybrid search: yaw_bins must be >= 4");
     if (!(p.weight >= 0.0) || !std::isfinite(p.weight)) throw std::invalid_argument("hybrid search: bad weight");
     if (!std::isfinite(p.clearance)) throw std::invalid_argument("hybrid search: clearance must be finite");
+    if (!(p.heuristic_weight >= 1.0) || !std::isfinite(p.heuristic_weight))
+      throw std::invalid_argument("hybrid search: heuristic_weight must be >= 1");
     if (!(p.step >= 0.0) || !(p.sample_step >= 0.0) || p.analytic_every < 1)
       throw std::invalid_argument("hybrid search: step and sample_step must be >= 0, analytic_every >= 1");
     nx_ = esdf.nx(), ny_ = esdf.ny(), x0_ = esdf.x0(), y0_ = esdf.y0(), res_ = esdf.res();
@@ -59,8 +61,7 @@ class Search {
     if (!std::isfinite(d)) return kInf;
     if (!p_.heuristic) return 0.0;
     constexpr double kappa = 1.0823922002923940;  // sqrt(4 - 2 sqrt 2)
-    const double g = std::max(0.0, d / kappa - std::sqrt(2.0) * res_);
-    return unit_ * std::max(dubins_shortest(q, goal_, p_.radius).length, g);
+    return std::max(unit_ * dubins_shortest(q, goal_, p_.radius).length, d / kappa - slack_);
   }
 
   HybridResult run(const Pose2& start) {
@@ -76,7 +77,7 @@ class Search {
     std::unordered_map<std::uint64_t, std::int32_t> best;
     nodes_.push_back(Node{start, 0.0, -1, {}, false});
     best[key(start)] = 0;
-    open.push({heuristic(start), 0});
+    open.push({p_.heuristic_weight * heuristic(start), 0});
     double best_cost = kInf;
     std::int32_t best_node = -1;
     DubinsPath best_tail;
@@ -127,7 +128,7 @@ class Search {
         const auto id = static_cast<std::int32_t>(nodes_.size());
         nodes_.push_back(Node{end, g2, n, m, false});
         best[k2] = id;
-        open.push({g2 + h, id});
+        open.push({g2 + p_.heuristic_weight * h, id});
       }
     }
     if (best_node < 0) {
@@ -222,6 +223,29 @@ class Search {
             const double top = std::max({c, 0.5 * (c + a), 0.5 * (c + b), 0.25 * (c + a + b + d)});
             if (top >= p_.clearance) open[std::size_t(j) * nx_ + i] = 1;
           }
+    // The least cost a sample in each cell can read: interpolation mixes the centres of
+    // the 3 x 3 cells around it (any yaw layer).
+    std::vector<double> least(open.size(), 0.0);
+    double most = 0.0;
+    if (cost_) {
+      std::vector<double> below(open.size(), kInf);
+      for (int k = 0; k < cost_->layers(); ++k)
+        for (int j = 0; j < ny_; ++j)
+          for (int i = 0; i < nx_; ++i) {
+            double& b = below[std::size_t(j) * nx_ + i];
+            b = std::min(b, cost_->at(k, j, i));
+          }
+      for (int j = 0; j < ny_; ++j)
+        for (int i = 0; i < nx_; ++i) {
+          double m = kInf;
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di)
+              m = std::min(m, below[std::size_t(std::clamp(j + dj, 0, ny_ - 1)) * nx_ + std::clamp(i + di, 0, nx_ - 1)]);
+          least[std::size_t(j) * nx_ + i] = m;
+          if (open[std::size_t(j) * nx_ + i]) most = std::max(most, m);
+        }
+    }
+    slack_ = std::sqrt(2.0) * res_ * (1.0 + p_.weight * most);
     relaxed_.assign(open.size(), kInf);
     using Entry = std::pair<double, std::size_t>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
@@ -240,7 +264,8 @@ class Search {
           const int a = i + di, b = j + dj;
           if ((di == 0 && dj == 0) || a < 0 || b < 0 || a >= nx_ || b >= ny_) continue;
           const std::size_t c2 = std::size_t(b) * nx_ + a;
-          const double d2 = d + (di != 0 && dj != 0 ? diag : res_);
+          const double d2 =
+              d + (di != 0 && dj != 0 ? diag : res_) * (1.0 + p_.weight * std::min(least[c], least[c2]));
           if (open[c2] && d2 < relaxed_[c2]) {
             relaxed_[c2] = d2;
             heap.push({d2, c2});
@@ -254,7 +279,7 @@ class Search {
   Pose2 goal_;
   HybridParams p_;
   int nx_ = 0, ny_ = 0;
-  double x0_ = 0.0, y0_ = 0.0, res_ = 1.0, step_ = 1.0, ds_ = 0.25, unit_ = 1.0;
+  double x0_ = 0.0, y0_ = 0.0, res_ = 1.0, step_ = 1.0, ds_ = 0.25, unit_ = 1.0, slack_ = 0.0;
   std::vector<double> relaxed_;
   std::uint64_t relaxed_cells_ = 0;
   std::vector<Node> nodes_;

@@ -20,19 +20,21 @@
 // time-weighted cost at constant speed. Collision: every sample (spacing at most
 // `sample_step`, ends included) lies on the grid with ESDF >= `clearance`.
 //
-// Heuristic, h = (1 + weight c_min) max(Dubins(p, goal), G(cell of p)), c_min the
-// least cost value (interpolation never goes below it, so every metre costs at
-// least 1 + weight c_min):
+// Heuristic, h = max((1 + weight c_min) Dubins(p, goal), G(cell of p)):
 //   - Dubins(p, goal) ignores obstacles: no forward path of turning radius >= R
-//     is shorter (Dubins' theorem);
-//   - G ignores heading: D / kappa - sqrt 2 res, D the 8-connected octile distance to
+//     is shorter (Dubins' theorem), and every metre costs at least 1 + weight
+//     c_min, c_min the least cost value (interpolation never goes below it);
+//   - G ignores heading: D / kappa - slack, D the 8-connected octile cost to
 //     the goal's cell (diagonals need no corner cells) through cells where a sample
 //     could be collision-free (the bilinear ESDF reaches `clearance` somewhere in the
 //     cell: at a corner of one of its quadrants), kappa = sqrt(4 - 2
 //     sqrt 2) the most an octile distance exceeds the Euclidean one (at 22.5
 //     degrees), and sqrt 2 res for the start and goal lying off their cell centres.
-//     G is a lower bound of a path's length (up to the samples' spacing) rather
-//     than a proven one: tests compare h with found costs (docs/planner_frontend.md).
+//     Each relaxed step costs l (1 + weight m), m the least cost any sample in
+//     either cell can read (the 3 x 3 centres around it, any layer), and the slack
+//     is sqrt 2 res (1 + weight max m). G is a lower bound of a path's cost (up to
+//     the samples' spacing) rather than a proven one: tests compare h with found
+//     costs (docs/planner_frontend.md).
 // The closed set on cells x bins makes the search resolution-complete, not complete
 // or optimal: a pruned pose may have led somewhere a kept one cannot.
 #pragma once
@@ -56,6 +58,9 @@ struct HybridParams {
   int analytic_every = 5;     ///< try a Dubins path to the goal every this many expansions
   std::uint64_t max_expansions = 2'000'000;
   bool heuristic = true;      ///< false: h = 0 (uniform-cost search), for tests
+  /// epsilon >= 1: f = g + epsilon h (weighted A*: a path within epsilon of the lattice's
+  /// best, found far sooner on large maps; sqrt(4 - 2 sqrt 2) undoes G's kappa).
+  double heuristic_weight = 1.0;
 };
 
 struct HybridResult {

@@ -72,7 +72,7 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
                     clearance: float = 0.0, yaw_bins: int = 72, step: float = 0.0,
                     sample_step: float = 0.0, spacing: float = 0.05, analytic_every: int = 5,
                     max_expansions: int = 2_000_000, heuristic: bool = True,
-                    esdf_field: GridField | None = None) -> HybridPath:
+                    heuristic_weight: float = 1.0, esdf_field: GridField | None = None) -> HybridPath:
     """Least-cost forward path of a car of turning radius ``radius`` from ``start`` to
     ``goal`` (x, y, yaw), exactly.
 
@@ -83,7 +83,9 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
     of the closed set; ``step``: primitive length (0: sqrt 2 res); ``sample_step``:
     collision and cost sample spacing (0: res / 4); ``spacing``: of the returned poses;
     ``analytic_every``: expansions between tries of a Dubins path to the goal;
-    ``heuristic=False``: uniform-cost search (tests).
+    ``heuristic=False``: uniform-cost search (tests); ``heuristic_weight`` epsilon >= 1:
+    weighted A* (f = g + epsilon h), a path within epsilon of the best the search can
+    find, far sooner on large maps; ``max_expansions``: give up after so many.
     """
     _radius(radius)
     start, goal = _pose3(start, "start"), _pose3(goal, "goal")
@@ -98,6 +100,10 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
             raise Lf3pmError(f"{name} must be >= 0 (0: default), got {value}")
     if not (math.isfinite(spacing) and spacing > 0):
         raise Lf3pmError(f"spacing must be positive, got {spacing}")
+    if not (math.isfinite(heuristic_weight) and heuristic_weight >= 1):
+        raise Lf3pmError(f"heuristic_weight must be >= 1, got {heuristic_weight}")
+    if not (isinstance(max_expansions, (int, np.integer)) and max_expansions >= 1):
+        raise Lf3pmError(f"max_expansions must be an integer >= 1, got {max_expansions!r}")
     if not (isinstance(analytic_every, (int, np.integer)) and analytic_every >= 1):
         raise Lf3pmError(f"analytic_every must be an integer >= 1, got {analytic_every!r}")
     if esdf_field is None:
@@ -110,7 +116,7 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
                               start, goal, float(radius), weight=float(weight), clearance=float(clearance),
                               yaw_bins=int(yaw_bins), step=float(step), sample_step=float(sample_step),
                               analytic_every=int(analytic_every), max_expansions=int(max_expansions),
-                              heuristic=heuristic)
+                              heuristic=heuristic, heuristic_weight=float(heuristic_weight))
     elapsed = time.perf_counter() - t0
     if not out["found"]:
         raise Lf3pmError(f"no forward path of turning radius {radius:g} m from start {_fmt(start)} to goal "
