@@ -10,8 +10,14 @@ to corner (Dijkstra closes nearly every state) and a quarter of the map across
 the middle (about 27 m at 1000 cells).
 Prints time, expansions (A* se2 also the x-y cells its backward pass closed),
 peak memory, and Dijkstra / A*.
+Car (Hybrid-A*, turning radius 0.5 m, 72 yaw bins, clearance 0.1 m): on the same
+map (its ESDF from the obstacle mask), both routes with the start and goal yaws
+of the se2 runs, against r2 A* on the cells at that clearance; and on the
+``boxes`` scene (SOLM built on the fly unless --boxes names one), seeded random
+queries, against r2 A* on the same SOLM.
 
-    .venv/bin/python bench/bench_graph_search.py [--size 1000] [--bins 36] [--no-se2]
+    .venv/bin/python bench/bench_graph_search.py [--size 1000] [--bins 36] [--no-se2] [--car-only]
+                                                 [--boxes S.zarr]
 """
 
 from __future__ import annotations
@@ -19,14 +25,22 @@ from __future__ import annotations
 import argparse
 import math
 import resource
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 from scipy.ndimage import gaussian_filter
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from lf3pm.errors import Lf3pmError
+from lf3pm.planner.cost_map import cost_from_solm
+from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import search_path
+from lf3pm.planner.hybrid_search import search_car_path
 
 RES = 0.1
 WEIGHT = 1.0
@@ -86,16 +100,85 @@ def routes(trav) -> dict:
     return {"corner to corner": corner, "mid-map": (near(0.5, 0.5, 0.0), near(0.75, 0.6, 0.5 * math.pi))}
 
 
+CAR_R, CAR_CLEARANCE = 0.5, 0.1
+
+
+def car_row(name, cost, esdf, start, goal, epsilon: float = 1.0) -> None:
+    """One car query: Hybrid-A* (heuristic weight epsilon) against r2 A* on the cells at
+    the same clearance."""
+    try:
+        car = search_car_path(cost, esdf, start, goal, radius=CAR_R, weight=WEIGHT, clearance=CAR_CLEARANCE,
+                              heuristic_weight=epsilon)
+    except Lf3pmError as err:
+        print(f"car {name}, epsilon {epsilon}: {err}")
+        return
+    grid = search_path(cost, esdf, esdf, start, goal, weight=WEIGHT, r_safe=CAR_CLEARANCE)
+    print(f"car {name}, epsilon {epsilon}: hybrid {car.time:.3f} s, {car.expanded} expanded (+ {car.relaxed_cells} x-y cells "
+          f"backward), {car.analytic_tries} Dubins tries, length {car.length:.2f} m, cost {car.cost:.3f}; "
+          f"r2 A* {grid.time:.3f} s, length {grid.length:.2f} m, cost {grid.cost:.3f}; "
+          f"hybrid / r2 A* {car.time / grid.time:.1f}x time, {car.cost / grid.cost:.3f}x cost")
+
+
+def boxes_solm(path: str | None):
+    from lf3pm.solm.reader import Solm
+
+    if path:
+        return Solm.open(path)
+    tmp = Path(tempfile.mkdtemp())
+    for args in (["scene", "boxes", "-o", tmp / "boxes.pcd"],
+                 ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"]):
+        subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
+    return Solm.open(tmp / "boxes.zarr")
+
+
+def car_cases(trav, cost, angle, boxes: str | None) -> None:
+    n = trav.shape[0]
+    esdf = Esdf.from_mask(~trav, 0.0, 0.0, RES)
+    print(f"car: turning radius {CAR_R} m, 72 yaw bins, clearance {CAR_CLEARANCE} m, lambda {WEIGHT}")
+    for route, (start, goal) in routes(esdf.traversable(CAR_CLEARANCE + 0.3)).items():
+        # Corner to corner, epsilon = 1 gives up after 2 M expansions (G's 1 / kappa leaves
+        # ~8 % of slack over 140 m); weighted A* with 1.2 finds a path within 2 %.
+        for epsilon in ((1.2,) if route == "corner to corner" else (1.0, 1.2)):
+            car_row(f"{n} x {n} {route}", cost, esdf, start, goal, epsilon)
+    solm = boxes_solm(boxes)
+    esdf = Esdf.from_solm(solm)
+    layer = cost_from_solm(solm, "q_n")
+    free = np.argwhere(esdf.traversable(0.3))
+    rng = np.random.default_rng(0)
+    total_car = total_grid = 0.0
+    count = 0
+    while count < 20:
+        (iy, ix), (jy, jx) = free[rng.choice(len(free), 2, replace=False)]
+        a = (esdf.x0 + (ix + 0.5) * esdf.res, esdf.y0 + (iy + 0.5) * esdf.res, rng.uniform(-math.pi, math.pi))
+        b = (esdf.x0 + (jx + 0.5) * esdf.res, esdf.y0 + (jy + 0.5) * esdf.res, rng.uniform(-math.pi, math.pi))
+        if math.hypot(a[0] - b[0], a[1] - b[1]) < 3:
+            continue
+        try:
+            car = search_car_path(layer, esdf, a, b, radius=CAR_R, weight=WEIGHT, clearance=CAR_CLEARANCE)
+        except Lf3pmError:  # facing a wall too closely to turn away: no forward path
+            continue
+        grid = search_path(layer, esdf, esdf, a, b, weight=WEIGHT, r_safe=CAR_CLEARANCE)
+        total_car, total_grid, count = total_car + car.time, total_grid + grid.time, count + 1
+    print(f"car boxes ({esdf.nx} x {esdf.ny} cells of {esdf.res} m), 20 random queries: hybrid "
+          f"{1e3 * total_car / count:.2f} ms, r2 A* {1e3 * total_grid / count:.2f} ms per query, "
+          f"{total_car / total_grid:.1f}x")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000)
     parser.add_argument("--bins", type=int, default=36)
     parser.add_argument("--no-se2", action="store_true")
+    parser.add_argument("--car-only", action="store_true", help="only the car (Hybrid-A*) cases")
+    parser.add_argument("--boxes", help="a built boxes SOLM (default: build one, about a minute)")
     args = parser.parse_args()
     n = args.size
     trav, cost, angle = synthetic_map(n)
     grid = type("Grid", (), dict(x0=0.0, y0=0.0, res=RES, nx=n, ny=n))
     print(f"map {n} x {n}, res {RES} m, {100 * (1 - trav.mean()):.1f} % blocked, lambda {WEIGHT}")
+    if args.car_only:
+        car_cases(trav, cost, angle, args.boxes)
+        return
 
     t = time.perf_counter()
     graph = explicit_graph(cost, trav)
@@ -115,6 +198,7 @@ def main() -> None:
         print(f"r2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.2f}x time, "
               f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded")
     if args.no_se2:
+        car_cases(trav, cost, angle, args.boxes)
         return
 
     bins = args.bins
@@ -138,6 +222,7 @@ def main() -> None:
                   f"process peak RSS {peak_mb():.0f} MB")
         print(f"se2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.1f}x time, "
               f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded")
+    car_cases(trav, cost, angle, args.boxes)
 
 
 if __name__ == "__main__":

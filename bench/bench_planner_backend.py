@@ -78,7 +78,8 @@ def main() -> None:
           f"rel_cost_tol {args.rel_cost_tol}, one thread")
     robots = {"omni": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0),
               "omni |v|": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0, vmax_norm=1.5),
-              "diff": Robot("diff", vmax_lon=1.5, wmax=1.0)}
+              "diff": Robot("diff", vmax_lon=1.5, wmax=1.0),
+              "car": Robot("car", vmax_lon=1.5, wmax=1.0, min_turn_radius=2.0)}
     for kind, robot in robots.items():
         problem = make_problem(waypoints, cost, esdf, robot, samples=16, piece_length=2.0)
         row = {}

@@ -23,12 +23,16 @@ class GridField {
   int ny() const { return ny_; }
   int layers() const { return layers_; }
   bool empty() const { return values_.empty(); }
+  double x0() const { return x0_; }
+  double y0() const { return y0_; }
+  double res() const { return res_; }
+  /// The stored value at yaw layer k, row j (y), column i (x).
+  double at(int k, int j, int i) const { return values_[(std::size_t(k) * ny_ + j) * nx_ + i]; }
 
   /// Value at (x, y, yaw); `grad` receives (d/dx, d/dy, d/dyaw). Yaw is ignored with one layer.
   double sample(double x, double y, double yaw, Eigen::Vector3d& grad) const;
 
  private:
-  double at(int k, int j, int i) const { return values_[(std::size_t(k) * ny_ + j) * nx_ + i]; }
   std::vector<double> values_;
   int nx_ = 0, ny_ = 0, layers_ = 1;
   double x0_ = 0.0, y0_ = 0.0, res_ = 1.0;

@@ -310,13 +310,13 @@ def plan(
 
             points = load_map(map_path).points if map_path is not None else None
             plans_figure(solm, {metric: result}, png, map_points=points,
-                         title=f"{robot} plan guided by {metric} over the SOLM (dotted: grid path)")
+                         title=f"{robot} plan guided by {metric} over the SOLM (dotted: front-end path)")
         summary = result.summary()
         if as_json:
             print(json.dumps(summary, indent=1))
         else:
             console.print(f"{out}: {summary['duration_s']:.1f} s, {summary['trajectory_length_m']:.1f} m "
-                          f"(grid path {summary['path_length_m']:.1f} m); search "
+                          f"(front-end path {summary['path_length_m']:.1f} m); search "
                           f"{summary['search_s'] * 1e3:.0f} ms, optimisation "
                           f"{summary['optimize_s'] * 1e3:.0f} ms")
 

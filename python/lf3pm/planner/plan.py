@@ -5,6 +5,10 @@ Both ends trade time against the same normalised cost layer c (a SOLM channel
 divided by its median, cost_map.py): the front end's edge cost is
 length * (1 + weight * c) and the back end integrates (rho_T + w_q * c) dt with
 w_q = weight * rho_T, which at constant speed is the same trade-off.
+Cars (turning radius R > 0) get a forward-only Hybrid-A* path instead of the
+grid path (planner/hybrid_search.py): it leaves and reaches rest along the
+start and goal yaws, looping where they point away from each other, which the
+back end's local optimiser cannot invent from a grid path.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import GraphPath, search_path
 from lf3pm.planner.grid import GridField
+from lf3pm.planner.hybrid_search import HybridPath, search_car_path
 from lf3pm.planner.optimizer import OptimizeResult, optimize_trajectory
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
@@ -36,11 +41,12 @@ _ESDF_MARGIN = 0.05
 
 @dataclass
 class Plan:
-    """A planned motion: the front end's grid path and the optimised trajectory."""
+    """A planned motion: the front end's path (a grid path, or a car's forward
+    path) and the optimised trajectory."""
 
     metric: str
     robot: Robot
-    path: GraphPath
+    path: GraphPath | HybridPath
     optimization: OptimizeResult
 
     @property
@@ -86,20 +92,29 @@ class Planner:
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
         layer = self.cost_layer(metric)
-        path = search_path(layer, self.esdf, self.solm.grid_spec, start, goal, weight=weight,
-                           heuristic=heuristic, r_safe=robot.r_safe)
-        waypoints = np.array(path.poses, dtype=np.float64)
-        # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
-        waypoints[0], waypoints[-1] = start, goal
         g = self.esdf
         cost = None if metric == "none" else GridField(layer.filled, g.x0, g.y0, g.res)
-        # Straighten the staircase where that keeps the clearance the optimiser's penalty
-        # asks for and costs no more under the front end's own edge cost.
-        keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + _ESDF_MARGIN, cost, weight)
-        waypoints = waypoints[keep]
-        waypoints[:, 2] = np.unwrap(waypoints[:, 2])  # exact end yaws may sit a turn away
+        piece_length = 2.0
+        if robot.kind == "car" and robot.min_turn_radius > 0:
+            path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
+                                   clearance=robot.r_safe + _ESDF_MARGIN, heuristic=heuristic,
+                                   esdf_field=self._esdf_field)
+            waypoints = path.poses
+            # Pieces of a quarter turn at most, so the spline can follow the path's loops.
+            piece_length = min(piece_length, 0.5 * math.pi * robot.min_turn_radius)
+        else:
+            path = search_path(layer, self.esdf, self.solm.grid_spec, start, goal, weight=weight,
+                               heuristic=heuristic, r_safe=robot.r_safe)
+            waypoints = np.array(path.poses, dtype=np.float64)
+            # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
+            waypoints[0], waypoints[-1] = start, goal
+            # Straighten the staircase where that keeps the clearance the optimiser's penalty
+            # asks for and costs no more under the front end's own edge cost.
+            keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + _ESDF_MARGIN, cost, weight)
+            waypoints = waypoints[keep]
+            waypoints[:, 2] = np.unwrap(waypoints[:, 2])  # exact end yaws may sit a turn away
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
-                                     rho_T=rho_T, esdf_margin=_ESDF_MARGIN)
+                                     rho_T=rho_T, esdf_margin=_ESDF_MARGIN, piece_length=piece_length)
         return Plan(metric, robot, path, result)
 
 

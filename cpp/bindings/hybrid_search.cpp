@@ -1,0 +1,120 @@
+// nanobind bindings of the car front end (cpp/lf3pm/hybrid_search.hpp, dubins.hpp).
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include <vector>
+
+#include "lf3pm/dubins.hpp"
+#include "lf3pm/grid_field.hpp"
+#include "lf3pm/hybrid_search.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace {
+
+using Poses = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+
+lf3pm::Pose2 pose(nb::handle h) {
+  const auto t = nb::cast<std::vector<double>>(h);
+  if (t.size() != 3) throw std::invalid_argument("a pose is three numbers x, y, yaw");
+  return {t[0], t[1], t[2]};
+}
+
+nb::ndarray<nb::numpy, double> to_numpy(std::vector<double>&& v, std::size_t rows, std::size_t cols) {
+  auto* owned = new std::vector<double>(std::move(v));
+  nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
+  const std::size_t shape[2] = {rows, cols};
+  return nb::ndarray<nb::numpy, double>(owned->data(), cols ? 2 : 1, shape, free_when_done);
+}
+
+std::vector<lf3pm::PathSegment> segments_from(nb::ndarray<const double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu> a) {
+  std::vector<lf3pm::PathSegment> s(a.shape(0));
+  for (std::size_t i = 0; i < s.size(); ++i) s[i] = {a(i, 0), a(i, 1)};
+  return s;
+}
+
+}  // namespace
+
+void bind_hybrid_search(nb::module_& m) {
+  m.def(
+      "dubins_path",
+      [](nb::handle from, nb::handle to, double radius) {
+        if (!(radius > 0.0)) throw std::invalid_argument("the turning radius must be positive");
+        const auto words = lf3pm::dubins_words(pose(from), pose(to), radius);
+        const lf3pm::DubinsPath best = lf3pm::dubins_shortest(pose(from), pose(to), radius);
+        std::vector<double> seg;
+        for (const auto& s : best.segments) seg.insert(seg.end(), {s.curvature, s.length});
+        nb::dict lengths;
+        for (int w = 0; w < 6; ++w) lengths[lf3pm::dubins_word_names()[w]] = words[w].length;
+        nb::dict out;
+        out["length"] = best.length;
+        out["word"] = lf3pm::dubins_word_names()[best.word];
+        out["segments"] = to_numpy(std::move(seg), 3, 2);
+        out["words"] = lengths;
+        return out;
+      },
+      "start"_a, "goal"_a, "radius"_a,
+      "Shortest forward path of turning radius `radius` between two poses (x, y, yaw). Returns a dict: length, word, "
+      "segments (3 x 2: signed curvature, length), words (length of each of the six words; inf where none).");
+  m.def(
+      "sample_segments",
+      [](nb::handle start, nb::ndarray<const double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu> segments,
+         double spacing) {
+        const auto poses = lf3pm::sample_segments(pose(start), segments_from(segments), spacing);
+        std::vector<double> flat;
+        for (const auto& p : poses) flat.insert(flat.end(), {p.x, p.y, p.yaw});
+        return to_numpy(std::move(flat), poses.size(), 3);
+      },
+      "start"_a, "segments"_a, "spacing"_a,
+      "Poses (N x 3, yaw unwrapped) every `spacing` metres and at each segment's end along segments (K x 2: signed "
+      "curvature, length) from `start`, integrated exactly.");
+  m.def(
+      "hybrid_search",
+      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, nb::handle start, nb::handle goal, double radius,
+         double weight, double clearance, int yaw_bins, double step, double sample_step, int analytic_every,
+         std::uint64_t max_expansions, bool heuristic, double heuristic_weight) {
+        const lf3pm::HybridParams p{radius, weight, clearance, yaw_bins, step, sample_step, analytic_every,
+                                    max_expansions, heuristic, heuristic_weight};
+        const lf3pm::Pose2 a = pose(start), b = pose(goal);
+        lf3pm::HybridResult r;
+        {
+          nb::gil_scoped_release release;
+          r = lf3pm::hybrid_search(esdf, cost, a, b, p);
+        }
+        std::vector<double> seg;
+        for (const auto& s : r.segments) seg.insert(seg.end(), {s.curvature, s.length});
+        const std::size_t k = r.segments.size();
+        nb::dict out;
+        out["found"] = r.found;
+        out["reason"] = r.reason;
+        out["segments"] = to_numpy(std::move(seg), k, 2);
+        out["length"] = r.length;
+        out["cost"] = r.cost;
+        out["expanded"] = r.expanded;
+        out["analytic_tries"] = r.analytic_tries;
+        out["relaxed_cells"] = r.relaxed_cells;
+        return out;
+      },
+      "esdf"_a, "cost"_a.none(), "start"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
+      "yaw_bins"_a = 72, "step"_a = 0.0, "sample_step"_a = 0.0, "analytic_every"_a = 5,
+      "max_expansions"_a = 2000000, "heuristic"_a = true, "heuristic_weight"_a = 1.0,
+      "Hybrid-A* forward search for a car (cpp/lf3pm/hybrid_search.hpp) on GridField ESDF and cost (or None). Returns "
+      "a dict: found, reason, segments (K x 2: signed curvature, length, from the start), length, cost, expanded, "
+      "analytic_tries, relaxed_cells.");
+  m.def(
+      "hybrid_heuristic",
+      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, Poses poses, nb::handle goal, double radius,
+         double weight, double clearance, int yaw_bins) {
+        std::vector<lf3pm::Pose2> q(poses.shape(0));
+        for (std::size_t i = 0; i < q.size(); ++i) q[i] = {poses(i, 0), poses(i, 1), poses(i, 2)};
+        lf3pm::HybridParams p;
+        p.radius = radius, p.weight = weight, p.clearance = clearance, p.yaw_bins = yaw_bins;
+        auto h = lf3pm::hybrid_heuristic(esdf, cost, q, pose(goal), p);
+        return to_numpy(std::move(h), q.size(), 0);
+      },
+      "esdf"_a, "cost"_a.none(), "poses"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
+      "yaw_bins"_a = 72, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
+}
