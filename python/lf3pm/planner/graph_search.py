@@ -29,6 +29,7 @@ from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
+from lf3pm.planner.poses import format_pose
 
 
 @dataclass(frozen=True)
@@ -94,7 +95,7 @@ def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float 
     for (name, pose), (ix, iy, k) in zip((("start", start), ("goal", goal)), ends):
         if not mask[k, iy, ix]:
             reason = esdf.blocked_reason(ix, iy, r_safe) if esdf is not None else None
-            raise Lf3pmError(f"{name} {_fmt(pose)} is "
+            raise Lf3pmError(f"{name} {format_pose(pose)} is "
                              + (reason or "not traversable (an obstacle, unknown ground, or closer "
                                           "than r_safe to one)"))
     # The core indexes states (y * nx + x) * layers + k (yaw innermost, for locality).
@@ -108,7 +109,7 @@ def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float 
                             heuristic=heuristic)
     elapsed = time.perf_counter() - t0
     if not out["found"]:
-        raise Lf3pmError(f"goal {_fmt(goal)} is unreachable from start {_fmt(start)}: "
+        raise Lf3pmError(f"goal {format_pose(goal)} is unreachable from start {format_pose(start)}: "
                          "no traversable path joins them")
     path = np.asarray(out["path"], dtype=np.int64)
     cell, k = np.divmod(path, layers)
@@ -129,7 +130,7 @@ def _locate(name, pose, g, layers, step):
     x, y, yaw = pose
     ix, iy = math.floor((x - g.x0) / g.res), math.floor((y - g.y0) / g.res)
     if not (0 <= ix < g.nx and 0 <= iy < g.ny):
-        raise Lf3pmError(f"{name} {_fmt(pose)} lies outside the grid x [{g.x0:.2f}, "
+        raise Lf3pmError(f"{name} {format_pose(pose)} lies outside the grid x [{g.x0:.2f}, "
                          f"{g.x0 + g.nx * g.res:.2f}], y [{g.y0:.2f}, {g.y0 + g.ny * g.res:.2f}]")
     return ix, iy, round(yaw / step) % layers
 
@@ -146,7 +147,3 @@ def _yaws(x, y, k, step, layers, start, goal):
         yaw[:-1] = np.arctan2(np.diff(y), np.diff(x))
     yaw[0], yaw[-1] = float(start[2]), float(goal[2])
     return yaw
-
-
-def _fmt(pose) -> str:
-    return "(" + ", ".join(f"{float(v):.2f}" for v in pose) + ")"

@@ -23,6 +23,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.grid import GridField
+from lf3pm.planner.poses import as_pose, format_pose
 
 # Clamp for an ESDF without free or without blocked cells (+-inf): the core needs finite values.
 _FAR = 1.0e3
@@ -56,7 +57,7 @@ def dubins_path(start, goal, radius: float) -> dict:
     obstacles): a dict of length, word (e.g. ``LSR``), segments (3, 2) and the length
     of each of the six words (inf where one does not exist)."""
     _radius(radius)
-    return _core.dubins_path(_pose3(start, "start"), _pose3(goal, "goal"), float(radius))
+    return _core.dubins_path(as_pose(start, "start"), as_pose(goal, "goal"), float(radius))
 
 
 def sample_segments(start, segments, spacing: float = 0.05) -> np.ndarray:
@@ -65,7 +66,7 @@ def sample_segments(start, segments, spacing: float = 0.05) -> np.ndarray:
     if not (math.isfinite(spacing) and spacing > 0):
         raise Lf3pmError(f"sample spacing must be positive, got {spacing}")
     seg = np.ascontiguousarray(np.asarray(segments, dtype=np.float64).reshape(-1, 2))
-    return _core.sample_segments(_pose3(start, "start"), seg, float(spacing))
+    return _core.sample_segments(as_pose(start, "start"), seg, float(spacing))
 
 
 def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: float = 1.0,
@@ -88,7 +89,7 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
     find, far sooner on large maps; ``max_expansions``: give up after so many.
     """
     _radius(radius)
-    start, goal = _pose3(start, "start"), _pose3(goal, "goal")
+    start, goal = as_pose(start, "start"), as_pose(goal, "goal")
     if not (math.isfinite(weight) and weight >= 0):
         raise Lf3pmError(f"weight must be finite and >= 0, got {weight}")
     if not (math.isfinite(clearance)):
@@ -119,8 +120,8 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
                               heuristic=heuristic, heuristic_weight=float(heuristic_weight))
     elapsed = time.perf_counter() - t0
     if not out["found"]:
-        raise Lf3pmError(f"no forward path of turning radius {radius:g} m from start {_fmt(start)} to goal "
-                         f"{_fmt(goal)} keeps {clearance:g} m from obstacles: {out['reason']}")
+        raise Lf3pmError(f"no forward path of turning radius {radius:g} m from start {format_pose(start)} to goal "
+                         f"{format_pose(goal)} keeps {clearance:g} m from obstacles: {out['reason']}")
     segments = np.asarray(out["segments"], dtype=np.float64).reshape(-1, 2)
     poses = sample_segments(start, segments, spacing)
     # Exact ends: the integration lands on the goal up to round-off.
@@ -138,7 +139,7 @@ def search_heuristic(cost, esdf: Esdf, poses, goal, *, radius: float, weight: fl
     cost_field = _cost_field(cost, esdf)
     q = np.ascontiguousarray(np.asarray(poses, dtype=np.float64).reshape(-1, 3))
     return _core.hybrid_heuristic(field._core, None if cost_field is None else cost_field._core, q,
-                                  _pose3(goal, "goal"), float(radius), float(weight), float(clearance),
+                                  as_pose(goal, "goal"), float(radius), float(weight), float(clearance),
                                   int(yaw_bins))
 
 
@@ -162,27 +163,16 @@ def _check_end(name: str, pose, esdf: Esdf, field: GridField, clearance: float) 
     x, y = float(pose[0]), float(pose[1])
     ix, iy = math.floor((x - esdf.x0) / esdf.res), math.floor((y - esdf.y0) / esdf.res)
     if not (0 <= ix < esdf.nx and 0 <= iy < esdf.ny):
-        raise Lf3pmError(f"{name} {_fmt(pose)} lies outside the grid x [{esdf.x0:.2f}, "
+        raise Lf3pmError(f"{name} {format_pose(pose)} lies outside the grid x [{esdf.x0:.2f}, "
                          f"{esdf.x0 + esdf.nx * esdf.res:.2f}], y [{esdf.y0:.2f}, "
                          f"{esdf.y0 + esdf.ny * esdf.res:.2f}]")
     d = float(field.sample(x, y)[0])
     if d < clearance:
         reason = esdf.blocked_reason(ix, iy) or (f"{d:.2f} m from an obstacle or unknown ground, closer than "
                                                  f"the {clearance:g} m clearance")
-        raise Lf3pmError(f"{name} {_fmt(pose)} is {reason}")
+        raise Lf3pmError(f"{name} {format_pose(pose)} is {reason}")
 
 
 def _radius(radius) -> None:
     if not (isinstance(radius, (int, float, np.floating)) and math.isfinite(radius) and radius > 0):
         raise Lf3pmError(f"a car's turning radius must be a positive number, got {radius!r}")
-
-
-def _pose3(value, name: str) -> np.ndarray:
-    pose = np.asarray(value, dtype=np.float64).reshape(-1)
-    if pose.shape != (3,) or not np.isfinite(pose).all():
-        raise Lf3pmError(f"{name} must be three finite numbers X Y YAW, got {value!r}")
-    return pose
-
-
-def _fmt(pose) -> str:
-    return "(" + ", ".join(f"{float(v):.2f}" for v in pose) + ")"

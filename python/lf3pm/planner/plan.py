@@ -25,6 +25,7 @@ from lf3pm.planner.graph_search import GraphPath, search_path
 from lf3pm.planner.grid import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
 from lf3pm.planner.optimizer import OptimizeResult, optimize_trajectory
+from lf3pm.planner.poses import as_pose
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
 from lf3pm.planner.trajectory import Trajectory
@@ -88,7 +89,7 @@ class Planner:
              rho_T: float = 1.0, heuristic: bool = True) -> Plan:
         """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
         (``none``: shortest and fastest only) with trade-off ``weight`` (lambda)."""
-        start, goal = _pose3(start, "start"), _pose3(goal, "goal")
+        start, goal = as_pose(start, "start"), as_pose(goal, "goal")
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
         layer = self.cost_layer(metric)
@@ -116,11 +117,3 @@ class Planner:
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
                                      rho_T=rho_T, esdf_margin=_ESDF_MARGIN, piece_length=piece_length)
         return Plan(metric, robot, path, result)
-
-
-def _pose3(value, name: str) -> np.ndarray:
-    pose = np.asarray(value, dtype=np.float64).reshape(-1)
-    if pose.shape != (3,) or not np.isfinite(pose).all():
-        raise Lf3pmError(f"{name} must be three finite numbers X Y YAW, got {value!r}")
-    return pose
-
