@@ -36,6 +36,7 @@ bench: build
 	$(PY) bench/bench_solm.py
 	$(PY) bench/bench_solm_yaw_reuse.py
 	$(PY) bench/bench_graph_search.py
+	$(PY) bench/bench_esdf.py
 	$(PY) bench/bench_planner_backend.py
 	$(PY) bench/bench_odometry_replay.py
 

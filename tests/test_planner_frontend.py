@@ -1,4 +1,4 @@
-"""Planner front end: ESDF, cost layer, and A* / Dijkstra against scipy's Dijkstra
+"""Planner front end: cost layer, and A* / Dijkstra against scipy's Dijkstra
 on the same explicit graph; the A* heuristic against exact costs-to-go."""
 
 import math
@@ -242,47 +242,6 @@ def test_lambda_trades_length_against_perception_cost():
     assert short.length == pytest.approx(20.0) and 5 in short.cells[1:-1, 1]
     careful = search_path(cost, trav, g, weight=1.0, **kwargs)
     assert careful.length > 25.0 and 5 not in careful.cells[1:-1, 1]
-
-
-def test_esdf_equals_brute_force_distances():
-    rng = np.random.default_rng(3)
-    mask = rng.random((9, 12)) < 0.2
-    unknown = (rng.random((9, 12)) < 0.1) & ~mask
-    res = 0.25
-    for policy in ("obstacle", "free"):
-        esdf = Esdf.from_mask(mask, 1.0, -2.0, res, unknown=unknown, unknown_policy=policy)
-        blocked = mask | unknown if policy == "obstacle" else mask
-        centres = np.argwhere(np.ones_like(mask)) * res
-        expected = np.empty(mask.shape)
-        for (iy, ix), c in zip(np.argwhere(np.ones_like(mask)), centres):
-            other = centres[(~blocked if blocked[iy, ix] else blocked).ravel()]
-            d = np.min(np.hypot(*(other - c).T)) - 0.5 * res
-            expected[iy, ix] = -d if blocked[iy, ix] else d
-        np.testing.assert_allclose(esdf.values, expected, atol=1e-12)
-        assert esdf.traversable(0.0).sum() == (~blocked).sum()
-        value, _ = esdf.distance(1.0 + (4 + 0.5) * res, -2.0 + (7 + 0.5) * res)
-        assert value == pytest.approx(expected[7, 4])
-
-
-def test_esdf_without_obstacles_is_infinite():
-    esdf = Esdf.from_mask(np.zeros((3, 4), bool), 0, 0, 1.0)
-    value, grad = esdf.distance([0.3, 2.0], [1.0, 1.5])
-    assert np.all(value == np.inf) and np.all(grad == 0) and esdf.traversable(5.0).all()
-
-
-def test_esdf_bilinear_gradient_matches_finite_differences():
-    rng = np.random.default_rng(4)
-    mask = rng.random((15, 20)) < 0.15
-    esdf = Esdf.from_mask(mask, -1.0, 2.0, 0.4)
-    x = rng.uniform(-1.0 + 0.2, -1.0 + 20 * 0.4 - 0.2, 50)
-    y = rng.uniform(2.0 + 0.2, 2.0 + 15 * 0.4 - 0.2, 50)
-    value, grad = esdf.distance(x, y)
-    h = 1e-6
-    num = np.stack([(esdf.distance(x + h, y)[0] - esdf.distance(x - h, y)[0]) / (2 * h),
-                    (esdf.distance(x, y + h)[0] - esdf.distance(x, y - h)[0]) / (2 * h)], axis=-1)
-    assert value.shape == (50,) and grad.shape == (50, 2)
-    np.testing.assert_allclose(grad, num, atol=1e-5)
-    assert np.abs(grad).max() > 0.1  # the field is not flat where sampled
 
 
 def test_cost_layer_is_normalised_capped_and_scale_free():
