@@ -44,7 +44,7 @@ def test_a_car_turns_round_at_both_ends(planner):
     the car front end's path loops at both ends, forwards only, and the trajectory
     follows it within every limit (a grid path here gave a cusp: reversing at ~0 speed)."""
     robot = Robot("car", min_turn_radius=0.5, r_safe=0.05)
-    start, goal = (START[0], START[1], np.pi), (GOAL[0], GOAL[1], -2.6)
+    start, goal = (START[0], START[1], 3.6), (GOAL[0], GOAL[1], -2.6)  # 3.6: opposite the goal
     plan = planner.plan(start, goal, robot=robot, metric="q_n", weight=3.0)
     turned = np.sum(plan.path.segments[:, 0] * plan.path.segments[:, 1])
     assert abs(turned) > np.pi  # more than a U-turn in all (main's grid front end: 850 rad/s at 0 m/s)
