@@ -32,13 +32,12 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
   const double inorm2 = robot_.vmax_norm > 0.0 ? 1.0 / (robot_.vmax_norm * robot_.vmax_norm) : 0.0;
   const double iw2 = 1.0 / (robot_.wmax * robot_.wmax), r2 = robot_.min_turn_radius * robot_.min_turn_radius;
   const double clearance = robot_.r_safe + weights_.esdf_margin;
-  const bool car = robot_.kind == RobotKind::Car && robot_.min_turn_radius > 0.0;
+  const bool car = robot_.straight_ends();  // a car with a turning radius
   const bool flat = robot_.nonholonomic();
   const double eps = 1e-2 * robot_.vmax_lon * robot_.vmax_lon;  // (0.1 vmax_lon)^2
   // A car keeps moving between its straight ends (pieces 0 and n - 1): at least
   // v_min = 0.1 vmax_lon, where the regularised limits above lose their grip. Slower,
   // it could reverse through a cusp, its heading flipping between two samples.
-  const bool keep_moving = robot_.straight_ends();
   const double ivmin2 = 1.0 / eps;
   Eigen::Vector3d field_grad;
 
@@ -73,7 +72,7 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
           }
         }
         double d = ilon2 * cubic_penalty(s2 * ilon2 - 1.0, w, f.velocity);
-        if (keep_moving && i > 0 && i < n - 1) d -= ivmin2 * cubic_penalty(1.0 - s2 * ivmin2, w, f.velocity);
+        if (car && i > 0 && i < n - 1) d -= ivmin2 * cubic_penalty(1.0 - s2 * ivmin2, w, f.velocity);
         gv(0) += 2.0 * d * v(0), gv(1) += 2.0 * d * v(1);
         // Relative excesses, regularised at rest by eps (omega and curvature are
         // undefined there): z = (cr^2 - wmax^2 s^2) / (wmax^2 (s + eps)^2) ~ omega^2 / wmax^2 - 1

@@ -79,6 +79,9 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.planner.grid import GridField
+
+_FAR = 1.0e3  # metres: the clamp of +-inf values in grid_field()
 
 UNKNOWN_POLICIES = ("obstacle", "free")
 
@@ -159,6 +162,12 @@ class Esdf:
         ddx = ((1 - ty) * (v01 - v00) + ty * (v11 - v10)) / self.res * inx
         ddy = ((1 - tx) * (v10 - v00) + tx * (v11 - v01)) / self.res * iny
         return value, np.stack([ddx, ddy], axis=-1)
+
+    def grid_field(self) -> GridField:
+        """The values as a :class:`GridField` for the C++ core (same interpolation),
+        +-inf (no blocked or no free cell) clamped to +-1 km: the core needs finite
+        values, and beyond that distance clearance never matters."""
+        return GridField(np.clip(self.values, -_FAR, _FAR), self.x0, self.y0, self.res)
 
     def traversable(self, r_safe: float = 0.0) -> np.ndarray:
         """(ny, nx) bool: cells not blocked whose value is at least ``r_safe`` metres."""

@@ -25,9 +25,6 @@ from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.grid import GridField
 from lf3pm.planner.poses import as_pose, format_pose
 
-# Clamp for an ESDF without free or without blocked cells (+-inf): the core needs finite values.
-_FAR = 1.0e3
-
 
 @dataclass(frozen=True)
 class HybridPath:
@@ -108,7 +105,7 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
     if not (isinstance(analytic_every, (int, np.integer)) and analytic_every >= 1):
         raise Lf3pmError(f"analytic_every must be an integer >= 1, got {analytic_every!r}")
     if esdf_field is None:
-        esdf_field = GridField(np.clip(esdf.values, -_FAR, _FAR), esdf.x0, esdf.y0, esdf.res)
+        esdf_field = esdf.grid_field()
     cost_field = _cost_field(cost, esdf)
     for name, pose in (("start", start), ("goal", goal)):
         _check_end(name, pose, esdf, esdf_field, clearance)
@@ -135,7 +132,7 @@ def search_heuristic(cost, esdf: Esdf, poses, goal, *, radius: float, weight: fl
                      clearance: float = 0.0, yaw_bins: int = 72) -> np.ndarray:
     """:func:`search_car_path`'s heuristic at each of ``poses`` (N, 3) (+inf: pruned), for tests."""
     _radius(radius)
-    field = GridField(np.clip(esdf.values, -_FAR, _FAR), esdf.x0, esdf.y0, esdf.res)
+    field = esdf.grid_field()
     cost_field = _cost_field(cost, esdf)
     q = np.ascontiguousarray(np.asarray(poses, dtype=np.float64).reshape(-1, 3))
     return _core.hybrid_heuristic(field._core, None if cost_field is None else cost_field._core, q,

@@ -33,9 +33,6 @@ from lf3pm.solm.reader import Solm
 
 METRICS = ("q_n", "q_min", "step_norm", "none")
 
-# An ESDF with nothing blocked is +inf everywhere; the back end needs finite
-# values, and beyond this distance clearance never matters.
-_FAR = 1.0e3
 # The optimiser penalises clearance below r_safe + this margin (optimize_trajectory's default).
 _ESDF_MARGIN = 0.05
 
@@ -74,8 +71,7 @@ class Planner:
             raise Lf3pmError("planning needs an r2 or se2 SOLM (ground robots); this one is r3")
         self.solm = solm
         self.esdf = Esdf.from_solm(solm, unknown_policy=unknown_policy)
-        g = self.esdf
-        self._esdf_field = GridField(np.minimum(self.esdf.values, _FAR), g.x0, g.y0, g.res)
+        self._esdf_field = self.esdf.grid_field()
         self._layers: dict[str, CostLayer] = {}
 
     def cost_layer(self, metric: str) -> CostLayer:
@@ -93,8 +89,7 @@ class Planner:
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
         layer = self.cost_layer(metric)
-        g = self.esdf
-        cost = None if metric == "none" else GridField(layer.filled, g.x0, g.y0, g.res)
+        cost = None if metric == "none" else GridField(layer.filled, self.esdf.x0, self.esdf.y0, self.esdf.res)
         piece_length = 2.0
         if robot.kind == "car" and robot.min_turn_radius > 0:
             path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
