@@ -1,5 +1,5 @@
 """Checks of a trajectory's kinematic limits on 100 Hz samples, shared by the
-back-end and end-to-end planning tests."""
+back-end and end-to-end planning tests and bench/bench_random_queries.py."""
 
 import numpy as np
 
@@ -11,18 +11,34 @@ def body_speeds(trajectory):
     return s, s["vx"] * c + s["vy"] * si, -s["vx"] * si + s["vy"] * c
 
 
-def assert_kinematics_hold(trajectory, robot, slack: float = 0.02):
-    """Speed (body-frame and, if set, |v|) and yaw-rate limits within ``slack``; no sideways motion (|h| < 1e-3 m/s)
-    for diff and car; the car's turning radius within ``slack`` of its top speed."""
+def kinematic_checks(trajectory, robot, slack: float = 0.02):
+    """(samples, {check: passed}) for every limit of ``robot`` on 100 Hz samples: speeds
+    (body frame and, if set, |v|), yaw rate, body-frame accelerations and yaw acceleration
+    within ``slack``; no sideways motion (|h| < 1e-3 m/s) for diff and car; the car's
+    turning radius within ``slack`` of its top speed. The yaw acceleration is taken by
+    central differences of the sampled yaw rate, as a tracking controller would see it
+    (a jump in the yaw rate fails it)."""
     s, v_lon, v_lat = body_speeds(trajectory)
-    assert np.max(np.abs(v_lon)) <= (1 + slack) * robot.vmax_lon
-    assert np.max(np.abs(s["omega"])) <= (1 + slack) * robot.wmax
+    c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
+    lim = 1 + slack
+    out = {"v_lon": np.max(np.abs(v_lon)) <= lim * robot.vmax_lon,
+           "omega": np.max(np.abs(s["omega"])) <= lim * robot.wmax,
+           "a_lon": np.max(np.abs(s["ax"] * c + s["ay"] * si)) <= lim * robot.amax_lon,
+           "a_lat": np.max(np.abs(-s["ax"] * si + s["ay"] * c)) <= lim * robot.amax_lat,
+           "alpha": np.max(np.abs(np.gradient(s["omega"], s["t"]))) <= lim * robot.alpha_max}
     if robot.kind == "omni":
-        assert np.max(np.abs(v_lat)) <= (1 + slack) * robot.vmax_lat
+        out["v_lat"] = np.max(np.abs(v_lat)) <= lim * robot.vmax_lat
         if robot.vmax_norm is not None:
-            assert np.max(np.hypot(s["vx"], s["vy"])) <= (1 + slack) * robot.vmax_norm
+            out["speed"] = np.max(np.hypot(s["vx"], s["vy"])) <= lim * robot.vmax_norm
     else:
-        assert np.max(np.abs(v_lat)) < 1e-3  # |h|: no sideways motion
+        out["sideways"] = np.max(np.abs(v_lat)) < 1e-3  # |h|: no sideways motion
     if robot.kind == "car":  # R |omega| <= |v_lon|
-        assert np.max(robot.min_turn_radius * np.abs(s["omega"]) - np.abs(v_lon)) <= slack * robot.vmax_lon
+        out["turn"] = np.max(robot.min_turn_radius * np.abs(s["omega"]) - np.abs(v_lon)) <= slack * robot.vmax_lon
+    return s, {name: bool(ok) for name, ok in out.items()}
+
+
+def assert_kinematics_hold(trajectory, robot, slack: float = 0.02):
+    """Asserts every check of :func:`kinematic_checks`; returns the samples."""
+    s, checks = kinematic_checks(trajectory, robot, slack)
+    assert all(checks.values()), {name: ok for name, ok in checks.items() if not ok}
     return s

@@ -136,22 +136,26 @@ def test_lbfgs_convex_quadratic():
 def test_objective_gradient_matches_finite_differences(kind, vmax_norm):
     rng = np.random.default_rng(3)
     robot = Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, min_turn_radius=30.0 if kind == "car" else 0.0,
-                  r_safe=1.0, vmax_norm=vmax_norm)
+                  r_safe=1.0, vmax_norm=vmax_norm, amax_lon=0.05, amax_lat=0.02, alpha_max=0.002)
     problem = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
                            rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
     x = problem.initial + rng.normal(size=problem.dimension) * 0.1
     taus = slice(3 * (problem.pieces - 1), 4 * problem.pieces - 1)
     x[taus] -= 1.0  # shorter durations than the initial guess: limits violated
-    if kind == "car":
-        assert problem.dimension == 4 * problem.pieces - 3 + 6  # and the straight ends' parameters
-        x[-6:] += [2.0, 2.0, -1.0] * 2  # faster, shorter straight ends: over the speed limit there
+    if kind != "omni":
+        # The straight ends add their parameters; the spline places its first and last waypoints.
+        # (a diff robot's heading too: it turns on the spot to it).
+        end = 4 if kind == "diff" else 3
+        assert problem.dimension == 3 * (problem.pieces - 3) + problem.pieces + 2 * end
+        x[-2 * end:] += ([2.0, 2.0, -1.0, 0.3] if kind == "diff" else [2.0, 2.0, -1.0]) * 2  # faster, shorter straight ends: over the speed limit there
     terms = problem.details(x)
-    active = ["q", "velocity", "omega", "esdf", "time", "energy"]
+    active = ["q", "velocity", "omega", "acceleration", "esdf", "time", "energy"]
     active += ["turn"] if kind == "car" else []
     assert all(terms[name] != 0 for name in active), terms
     if vmax_norm is not None:  # the |v| limit adds to the velocity penalty
         box = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0),
-                           Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, r_safe=1.0), w_q=1.3, rho_T=0.7,
+                           Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, r_safe=1.0, amax_lon=0.05,
+                                 amax_lat=0.02, alpha_max=0.002), w_q=1.3, rho_T=0.7,
                            w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
         assert terms["velocity"] > 1.01 * box.details(x)["velocity"]
     _, grad = problem.evaluate(x)

@@ -49,18 +49,12 @@ nb::ndarray<nb::numpy, double> coefficients_array(const Eigen::MatrixX3d& c) {
   return nb::ndarray<nb::numpy, double>(flat->data(), {n, 4, 3}, owner);
 }
 
-RobotKind robot_kind(const std::string& kind) {
-  if (kind == "omni") return RobotKind::Omni;
-  if (kind == "diff") return RobotKind::Diff;
-  if (kind == "car") return RobotKind::Car;
-  throw std::invalid_argument("robot kind must be 'omni', 'diff' or 'car'");
-}
-
 nb::dict terms_dict(const CostTerms& t) {
   nb::dict d;
   d["q"] = t.q;
   d["velocity"] = t.velocity;
   d["omega"] = t.omega;
+  d["acceleration"] = t.acceleration;
   d["turn"] = t.turn;
   d["esdf"] = t.esdf;
   d["time"] = t.time;
@@ -146,22 +140,43 @@ void bind_trajectory(nb::module_& m) {
         "fun"_a, "x0"_a, "memory"_a = 8, "g_epsilon"_a = 1e-6, "past"_a = 3, "delta"_a = 1e-9,
         "max_iterations"_a = 0, "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
 
+  nb::enum_<RobotKind>(m, "RobotKind")
+      .value("omni", RobotKind::Omni)
+      .value("diff", RobotKind::Diff)
+      .value("car", RobotKind::Car);
+
+  nb::class_<RobotLimits>(m, "RobotLimits", "A ground robot's kind and kinematic limits (SI units; the defaults).")
+      .def(nb::init<>())
+      .def_rw("kind", &RobotLimits::kind)
+      .def_rw("vmax_lon", &RobotLimits::vmax_lon)
+      .def_rw("vmax_lat", &RobotLimits::vmax_lat)
+      .def_rw("wmax", &RobotLimits::wmax)
+      .def_rw("amax_lon", &RobotLimits::amax_lon)
+      .def_rw("amax_lat", &RobotLimits::amax_lat)
+      .def_rw("alpha_max", &RobotLimits::alpha_max)
+      .def_rw("min_turn_radius", &RobotLimits::min_turn_radius)
+      .def_rw("vmax_norm", &RobotLimits::vmax_norm)
+      .def_rw("r_safe", &RobotLimits::r_safe);
+
+  nb::class_<CostWeights>(m, "CostWeights", "Weights of the trajectory objective's sampled terms (the defaults).")
+      .def(nb::init<>())
+      .def_rw("w_q", &CostWeights::w_q)
+      .def_rw("penalty", &CostWeights::penalty)
+      .def_rw("esdf_margin", &CostWeights::esdf_margin)
+      .def_rw("samples", &CostWeights::samples);
+
   nb::class_<TrajectoryProblem>(m, "TrajectoryProblem",
                                 "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece), car: 2 x 3 straight-end parameters].")
       .def("__init__",
-           [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const std::string& kind,
-              double vmax_lon, double vmax_lat, double vmax_norm, double wmax, double min_turn_radius, double r_safe, double w_q,
-              double penalty, double esdf_margin, int samples, double rho_t, double w_energy, Mat32 head,
-              Mat32 tail, Mat3 waypoints, Vec durations) {
-             RobotLimits robot{robot_kind(kind), vmax_lon, vmax_lat, wmax, min_turn_radius, vmax_norm, r_safe};
-             CostWeights weights{w_q, penalty, esdf_margin, samples};
+           [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const RobotLimits& robot,
+              const CostWeights& weights, double rho_t, double w_energy, Mat32 head, Mat32 tail, Mat3 waypoints,
+              Vec durations) {
              TrajectoryCost tc(cost ? *cost : GridField(), esdf ? *esdf : GridField(), robot, weights);
              new (self) TrajectoryProblem(std::move(tc), rho_t, w_energy, to_state(head), to_state(tail),
                                           to_points(waypoints), to_vector(durations));
            },
-           "cost"_a.none(), "esdf"_a.none(), "kind"_a, "vmax_lon"_a, "vmax_lat"_a, "vmax_norm"_a, "wmax"_a, "min_turn_radius"_a,
-           "r_safe"_a, "w_q"_a, "penalty"_a, "esdf_margin"_a, "samples"_a, "rho_T"_a, "w_energy"_a, "head"_a,
-           "tail"_a, "waypoints"_a, "durations"_a)
+           "cost"_a.none(), "esdf"_a.none(), "robot"_a, "weights"_a, "rho_T"_a, "w_energy"_a, "head"_a, "tail"_a,
+           "waypoints"_a, "durations"_a)
       .def_prop_ro("dimension", &TrajectoryProblem::dimension)
       .def_prop_ro("pieces", &TrajectoryProblem::pieces, "MINCO pieces N (a car adds its two straight ends).")
       .def_prop_ro("initial", &TrajectoryProblem::initial)

@@ -48,54 +48,77 @@ void BandedSystem::solve_transposed(Eigen::MatrixX3d& b) const {
       if ((*this)(j, i) != 0.0) b.row(i) -= (*this)(j, i) * b.row(j);
 }
 
-void MincoS2::set_conditions(const Eigen::Matrix<double, 3, 2>& head, const Eigen::Matrix<double, 3, 2>& tail,
-                             int pieces) {
+void MincoS2::set_conditions(const State& head, const State& tail, int pieces, bool head_acceleration,
+                             bool tail_acceleration) {
   if (pieces < 1) throw std::invalid_argument("a trajectory needs at least one piece");
   n_ = pieces;
+  head_acc_ = head_acceleration;
+  tail_acc_ = tail_acceleration;
+  if (free_waypoints() < 0 || (head_acc_ && tail_acc_ && n_ < 3))
+    throw std::invalid_argument("MINCO: too few pieces for the acceleration conditions");
   head_ = head;
   tail_ = tail;
+  if (!head_acc_) head_.col(2).setZero();
+  if (!tail_acc_) tail_.col(2).setZero();
+  rows_.clear();
+  rows_.push_back({Kind::HeadPosition, 0, -1});
+  rows_.push_back({Kind::HeadVelocity, 0, -1});
+  if (head_acc_) rows_.push_back({Kind::HeadAcceleration, 0, -1});
+  int waypoint = 0;
+  for (int i = 0; i < n_ - 1; ++i) {
+    const bool freed_head = head_acc_ && i == 0, freed_tail = tail_acc_ && i == n_ - 2;
+    rows_.push_back({Kind::AccelerationContinuity, i, -1});
+    if (freed_tail) {  // no waypoint row: velocity first keeps the pivots non-zero
+      rows_.push_back({Kind::VelocityContinuity, i, -1});
+      rows_.push_back({Kind::PositionContinuity, i, -1});
+      continue;
+    }
+    if (!freed_head) rows_.push_back({Kind::Waypoint, i, waypoint++});
+    rows_.push_back({Kind::PositionContinuity, i, -1});
+    rows_.push_back({Kind::VelocityContinuity, i, -1});
+  }
+  rows_.push_back({Kind::TailPosition, n_ - 1, -1});
+  rows_.push_back({Kind::TailVelocity, n_ - 1, -1});
+  if (tail_acc_) rows_.push_back({Kind::TailAcceleration, n_ - 1, -1});
+}
+
+void MincoS2::set_conditions(const Eigen::Matrix<double, 3, 2>& head, const Eigen::Matrix<double, 3, 2>& tail,
+                             int pieces) {
+  State h = State::Zero(), t = State::Zero();
+  h.leftCols<2>() = head;
+  t.leftCols<2>() = tail;
+  set_conditions(h, t, pieces);
 }
 
 void MincoS2::set_parameters(const Eigen::Matrix3Xd& q, const Eigen::VectorXd& durations) {
-  if (q.cols() != n_ - 1 || durations.size() != n_)
-    throw std::invalid_argument("MINCO needs N-1 waypoints and N durations");
+  if (q.cols() != free_waypoints() || durations.size() != n_)
+    throw std::invalid_argument("MINCO needs its free waypoints and N durations");
   t1_ = durations;
   t2_ = t1_.cwiseProduct(t1_);
   t3_ = t2_.cwiseProduct(t1_);
   a_.reset(4 * n_, 4, 4);
   coef_.setZero(4 * n_, 3);
-  a_(0, 0) = 1.0;
-  a_(1, 1) = 1.0;
-  coef_.row(0) = head_.col(0).transpose();
-  coef_.row(1) = head_.col(1).transpose();
-  for (int i = 0; i < n_ - 1; ++i) {
-    const int r = 4 * i + 2, c = 4 * i;
-    a_(r, c + 2) = 2.0;  // acceleration continuity
-    a_(r, c + 3) = 6.0 * t1_(i);
-    a_(r, c + 6) = -2.0;
-    for (int k : {1, 2}) {  // position = waypoint, position continuity
-      a_(r + k, c) = 1.0;
-      a_(r + k, c + 1) = t1_(i);
-      a_(r + k, c + 2) = t2_(i);
-      a_(r + k, c + 3) = t3_(i);
+  for (int r = 0; r < 4 * n_; ++r) {
+    const Row& row = rows_[r];
+    const int i = row.piece, c = 4 * i;
+    const double t = t1_(i), t2 = t2_(i), t3 = t3_(i);
+    // Position, velocity and acceleration of piece i at its end, as rows over its coefficients.
+    auto position_end = [&] { a_(r, c) = 1.0, a_(r, c + 1) = t, a_(r, c + 2) = t2, a_(r, c + 3) = t3; };
+    auto velocity_end = [&] { a_(r, c + 1) = 1.0, a_(r, c + 2) = 2.0 * t, a_(r, c + 3) = 3.0 * t2; };
+    auto acceleration_end = [&] { a_(r, c + 2) = 2.0, a_(r, c + 3) = 6.0 * t; };
+    switch (row.kind) {
+      case Kind::HeadPosition: a_(r, 0) = 1.0, coef_.row(r) = head_.col(0).transpose(); break;
+      case Kind::HeadVelocity: a_(r, 1) = 1.0, coef_.row(r) = head_.col(1).transpose(); break;
+      case Kind::HeadAcceleration: a_(r, 2) = 2.0, coef_.row(r) = head_.col(2).transpose(); break;
+      case Kind::AccelerationContinuity: acceleration_end(), a_(r, c + 6) = -2.0; break;
+      case Kind::Waypoint: position_end(), coef_.row(r) = q.col(row.waypoint).transpose(); break;
+      case Kind::PositionContinuity: position_end(), a_(r, c + 4) = -1.0; break;
+      case Kind::VelocityContinuity: velocity_end(), a_(r, c + 5) = -1.0; break;
+      case Kind::TailPosition: position_end(), coef_.row(r) = tail_.col(0).transpose(); break;
+      case Kind::TailVelocity: velocity_end(), coef_.row(r) = tail_.col(1).transpose(); break;
+      case Kind::TailAcceleration: acceleration_end(), coef_.row(r) = tail_.col(2).transpose(); break;
     }
-    a_(r + 2, c + 4) = -1.0;
-    coef_.row(r + 1) = q.col(i).transpose();
-    a_(r + 3, c + 1) = 1.0;  // velocity continuity
-    a_(r + 3, c + 2) = 2.0 * t1_(i);
-    a_(r + 3, c + 3) = 3.0 * t2_(i);
-    a_(r + 3, c + 5) = -1.0;
   }
-  const int r = 4 * n_ - 2, c = 4 * (n_ - 1), last = n_ - 1;
-  a_(r, c) = 1.0;
-  a_(r, c + 1) = t1_(last);
-  a_(r, c + 2) = t2_(last);
-  a_(r, c + 3) = t3_(last);
-  a_(r + 1, c + 1) = 1.0;
-  a_(r + 1, c + 2) = 2.0 * t1_(last);
-  a_(r + 1, c + 3) = 3.0 * t2_(last);
-  coef_.row(r) = tail_.col(0).transpose();
-  coef_.row(r + 1) = tail_.col(1).transpose();
   a_.factorize();
   a_.solve(coef_);
 }
@@ -124,26 +147,39 @@ void add_acceleration_energy_gradient(double weight, const Eigen::MatrixX3d& coe
 }
 
 void MincoS2::propagate_gradient(Eigen::MatrixX3d& grad_c, const Eigen::VectorXd& grad_t, Eigen::Matrix3Xd& grad_q,
-                                 Eigen::VectorXd& grad_T, Eigen::Matrix<double, 3, 2>* grad_head,
-                                 Eigen::Matrix<double, 3, 2>* grad_tail) const {
+                                 Eigen::VectorXd& grad_T, State* grad_head, State* grad_tail) const {
   a_.solve_transposed(grad_c);  // the adjoint: G = A^-T dK/dc
   const Eigen::MatrixX3d& g = grad_c;
-  // The head and tail conditions are the right-hand side's first and last two rows.
-  if (grad_head) *grad_head << g.row(0).transpose(), g.row(1).transpose();
-  if (grad_tail) *grad_tail << g.row(4 * n_ - 2).transpose(), g.row(4 * n_ - 1).transpose();
-  grad_q.resize(3, n_ - 1);
+  if (grad_head) grad_head->setZero();
+  if (grad_tail) grad_tail->setZero();
+  grad_q.setZero(3, free_waypoints());
   grad_T = grad_t;
-  for (int i = 0; i < n_; ++i) {
+  for (int r = 0; r < 4 * n_; ++r) {
+    const Row& row = rows_[r];
+    const int i = row.piece;
     const Eigen::RowVector3d c1 = coef_.row(4 * i + 1), c2 = coef_.row(4 * i + 2), c3 = coef_.row(4 * i + 3);
-    const Eigen::RowVector3d vel = c1 + 2.0 * t1_(i) * c2 + 3.0 * t2_(i) * c3;  // d(position row)/dT
-    const Eigen::RowVector3d acc = 2.0 * c2 + 6.0 * t1_(i) * c3;                // d(velocity row)/dT
-    if (i < n_ - 1) {
-      const int r = 4 * i + 2;
-      grad_q.col(i) = g.row(r + 1).transpose();
-      grad_T(i) -= 6.0 * g.row(r).dot(c3) + (g.row(r + 1) + g.row(r + 2)).dot(vel) + g.row(r + 3).dot(acc);
-    } else {
-      const int r = 4 * n_ - 2;
-      grad_T(i) -= g.row(r).dot(vel) + g.row(r + 1).dot(acc);
+    // d(row . c)/dT_i: the end position's rate is the end velocity, and so on.
+    const Eigen::RowVector3d vel = c1 + 2.0 * t1_(i) * c2 + 3.0 * t2_(i) * c3, acc = 2.0 * c2 + 6.0 * t1_(i) * c3;
+    switch (row.kind) {
+      case Kind::HeadPosition: if (grad_head) grad_head->col(0) = g.row(r).transpose(); break;
+      case Kind::HeadVelocity: if (grad_head) grad_head->col(1) = g.row(r).transpose(); break;
+      case Kind::HeadAcceleration: if (grad_head) grad_head->col(2) = g.row(r).transpose(); break;
+      case Kind::AccelerationContinuity: grad_T(i) -= 6.0 * g.row(r).dot(c3); break;
+      case Kind::Waypoint: grad_q.col(row.waypoint) = g.row(r).transpose(), grad_T(i) -= g.row(r).dot(vel); break;
+      case Kind::PositionContinuity: grad_T(i) -= g.row(r).dot(vel); break;
+      case Kind::VelocityContinuity: grad_T(i) -= g.row(r).dot(acc); break;
+      case Kind::TailPosition:
+        if (grad_tail) grad_tail->col(0) = g.row(r).transpose();
+        grad_T(i) -= g.row(r).dot(vel);
+        break;
+      case Kind::TailVelocity:
+        if (grad_tail) grad_tail->col(1) = g.row(r).transpose();
+        grad_T(i) -= g.row(r).dot(acc);
+        break;
+      case Kind::TailAcceleration:
+        if (grad_tail) grad_tail->col(2) = g.row(r).transpose();
+        grad_T(i) -= 6.0 * g.row(r).dot(c3);
+        break;
     }
   }
 }

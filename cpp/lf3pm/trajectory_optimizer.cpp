@@ -12,43 +12,54 @@ TrajectoryProblem::TrajectoryProblem(TrajectoryCost cost, double rho_t, double w
       rho_t_(rho_t),
       w_energy_(w_energy),
       pieces_(static_cast<int>(durations.size())),
-      straight_ends_(cost_.robot().straight_ends()),
-      head_(head),
-      tail_(tail) {
+      straight_ends_(cost_.robot().straight_ends()) {
   if (pieces_ < 1 || waypoints.cols() != pieces_ - 1)
     throw std::invalid_argument("trajectory: N durations need N-1 intermediate waypoints");
+  if (straight_ends_ && pieces_ < 3)
+    throw std::invalid_argument("trajectory: straight ends need a spline of at least 3 pieces");
   if ((durations.array() <= 0.0).any()) throw std::invalid_argument("trajectory: durations must be positive");
-  minco_.set_conditions(head, tail, pieces_);
+  // With straight ends the spline's head and tail take the junctions' accelerations too,
+  // and place its first and last waypoints itself (minco.hpp): those are not parameters.
+  const int skip = straight_ends_ ? 1 : 0, free = free_waypoints();
+  if (straight_ends_) {
+    minco_.set_conditions(MincoS2::State::Zero(), MincoS2::State::Zero(), pieces_, true, true);
+  } else {
+    minco_.set_conditions(head, tail, pieces_);
+  }
   x0_.resize(dimension());
-  x0_.head(3 * (pieces_ - 1)) = Eigen::Map<const Eigen::VectorXd>(waypoints.data(), 3 * (pieces_ - 1));
-  for (int i = 0; i < pieces_; ++i) x0_(3 * (pieces_ - 1) + i) = tau_from_duration(durations(i));
+  for (int k = 0; k < free; ++k) x0_.segment<3>(3 * k) = waypoints.col(k + skip);
+  for (int i = 0; i < pieces_; ++i) x0_(3 * free + i) = tau_from_duration(durations(i));
   if (straight_ends_) {
     // Initially each straight end covers a quarter of the way to its neighbouring
     // waypoint, reaching a quarter of the top speed.
     const double v = cost_.robot().vmax_lon, a_ref = 0.2 * v, v_ref = 0.5 * v;
-    lead_in_ = StraightEnd(head.col(0), false, a_ref, v_ref);
-    lead_out_ = StraightEnd(tail.col(0), true, a_ref, v_ref);
-    const Eigen::Vector2d next = pieces_ > 1 ? Eigen::Vector2d(waypoints.block<2, 1>(0, 0)) : tail.block<2, 1>(0, 0);
-    const Eigen::Vector2d prev =
-        pieces_ > 1 ? Eigen::Vector2d(waypoints.block<2, 1>(0, pieces_ - 2)) : head.block<2, 1>(0, 0);
+    // A diff robot turns on the spot at both ends, so its straight ends may point anywhere;
+    // a car's run along its given yaws.
+    const bool free_heading = cost_.robot().turns_on_the_spot();
+    lead_in_ = StraightEnd(head.col(0), false, a_ref, v_ref, free_heading);
+    lead_out_ = StraightEnd(tail.col(0), true, a_ref, v_ref, free_heading);
+    const Eigen::Vector2d next = waypoints.block<2, 1>(0, 0), prev = waypoints.block<2, 1>(0, pieces_ - 2);
     const double d_in = std::max(0.25 * (next - head.block<2, 1>(0, 0)).norm(), 1e-3);
     const double d_out = std::max(0.25 * (tail.block<2, 1>(0, 0) - prev).norm(), 1e-3);
-    x0_.segment<3>(dimension() - 6) = lead_in_.parameters_for(d_in, 0.25 * v);
-    x0_.tail<3>() = lead_out_.parameters_for(d_out, 0.25 * v);
+    const int e = lead_in_.parameters();
+    x0_.segment(dimension() - 2 * e, e) = lead_in_.parameters_for(d_in, 0.25 * v);
+    x0_.tail(e) = lead_out_.parameters_for(d_out, 0.25 * v);
   }
 }
 
 void TrajectoryProblem::decode(const Eigen::VectorXd& x) {
   if (x.size() != dimension()) throw std::invalid_argument("decision vector has the wrong size");
   const int n = pieces_, off = straight_ends_ ? 1 : 0, all = n + 2 * off;
-  q_ = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, n - 1);
-  tau_ = x.segment(3 * (n - 1), n);
+  const int free = free_waypoints();
+  q_ = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, free);
+  tau_ = x.segment(3 * free, n);
   durations_.resize(n);
   for (int i = 0; i < n; ++i) durations_(i) = duration_from_tau(tau_(i));
   if (straight_ends_) {
-    lead_in_.set(x.segment<3>(dimension() - 6));
-    lead_out_.set(x.tail<3>());
-    minco_.set_conditions(lead_in_.junction(), lead_out_.junction(), n);
+    const int e = lead_in_.parameters();
+    lead_in_.set(x.segment(dimension() - 2 * e, e));
+    lead_out_.set(x.tail(e));
+    minco_.set_conditions(lead_in_.junction(), lead_out_.junction(), n, true, true);
   }
   minco_.set_parameters(q_, durations_);
   coef_all_.resize(4 * all, 3);
@@ -77,14 +88,16 @@ double TrajectoryProblem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g,
   // The spline's share reaches its waypoints, durations and (a car) its head and tail.
   grad_c_ = grad_c_all_.middleRows(4 * off, 4 * n);
   const Eigen::VectorXd grad_t = grad_t_all_.segment(off, n);
-  Eigen::Matrix<double, 3, 2> grad_head, grad_tail;
+  MincoS2::State grad_head, grad_tail;
   minco_.propagate_gradient(grad_c_, grad_t, grad_q_, grad_T_, &grad_head, &grad_tail);
+  const int free = free_waypoints();
   g.resize(dimension());
-  g.head(3 * (n - 1)) = Eigen::Map<const Eigen::VectorXd>(grad_q_.data(), 3 * (n - 1));
-  for (int i = 0; i < n; ++i) g(3 * (n - 1) + i) = grad_T_(i) * duration_derivative(tau_(i));
+  g.head(3 * free) = Eigen::Map<const Eigen::VectorXd>(grad_q_.data(), 3 * free);
+  for (int i = 0; i < n; ++i) g(3 * free + i) = grad_T_(i) * duration_derivative(tau_(i));
   if (straight_ends_) {
-    g.segment<3>(dimension() - 6) = lead_in_.gradient(grad_c_all_.topRows<4>(), grad_t_all_(0), grad_head);
-    g.tail<3>() = lead_out_.gradient(grad_c_all_.bottomRows<4>(), grad_t_all_(all - 1), grad_tail);
+    const int e = lead_in_.parameters();
+    g.segment(dimension() - 2 * e, e) = lead_in_.gradient(grad_c_all_.topRows<4>(), grad_t_all_(0), grad_head);
+    g.tail(e) = lead_out_.gradient(grad_c_all_.bottomRows<4>(), grad_t_all_(all - 1), grad_tail);
   }
   if (terms) *terms = t;
   return t.total();
@@ -101,12 +114,22 @@ OptimizeOutcome optimize(TrajectoryProblem& problem, const LbfgsParams& lbfgs) {
   OptimizeOutcome out;
   out.x = problem.initial();
   const Objective f = [&problem](const Eigen::VectorXd& x, Eigen::VectorXd& g) { return problem.evaluate(x, g); };
-  const LbfgsResult r = lbfgs_minimize(f, out.x, lbfgs);
-  out.iterations = r.iterations;
-  out.evaluations = r.evaluations;
-  out.status = to_string(r.status);
+  LbfgsParams params = lbfgs;
   Eigen::VectorXd g;
-  problem.evaluate(out.x, g, &out.terms);
+  for (int round = 0;; ++round) {
+    const LbfgsResult r = lbfgs_minimize(f, out.x, params);
+    out.iterations += r.iterations;
+    out.evaluations += r.evaluations;
+    out.status = to_string(r.status);
+    problem.evaluate(out.x, g, &out.terms);
+    // The relative-decrease test can stop L-BFGS in a narrow valley of the cubic
+    // penalties with a limit still exceeded; then restart it there, with fresh
+    // curvature pairs and a tenth of the tolerance (at most kRestarts times).
+    const CostTerms& t = out.terms;
+    const double penalties = t.velocity + t.omega + t.acceleration + t.turn + t.esdf;
+    if (r.status != LbfgsStatus::Stalled || round == kRestarts || penalties <= 1e-3 * std::abs(t.total())) break;
+    params.delta *= 0.1;
+  }
   return out;
 }
 

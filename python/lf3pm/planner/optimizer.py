@@ -8,12 +8,13 @@ velocity at both ends; its free intermediate waypoints and piece durations
         + rho_T * total time + w_energy * acceleration energy,
 
 Diff and car robots use the flat output: (x, y) only, the yaw follows the
-direction of travel, so there is no lateral motion at all; a diff robot turns on
-the spot to the optimised start heading and from the end heading to the goal's
-(pieces added after optimisation); a car leaves and reaches rest on straight
-pieces along its start and goal yaw, which the C++ problem puts around the
-spline (docs/planner_backend.md has the math, and why there is no PHR
-augmented-Lagrangian loop).
+direction of travel, so there is no lateral motion at all. Both leave and reach
+rest on straight pieces, which the C++ problem puts around the spline and joins
+to it with continuous acceleration (so the yaw rate never jumps): a car's run
+along its start and goal yaw, a diff robot's along the path's first and last
+direction, to and from which it turns on the spot (pieces added after
+optimisation). docs/planner_backend.md has the math, and why there is no PHR
+augmented-Lagrangian loop.
 """
 
 from __future__ import annotations
@@ -37,7 +38,9 @@ class OptimizeResult:
     ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
     heading, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
     max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
-    max_omega_ratio (<= 1 is within the limit), max_turn_excess (car: max(R |omega|
+    max_omega_ratio, max_a_lon_ratio, max_a_lat_ratio (body-frame acceleration), max_alpha_ratio
+    (yaw acceleration, from central differences of the sampled yaw rate) (<= 1 is within
+    the limit), max_turn_excess (car: max(R |omega|
     - |v_lon|) in m/s), max_h (|xdot sin yaw - ydot cos yaw|, m/s; diff and car)
     and min_clearance (ESDF - r_safe, m).
     """
@@ -87,10 +90,11 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
         head[2, 0], tail[2, 0] = points[1, 2], points[-2, 2]
     from lf3pm import _core
 
-    return _core.TrajectoryProblem(
-        cost._core if cost is not None else None, esdf._core if esdf is not None else None, robot.kind,
-        robot.vmax_lon, robot.vmax_lat, robot.vmax_norm or 0.0, robot.wmax, robot.min_turn_radius, robot.r_safe,
-        w_q, penalty, esdf_margin, samples, rho_T, w_energy, head, tail, np.ascontiguousarray(points[1:-1]), durations)
+    weights = _core.CostWeights()
+    weights.w_q, weights.penalty, weights.esdf_margin, weights.samples = w_q, penalty, esdf_margin, samples
+    return _core.TrajectoryProblem(cost._core if cost is not None else None, esdf._core if esdf is not None else None,
+                                   robot.limits(), weights, rho_T, w_energy, head, tail,
+                                   np.ascontiguousarray(points[1:-1]), durations)
 
 
 def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
@@ -109,14 +113,15 @@ def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
     if len(wp) < 2:
         raise Lf3pmError("start and goal coincide in x and y: nothing to optimise"
                          if robot.nonholonomic else "start and goal coincide: nothing to optimise")
-    pieces = max(1, math.ceil(u[-1] / piece_length))
+    # Diff and car splines join straight ends and place their own first and last interior
+    # waypoints (cpp/lf3pm/trajectory_optimizer.hpp): two more pieces keep as many waypoints
+    # on the path as an omni robot gets.
+    pieces = max(1, math.ceil(u[-1] / piece_length)) + (2 if robot.nonholonomic else 0)
     knots = np.linspace(0.0, u[-1], pieces + 1)
     points = np.column_stack([np.interp(knots, u, wp[:, d]) for d in range(3)])
     dist = np.hypot(*np.diff(points[:, :2], axis=0).T)
     turn = np.zeros(pieces) if robot.nonholonomic else np.abs(np.diff(points[:, 2]))
     durations = np.maximum(np.maximum(dist / (0.5 * robot.vmax_lon), turn / (0.5 * robot.wmax)), 0.1)
-    if robot.nonholonomic:
-        points[1:-1, 2] = np.interp(knots[1:-1], u, wp[:, 2])
     return points, durations
 
 
@@ -129,18 +134,20 @@ def _travel_yaw(wp: np.ndarray) -> np.ndarray:
     return 0.5 * (heading[1:] + heading[:-1])
 
 
-def _turn_in_place(x: float, y: float, yaw0: float, yaw1: float, wmax: float):
+def _turn_in_place(x: float, y: float, yaw0: float, yaw1: float, wmax: float, alpha_max: float):
     """A cubic piece (4, 3) turning on the spot from yaw0 to yaw1 at rest at both ends,
-    its peak rate 1.5 |yaw1 - yaw0| / T equal to wmax, and its duration T."""
+    and its duration T: the shortest whose peak rate 1.5 |yaw1 - yaw0| / T and peak
+    acceleration 6 |yaw1 - yaw0| / T^2 (at both ends) keep within wmax and alpha_max."""
     delta = yaw1 - yaw0
-    T = 1.5 * abs(delta) / wmax
+    T = max(1.5 * abs(delta) / wmax, math.sqrt(6.0 * abs(delta) / alpha_max))
     c = np.zeros((4, 3))
     c[0] = (x, y, yaw0)
     c[2, 2], c[3, 2] = 3 * delta / T**2, -2 * delta / T**3
     return c, T
 
 
-def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax: float) -> Trajectory:
+def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax: float,
+                alpha_max: float) -> Trajectory:
     """Diff robots: turn on the spot from start_yaw to the trajectory's first heading and
     from its last heading to goal_yaw (the shorter way round)."""
     # Unwrap the flat pieces (through their yaw column) to within half a turn of start_yaw.
@@ -151,11 +158,11 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
     coefficients, durations = [trajectory.coefficients], [trajectory.durations]
     flat = [np.asarray(trajectory.flat)]
     if abs(p0[2] - start_yaw) > 1e-9:
-        c, T = _turn_in_place(p0[0], p0[1], start_yaw, p0[2], wmax)
+        c, T = _turn_in_place(p0[0], p0[1], start_yaw, p0[2], wmax, alpha_max)
         coefficients.insert(0, c[None]), durations.insert(0, [T]), flat.insert(0, [False])
     last = goal_yaw + 2 * np.pi * np.round((p1[2] - goal_yaw) / (2 * np.pi))
     if abs(last - p1[2]) > 1e-9:
-        c, T = _turn_in_place(p1[0], p1[1], p1[2], last, wmax)
+        c, T = _turn_in_place(p1[0], p1[1], p1[2], last, wmax, alpha_max)
         coefficients.append(c[None]), durations.append([T]), flat.append([False])
     return Trajectory(np.concatenate(coefficients), np.concatenate(durations).astype(np.float64),
                       np.concatenate(flat).astype(bool))
@@ -188,7 +195,7 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     trajectory = Trajectory(coefficients, durations, np.ones(len(durations), bool) if robot.nonholonomic else None)
     if robot.kind == "diff":
         wp = np.asarray(waypoints, dtype=np.float64)
-        trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax)
+        trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax, robot.alpha_max)
     return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], dict(out["terms"]),
                           check_limits(trajectory, robot, esdf, check_rate), wall)
 
@@ -199,8 +206,16 @@ def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, r
     c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
     v_lon = s["vx"] * c + s["vy"] * si
     v_lat = -s["vx"] * si + s["vy"] * c
+    a_lon = s["ax"] * c + s["ay"] * si
+    a_lat = -s["ax"] * si + s["ay"] * c
+    # The yaw acceleration as a tracking controller sees it: central differences of the
+    # sampled yaw rate (a jump in the rate shows up as a spike).
+    alpha = np.gradient(s["omega"], s["t"]) if len(s["t"]) > 1 else np.zeros(1)
     out = {"max_v_lon_ratio": float(np.max(np.abs(v_lon)) / robot.vmax_lon),
-           "max_omega_ratio": float(np.max(np.abs(s["omega"])) / robot.wmax)}
+           "max_omega_ratio": float(np.max(np.abs(s["omega"])) / robot.wmax),
+           "max_a_lon_ratio": float(np.max(np.abs(a_lon)) / robot.amax_lon),
+           "max_a_lat_ratio": float(np.max(np.abs(a_lat)) / robot.amax_lat),
+           "max_alpha_ratio": float(np.max(np.abs(alpha)) / robot.alpha_max)}
     if robot.nonholonomic:
         out["max_h"] = float(np.max(np.abs(v_lat)))
     else:

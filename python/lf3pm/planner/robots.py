@@ -1,13 +1,20 @@
-"""Robot kinds and their kinematic limits for trajectory optimisation."""
+"""Robot kinds and their kinematic limits for trajectory optimisation.
+
+The defaults are the C++ core's (``RobotLimits`` in cpp/lf3pm/trajectory_cost.hpp),
+read from it here, so that the library, the CLI and the experiments share them.
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
+from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 
 KINDS = ("omni", "diff", "car")
+
+_LIMITS = _core.RobotLimits()
 
 
 @dataclass(frozen=True)
@@ -20,21 +27,27 @@ class Robot:
     (omni only) also limits the speed |v| itself: with only the body-frame limits an
     omni robot is fastest moving diagonally (sqrt(vmax_lon^2 + vmax_lat^2)), which a
     time-weighted planner exploits by yawing 45 degrees off its path. ``r_safe`` is
-    the clearance the trajectory keeps from obstacles (ESDF >= r_safe).
+    the clearance the trajectory keeps from obstacles (ESDF >= r_safe) beyond the
+    SOLM's robot radius. ``amax_lon`` and ``amax_lat`` limit the acceleration in the
+    body frame (diff and car: tangential and centripetal), ``alpha_max`` the yaw
+    acceleration, so that a real base can track the trajectory.
     """
 
     kind: str = "omni"
-    vmax_lon: float = 1.0
-    vmax_lat: float = 1.0
-    wmax: float = 1.0
-    min_turn_radius: float = 0.0
-    r_safe: float = 0.5
+    vmax_lon: float = _LIMITS.vmax_lon
+    vmax_lat: float = _LIMITS.vmax_lat
+    wmax: float = _LIMITS.wmax
+    amax_lon: float = _LIMITS.amax_lon
+    amax_lat: float = _LIMITS.amax_lat
+    alpha_max: float = _LIMITS.alpha_max
+    min_turn_radius: float = _LIMITS.min_turn_radius
+    r_safe: float = _LIMITS.r_safe
     vmax_norm: float | None = None
 
     def __post_init__(self):
         if self.kind not in KINDS:
             raise Lf3pmError(f"robot kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
-        for name in ("vmax_lon", "vmax_lat", "wmax"):
+        for name in ("vmax_lon", "vmax_lat", "wmax", "amax_lon", "amax_lat", "alpha_max"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise Lf3pmError(f"robot {name} must be a positive number, got {value!r}")
@@ -55,3 +68,17 @@ class Robot:
     def nonholonomic(self) -> bool:
         """True for diff and car robots (no lateral velocity)."""
         return self.kind != "omni"
+
+    def limits(self) -> "_core.RobotLimits":
+        """The C++ core's limits struct for this robot."""
+        out = _core.RobotLimits()
+        out.kind = getattr(_core.RobotKind, self.kind)
+        for name in ("vmax_lon", "vmax_lat", "wmax", "amax_lon", "amax_lat", "alpha_max", "min_turn_radius",
+                     "r_safe"):
+            setattr(out, name, float(getattr(self, name)))
+        out.vmax_norm = float(self.vmax_norm or 0.0)
+        return out
+
+
+#: Each field's default, for the CLI and configs (one place: the C++ core's RobotLimits).
+DEFAULTS = {f.name: f.default for f in fields(Robot)}

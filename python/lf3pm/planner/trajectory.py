@@ -40,9 +40,7 @@ class Trajectory:
         """Positions (n, 3) and velocities (n, 3) (x, y, yaw and their rates) at times t,
         clamped to [0, duration]."""
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=np.float64)), 0.0, self.duration)
-        starts = np.concatenate([[0.0], np.cumsum(self.durations)[:-1]])
-        piece = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, self.pieces - 1)
-        tau = t - starts[piece]
+        piece, tau = self._locate(t)
         c = self.coefficients[piece]  # (n, 4, 3)
         p, v = _powers(c, tau, 0), _powers(c, tau, 1)
         if self.flat is not None and np.any(self.flat[piece]):
@@ -52,16 +50,29 @@ class Trajectory:
             p[f, 2], v[f, 2] = yaw[f], omega[f]
         return p, v
 
+    def acceleration(self, t) -> np.ndarray:
+        """World-frame accelerations (n, 2) (x'', y'') at times t, clamped to [0, duration]."""
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=np.float64)), 0.0, self.duration)
+        piece, tau = self._locate(t)
+        return _powers(self.coefficients[piece], tau, 2)[:, :2]
+
     def sample(self, rate: float = 100.0) -> dict:
         """Samples at ``rate`` Hz from 0 to the end (the end included): dict of arrays
-        t, x, y, yaw, vx, vy, omega (world frame)."""
+        t, x, y, yaw, vx, vy, omega, ax, ay (world frame)."""
         if not rate > 0:
             raise Lf3pmError(f"sample rate must be positive, got {rate}")
         t = np.arange(0.0, self.duration, 1.0 / rate)
         t = np.append(t, self.duration) if t[-1] < self.duration else t
         p, v = self.evaluate(t)
+        a = self.acceleration(t)
         return {"t": t, "x": p[:, 0], "y": p[:, 1], "yaw": p[:, 2], "vx": v[:, 0], "vy": v[:, 1],
-                "omega": v[:, 2]}
+                "omega": v[:, 2], "ax": a[:, 0], "ay": a[:, 1]}
+
+    def _locate(self, t: np.ndarray):
+        """Piece index and local time of each (clamped) time."""
+        starts = np.concatenate([[0.0], np.cumsum(self.durations)[:-1]])
+        piece = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, self.pieces - 1)
+        return piece, t - starts[piece]
 
     def to_csv(self, path, rate: float = 100.0) -> None:
         """Write :meth:`sample` as CSV with header ``t,x,y,yaw,vx,vy,omega`` (atomically)."""

@@ -1,15 +1,16 @@
-"""Car planning on random queries: how many plans meet every limit.
+"""Planning on random queries: how many plans meet every limit, and how fast.
 
 20 seeded random (start, goal) pairs, 3 m or more apart, on traversable cells of the
-`boxes` scene's SOLM (0.5 m cells), with random start and goal yaws; a car with a
-0.5 m turning radius. A plan counts as feasible when its 100 Hz samples meet the
-test suite's checks (tests/kinematics.py: speed and yaw-rate limits within 2 %,
-no sideways motion, R |omega| - |v| within 2 % of vmax), clearance >= r_safe, and
-the start and goal yaws within 0.01 rad. Queries with no forward path (the front
-end says so) are replaced by new draws and counted. Builds the SOLM in a temporary
-folder unless --solm names one.
+`boxes` scene's SOLM (0.5 m cells), with random start and goal yaws, for an omni, a
+diff or a car robot (0.5 m turning radius), the default limits otherwise. A plan
+counts as feasible when its 100 Hz samples meet the test suite's checks
+(tests/kinematics.py: speed, yaw-rate, acceleration and yaw-acceleration limits
+within 2 %, no sideways motion for diff and car, R |omega| - |v| within 2 % of vmax),
+clearance >= r_safe, and the start and goal yaws within 0.01 rad. Queries with no
+path (the front end says so) are replaced by new draws and counted. Builds the SOLM
+in a temporary folder unless --solm names one.
 
-    .venv/bin/python bench/bench_car_queries.py [--seed 0] [--solm boxes.zarr]
+    .venv/bin/python bench/bench_random_queries.py [--robot car] [--seed 0] [--solm boxes.zarr]
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from kinematics import body_speeds  # noqa: E402
+from kinematics import kinematic_checks  # noqa: E402
 
 from lf3pm.errors import Lf3pmError  # noqa: E402
 from lf3pm.planner import Planner, Robot  # noqa: E402
@@ -41,19 +42,16 @@ def build_boxes(folder: Path) -> Path:
 
 
 def checks(plan, start, goal, robot, esdf) -> dict:
-    s, v_lon, v_lat = body_speeds(plan.trajectory)
+    s, out = kinematic_checks(plan.trajectory, robot)
     yaw_error = [abs(np.angle(np.exp(1j * (s["yaw"][i] - pose[2])))) for i, pose in ((0, start), (-1, goal))]
-    return {"v_lon": np.max(np.abs(v_lon)) <= 1.02 * robot.vmax_lon,
-            "omega": np.max(np.abs(s["omega"])) <= 1.02 * robot.wmax,
-            "sideways": np.max(np.abs(v_lat)) < 1e-3,
-            "turn": np.max(robot.min_turn_radius * np.abs(s["omega"]) - np.abs(v_lon)) <= 0.02 * robot.vmax_lon,
-            "clearance": np.min(esdf.distance(s["x"], s["y"])[0]) >= robot.r_safe,
-            "end yaws": max(yaw_error) < 1e-2}
+    out["clearance"] = bool(np.min(esdf.distance(s["x"], s["y"])[0]) >= robot.r_safe)
+    out["end yaws"] = max(yaw_error) < 1e-2
+    return out
 
 
-def run(solm_path: Path, seed: int, queries: int = 20) -> None:
+def run(solm_path: Path, kind: str, seed: int, queries: int = 20) -> None:
     planner = Planner(Solm.open(solm_path))
-    robot = Robot("car", min_turn_radius=0.5, r_safe=0.05)
+    robot = Robot(kind, min_turn_radius=0.5 if kind == "car" else 0.0, r_safe=0.05)
     g = planner.esdf
     ys, xs = np.nonzero(g.traversable(0.3))
     rng = np.random.default_rng(seed)
@@ -79,7 +77,7 @@ def run(solm_path: Path, seed: int, queries: int = 20) -> None:
             feasible += 1
         else:
             failures.append((done, [name for name, ok in result.items() if not ok]))
-    print(f"seed {seed}: {feasible}/{queries} plans meet every limit; {no_path} queries had no plan; "
+    print(f"{kind}, seed {seed}: {feasible}/{queries} plans meet every limit; {no_path} queries had no plan; "
           f"median plan time {1e3 * np.median(times):.0f} ms")
     for number, names in failures:
         print(f"  query {number}: misses {', '.join(names)}")
@@ -87,14 +85,15 @@ def run(solm_path: Path, seed: int, queries: int = 20) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", choices=("omni", "diff", "car"), default="car")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--solm", type=Path, default=None, help="the boxes SOLM (default: build one)")
     args = parser.parse_args()
     if args.solm is not None:
-        run(args.solm, args.seed)
+        run(args.solm, args.robot, args.seed)
         return
     with tempfile.TemporaryDirectory() as folder:
-        run(build_boxes(Path(folder)), args.seed)
+        run(build_boxes(Path(folder)), args.robot, args.seed)
 
 
 if __name__ == "__main__":
