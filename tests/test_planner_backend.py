@@ -155,7 +155,7 @@ def test_objective_gradient_matches_finite_differences(kind, vmax_norm):
     if vmax_norm is not None:  # the |v| limit adds to the velocity penalty
         box = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0),
                            Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, r_safe=1.0, amax_lon=0.05,
-                                 amax_lat=0.02, alpha_max=0.002), w_q=1.3, rho_T=0.7,
+                                 amax_lat=0.02, alpha_max=0.002, vmax_norm=math.inf), w_q=1.3, rho_T=0.7,
                            w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
         assert terms["velocity"] > 1.01 * box.details(x)["velocity"]
     _, grad = problem.evaluate(x)
@@ -246,7 +246,7 @@ def test_speed_norm_limit_holds_where_box_limits_allow_diagonal_motion():
     # sqrt(2) vmax; a limit on |v| removes that. (The path's yaw is off the direction of
     # travel: at exactly 0 the box limits' yaw gradient vanishes by symmetry.)
     path = _straight(yaw=0.3)
-    box = Robot("omni", vmax_lon=1.0, vmax_lat=1.0, wmax=1.0, r_safe=0.5)
+    box = Robot("omni", vmax_lon=1.0, vmax_lat=1.0, wmax=1.0, r_safe=0.5, vmax_norm=math.inf)
     fast = optimize_trajectory(path, None, None, box, rho_T=5.0, rel_cost_tol=1e-6)
     s = fast.trajectory.sample(100.0)
     assert np.max(np.hypot(s["vx"], s["vy"])) > 1.2

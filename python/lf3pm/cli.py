@@ -16,6 +16,7 @@ from rich.table import Table
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
+from lf3pm.planner.robots import DEFAULTS as ROBOT
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
@@ -279,16 +280,19 @@ def plan(
     goal: Tuple[float, float, float] = typer.Option(..., help="Goal X Y YAW (m, rad)."),
     out: Path = typer.Option(..., "-o", "--out", metavar="TRAJ.csv",
                              help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."),
-    robot: str = typer.Option("omni", help="omni, diff (differential drive) or car."),
+    robot: str = typer.Option(ROBOT["kind"], help="omni, diff (differential drive) or car."),
     metric: str = typer.Option("q_n", help="SOLM channel guiding the plan: q_n, q_min, step_norm or none."),
     weight: float = typer.Option(1.0, help="lambda: cost of a median cell relative to path length/time."),
-    vmax_lon: float = typer.Option(1.0, help="Longitudinal speed limit (m/s)."),
-    vmax_lat: float = typer.Option(1.0, help="Lateral speed limit (m/s; omni)."),
+    vmax_lon: float = typer.Option(ROBOT["vmax_lon"], help="Longitudinal speed limit (m/s)."),
+    vmax_lat: float = typer.Option(ROBOT["vmax_lat"], help="Lateral speed limit (m/s; omni)."),
     vmax_norm: Optional[float] = typer.Option(
-        None, help="Limit on the speed |v| too (m/s; omni): without it the robot is fastest diagonally."),
-    wmax: float = typer.Option(1.0, help="Yaw rate limit (rad/s)."),
-    min_turn_radius: float = typer.Option(0.0, help="Minimum turning radius (m; car)."),
-    r_safe: float = typer.Option(0.3, help="Clearance beyond the SOLM's robot radius (m)."),
+        None, help="Limit on the speed |v| (m/s; omni; default max(vmax-lon, vmax-lat), inf: none)."),
+    wmax: float = typer.Option(ROBOT["wmax"], help="Yaw rate limit (rad/s)."),
+    amax_lon: float = typer.Option(ROBOT["amax_lon"], help="Longitudinal (tangential) acceleration limit (m/s^2)."),
+    amax_lat: float = typer.Option(ROBOT["amax_lat"], help="Lateral (centripetal) acceleration limit (m/s^2)."),
+    alpha_max: float = typer.Option(ROBOT["alpha_max"], help="Yaw acceleration limit (rad/s^2)."),
+    min_turn_radius: float = typer.Option(ROBOT["min_turn_radius"], help="Minimum turning radius (m; car)."),
+    r_safe: float = typer.Option(ROBOT["r_safe"], help="Clearance beyond the SOLM's robot radius (m)."),
     png: Optional[Path] = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
     map_path: Optional[Path] = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan's summary as JSON."),
@@ -299,8 +303,9 @@ def plan(
         from lf3pm.planner.robots import Robot
         from lf3pm.solm import Solm
 
-        vehicle = Robot(robot, vmax_lon=vmax_lon, vmax_lat=vmax_lat, wmax=wmax,
-                        min_turn_radius=min_turn_radius, r_safe=r_safe, vmax_norm=vmax_norm)
+        vehicle = Robot(robot, vmax_lon=vmax_lon, vmax_lat=vmax_lat, wmax=wmax, amax_lon=amax_lon,
+                        amax_lat=amax_lat, alpha_max=alpha_max, min_turn_radius=min_turn_radius,
+                        r_safe=r_safe, vmax_norm=vmax_norm)
         solm = Solm.open(solm_path)
         result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight)
         result.trajectory.to_csv(out)

@@ -31,6 +31,10 @@ from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.poses import format_pose
 
+#: Default turn radius (m): a yaw step costs the arc a point this far from the rotation
+#: axis travels.
+TURN_RADIUS = 0.5
+
 
 @dataclass(frozen=True)
 class GraphPath:
@@ -56,7 +60,7 @@ class GraphPath:
 
 
 def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float = 1.0,
-                heuristic: bool = True, r_safe: float = 0.0, turn_radius: float = 0.5,
+                heuristic: bool = True, r_safe: float = 0.0, turn_radius: float = TURN_RADIUS,
                 turn_while_moving: bool = True) -> GraphPath:
     """Least-cost path from ``start`` to ``goal`` (x, y, yaw), snapped to their cells.
 

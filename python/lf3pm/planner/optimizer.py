@@ -56,7 +56,8 @@ class OptimizeResult:
 
 def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                  w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
-                 esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0):
+                 esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
+                 corners: bool = False):
     """The C++ objective (``lf3pm._core.TrajectoryProblem``) and its initial guess from
     front-end waypoints (K, 3: x, y, yaw), K >= 2. Arguments as in :func:`optimize_trajectory`."""
     wp = np.asarray(waypoints, dtype=np.float64)
@@ -80,7 +81,7 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
     if not (math.isfinite(piece_length) and piece_length > 0):
         raise Lf3pmError(f"piece_length must be positive, got {piece_length!r}")
 
-    points, durations = _initial_guess(wp, robot, piece_length)
+    points, durations = _initial_guess(wp, robot, piece_length, corners)
     head = np.zeros((3, 2))
     tail = np.zeros((3, 2))
     head[:, 0], tail[:, 0] = points[0], points[-1]
@@ -97,10 +98,12 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
                                    np.ascontiguousarray(points[1:-1]), durations)
 
 
-def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
-    """Resample the path into pieces of about piece_length (arc length; omni: yaw
-    counted at 0.5 m/rad so that turns on the spot get pieces too; diff and car: in
-    (x, y) only, yaw the direction of travel) and time them at half speed."""
+def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float, corners: bool):
+    """Knots along the path and piece durations at half speed. Arc length u counts yaw at
+    0.5 m/rad for omni robots (turns on the spot get pieces too); diff and car robots move
+    in (x, y) only, their yaw the direction of travel. ``corners``: every waypoint is a
+    knot (a shortcut path's corners), longer segments split into pieces of at most
+    piece_length; otherwise the path is resampled evenly at about piece_length."""
     wp = wp.copy()
     wp[:, 2] = np.unwrap(wp[:, 2])
     step = np.hypot(*np.diff(wp[:, :2], axis=0).T)
@@ -113,14 +116,20 @@ def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float):
     if len(wp) < 2:
         raise Lf3pmError("start and goal coincide in x and y: nothing to optimise"
                          if robot.nonholonomic else "start and goal coincide: nothing to optimise")
-    # Diff and car splines join straight ends and place their own first and last interior
-    # waypoints (cpp/lf3pm/trajectory_optimizer.hpp): two more pieces keep as many waypoints
-    # on the path as an omni robot gets.
-    pieces = max(1, math.ceil(u[-1] / piece_length)) + (2 if robot.nonholonomic else 0)
-    knots = np.linspace(0.0, u[-1], pieces + 1)
+    if corners:
+        splits = np.maximum(1, np.ceil(np.diff(u) / piece_length).astype(int))
+        knots = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in zip(u[:-1], u[1:], splits)]
+                               + [u[-1:]])
+    else:
+        knots = np.linspace(0.0, u[-1], max(1, math.ceil(u[-1] / piece_length)) + 1)
+    if robot.nonholonomic:
+        # Diff and car splines join straight ends and place their own first and last interior
+        # waypoints (cpp/lf3pm/trajectory_optimizer.hpp): a knot halfway along the first and
+        # the last piece gives them those, and leaves the path's own knots as parameters.
+        knots = np.unique(np.concatenate([knots, [0.5 * knots[1], 0.5 * (knots[-2] + knots[-1])]]))
     points = np.column_stack([np.interp(knots, u, wp[:, d]) for d in range(3)])
     dist = np.hypot(*np.diff(points[:, :2], axis=0).T)
-    turn = np.zeros(pieces) if robot.nonholonomic else np.abs(np.diff(points[:, 2]))
+    turn = np.zeros(len(dist)) if robot.nonholonomic else np.abs(np.diff(points[:, 2]))
     durations = np.maximum(np.maximum(dist / (0.5 * robot.vmax_lon), turn / (0.5 * robot.wmax)), 0.1)
     return points, durations
 
@@ -171,6 +180,7 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                         w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
                         esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
+                        corners: bool = False,
                         g_epsilon: float = 1e-6, rel_cost_tol: float = 1e-4,
                         max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
@@ -180,7 +190,9 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     clearance term); ``rho_T``: weight of the total time; ``w_energy``: weight of the
     acceleration energy; ``penalty``: weight W of the cubic penalties on the velocity,
     yaw rate, speed norm, turning radius and clearance limits (clearance penalised
-    from r_safe + esdf_margin); ``samples``: K samples per piece; ``piece_length``:
+    from r_safe + esdf_margin); ``samples``: K samples per piece; ``corners``: every
+    waypoint is a knot of the initial guess (a shortcut path's corners; otherwise the
+    path is resampled evenly); ``piece_length``:
     metres per piece in the initial guess. L-BFGS stops at ||g|| <= g_epsilon
     max(1, ||x||), when the objective fell by less than ``rel_cost_tol`` (relative)
     over 3 iterations, or after ``max_iterations`` (0: none). Single-threaded.
@@ -188,7 +200,7 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     start = time.perf_counter()
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
                            penalty=penalty, esdf_margin=esdf_margin, samples=samples,
-                           piece_length=piece_length)
+                           piece_length=piece_length, corners=corners)
     out = problem.optimize(g_epsilon=g_epsilon, delta=rel_cost_tol, max_iterations=max_iterations)
     coefficients, durations = problem.trajectory(out["x"])
     wall = time.perf_counter() - start

@@ -21,7 +21,7 @@ import numpy as np
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
-from lf3pm.planner.graph_search import GraphPath, search_path
+from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
 from lf3pm.planner.grid import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
 from lf3pm.planner.optimizer import OptimizeResult, optimize_trajectory
@@ -90,7 +90,7 @@ class Planner:
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
         layer = self.cost_layer(metric)
         cost = None if metric == "none" else GridField(layer.filled, self.esdf.x0, self.esdf.y0, self.esdf.res)
-        piece_length = 2.0
+        piece_length, corners = 2.0, False
         if robot.kind == "car" and robot.min_turn_radius > 0:
             path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
                                    clearance=robot.r_safe + _ESDF_MARGIN, heuristic=heuristic,
@@ -100,15 +100,21 @@ class Planner:
             piece_length = min(piece_length, 0.5 * math.pi * robot.min_turn_radius)
         else:
             path = search_path(layer, self.esdf, self.solm.grid_spec, start, goal, weight=weight,
-                               heuristic=heuristic, r_safe=robot.r_safe)
+                               heuristic=heuristic, r_safe=robot.r_safe, turn_radius=TURN_RADIUS)
             waypoints = np.array(path.poses, dtype=np.float64)
             # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
             waypoints[0], waypoints[-1] = start, goal
+            # The exact end yaws may sit a turn away from the path's unwrapped bins.
+            waypoints[:, 2] = np.unwrap(waypoints[:, 2])
             # Straighten the staircase where that keeps the clearance the optimiser's penalty
-            # asks for and costs no more under the front end's own edge cost.
-            keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + _ESDF_MARGIN, cost, weight)
-            waypoints = waypoints[keep]
-            waypoints[:, 2] = np.unwrap(waypoints[:, 2])  # exact end yaws may sit a turn away
+            # asks for and costs no more under the front end's own edge cost. An omni robot on
+            # an SE(2) SOLM keeps the front end's yaws (the sensor's heading is the plan there);
+            # otherwise the yaw is the direction of travel.
+            oriented = robot.kind == "omni" and cost is not None and cost.yaw_bins > 1
+            keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + _ESDF_MARGIN, cost, weight,
+                                 yaw="interpolate" if oriented else "travel", turn_radius=TURN_RADIUS)
+            waypoints, corners = waypoints[keep], True
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
-                                     rho_T=rho_T, esdf_margin=_ESDF_MARGIN, piece_length=piece_length)
+                                     rho_T=rho_T, esdf_margin=_ESDF_MARGIN, piece_length=piece_length,
+                                     corners=corners)
         return Plan(metric, robot, path, result)

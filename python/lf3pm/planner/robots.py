@@ -24,8 +24,9 @@ class Robot:
     ``kind``: ``omni`` (holonomic: body-frame longitudinal and lateral speed limits),
     ``diff`` (differential drive: no lateral motion) or ``car`` (diff plus a minimum
     turning radius ``min_turn_radius``, |omega| <= |v_lon| / R). ``vmax_norm``
-    (omni only) also limits the speed |v| itself: with only the body-frame limits an
-    omni robot is fastest moving diagonally (sqrt(vmax_lon^2 + vmax_lat^2)), which a
+    (omni only) also limits the speed |v| itself, by default to max(vmax_lon,
+    vmax_lat) (``inf``: no such limit): with only the body-frame limits an omni
+    robot is fastest moving diagonally (sqrt(vmax_lon^2 + vmax_lat^2)), which a
     time-weighted planner exploits by yawing 45 degrees off its path. ``r_safe`` is
     the clearance the trajectory keeps from obstacles (ESDF >= r_safe) beyond the
     SOLM's robot radius. ``amax_lon`` and ``amax_lat`` limit the acceleration in the
@@ -58,9 +59,13 @@ class Robot:
         if self.vmax_norm is not None:
             if self.kind != "omni":
                 raise Lf3pmError(f"a speed-norm limit applies to omni robots only, not {self.kind!r}")
-            if not (isinstance(self.vmax_norm, (int, float)) and math.isfinite(self.vmax_norm)
+            if not (isinstance(self.vmax_norm, (int, float)) and not math.isnan(self.vmax_norm)
                     and self.vmax_norm > 0):
-                raise Lf3pmError(f"robot vmax_norm must be a positive number, got {self.vmax_norm!r}")
+                raise Lf3pmError(f"robot vmax_norm must be a positive number (inf: none), got {self.vmax_norm!r}")
+        elif self.kind == "omni":
+            # A base's wheels limit its speed, not only its body-frame components: with the
+            # box alone a time-weighted plan yaws 45 degrees off its path to go sqrt(2) faster.
+            object.__setattr__(self, "vmax_norm", float(max(self.vmax_lon, self.vmax_lat)))
         if self.kind != "car" and self.min_turn_radius > 0:
             raise Lf3pmError(f"a minimum turning radius applies to car robots only, not {self.kind!r}")
 
@@ -76,7 +81,7 @@ class Robot:
         for name in ("vmax_lon", "vmax_lat", "wmax", "amax_lon", "amax_lat", "alpha_max", "min_turn_radius",
                      "r_safe"):
             setattr(out, name, float(getattr(self, name)))
-        out.vmax_norm = float(self.vmax_norm or 0.0)
+        out.vmax_norm = float(self.vmax_norm) if self.vmax_norm is not None and math.isfinite(self.vmax_norm) else 0.0
         return out
 
 
