@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from lf3pm.errors import Lf3pmError
 from lf3pm.planner import Planner, Robot
 from lf3pm.solm.reader import Solm
 
@@ -56,3 +57,49 @@ def test_a_car_turns_round_at_both_ends(planner):
     assert abs(np.angle(np.exp(1j * (s["yaw"][-1] - goal[2])))) < 1e-9
     summary = plan.summary()
     assert summary["path_length_m"] == pytest.approx(plan.path.length) and summary["search_s"] >= 0
+
+
+def random_queries(planner, seed: int, count: int):
+    """``count`` seeded (start, goal) pairs 3 m or more apart on cells 0.3 m clear of
+    obstacles, with random yaws (as bench/bench_random_queries.py draws them)."""
+    g = planner.esdf
+    ys, xs = np.nonzero(g.traversable(0.3))
+    rng = np.random.default_rng(seed)
+    while count:
+        i, j = rng.choice(len(xs), 2, replace=False)
+        start = (g.x0 + (xs[i] + 0.5) * g.res, g.y0 + (ys[i] + 0.5) * g.res, rng.uniform(-np.pi, np.pi))
+        goal = (g.x0 + (xs[j] + 0.5) * g.res, g.y0 + (ys[j] + 0.5) * g.res, rng.uniform(-np.pi, np.pi))
+        if np.hypot(start[0] - goal[0], start[1] - goal[1]) >= 3:
+            count -= 1
+            yield start, goal
+
+
+@pytest.mark.parametrize("kind", ["omni", "diff", "car"])
+def test_random_queries_meet_every_limit(planner, kind):
+    """Speeds, accelerations, yaw rate and yaw acceleration (by central differences of
+    the sampled yaw rate) within 2 % on 100 Hz samples, clearance kept, for random
+    queries with the default limits (bench/bench_random_queries.py runs more seeds)."""
+    robot = Robot(kind, min_turn_radius=0.5 if kind == "car" else 0.0, r_safe=0.05)
+    for start, goal in random_queries(planner, seed=0, count=6):
+        try:
+            plan = planner.plan(start, goal, robot=robot, metric="q_n", weight=1.0)
+        except Lf3pmError:  # a car may have no forward path (a start facing a wall)
+            assert kind == "car"
+            continue
+        s = assert_kinematics_hold(plan.trajectory, robot)
+        assert np.min(planner.esdf.distance(s["x"], s["y"])[0]) >= robot.r_safe
+
+
+def test_csv_velocities_are_the_derivatives_of_its_positions(planner, tmp_path):
+    """What `lf3pm plan` writes: 100 Hz rows whose vx, vy, omega are the central
+    differences of x, y, yaw, to within h times the acceleration limit (the
+    difference's error where the acceleration has a kink between pieces)."""
+    for kind in ("omni", "diff"):
+        robot = Robot(kind, r_safe=0.05)
+        plan = planner.plan(START, GOAL, robot=robot, metric="q_n", weight=1.0)
+        plan.trajectory.to_csv(tmp_path / "t.csv")
+        t, x, y, yaw, vx, vy, omega = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1).T
+        assert np.allclose(np.diff(t[:-1]), 0.01, atol=1e-9) and t[-1] == pytest.approx(plan.trajectory.duration)
+        for p, v, limit in ((x, vx, robot.amax_lon), (y, vy, robot.amax_lon), (np.unwrap(yaw), omega, robot.alpha_max)):
+            fd = (p[2:] - p[:-2]) / (t[2:] - t[:-2])
+            assert np.max(np.abs(fd[:-1] - v[1:-2])) <= 0.01 * limit

@@ -83,6 +83,32 @@ def test_minco_continuity_and_boundary_conditions():
     assert energy == pytest.approx(quad, rel=1e-10)
 
 
+@pytest.mark.parametrize("head_acc, tail_acc", [(True, False), (False, True), (True, True)])
+def test_minco_with_acceleration_conditions(head_acc, tail_acc):
+    """An end with its acceleration given frees its neighbouring junction's waypoint; the
+    spline is C^2 and meets every condition (which fix its coefficients)."""
+    rng = np.random.default_rng(4)
+    n = 5
+    head = np.array([[0.0, 0.3, 0.2], [0.0, -0.2, -0.4], [0.1, 0.05, 0.0]])
+    tail = np.array([[10.0, 0.5, -0.3], [2.0, 0.0, 0.6], [1.0, -0.1, 0.0]])
+    free = n - 1 - head_acc - tail_acc
+    q = np.column_stack([np.linspace(2, 8, free), rng.normal(size=free), rng.normal(size=free)])
+    durations = rng.uniform(0.3, 2.5, n)
+    coef, _ = _core.minco_s2(np.ascontiguousarray(head[:, :3 if head_acc else 2]),
+                             np.ascontiguousarray(tail[:, :3 if tail_acc else 2]), q, durations)
+    for i in range(n - 1):
+        for order in range(3):
+            np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], order),
+                                       _coefficient_value(coef[i + 1], 0.0, order), atol=1e-9)
+    junctions = [i for i in range(n - 1) if not (head_acc and i == 0) and not (tail_acc and i == n - 2)]
+    for k, i in enumerate(junctions):
+        np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], 0), q[k], atol=1e-9)
+    for order in range(3 if head_acc else 2):
+        np.testing.assert_allclose(_coefficient_value(coef[0], 0.0, order), head[:, order], atol=1e-9)
+    for order in range(3 if tail_acc else 2):
+        np.testing.assert_allclose(_coefficient_value(coef[-1], durations[-1], order), tail[:, order], atol=1e-9)
+
+
 def test_trajectory_evaluate_is_continuous_and_keeps_boundaries(tmp_path):
     result = optimize_trajectory(_bend(), None, None, Robot("omni"), rho_T=1.0, samples=8)
     traj = result.trajectory

@@ -107,15 +107,27 @@ void bind_trajectory(nb::module_& m) {
            "x"_a, "y"_a, "yaw"_a, "Values (n,) and gradients (n, 3: d/dx, d/dy, d/dyaw) at the points.");
 
   m.def("minco_s2",
-        [](Mat32 head, Mat32 tail, Mat3 waypoints, Vec durations) {
+        [](nb::ndarray<const double, nb::shape<3, -1>, nb::c_contig, nb::device::cpu> head,
+           nb::ndarray<const double, nb::shape<3, -1>, nb::c_contig, nb::device::cpu> tail, Mat3 waypoints,
+           Vec durations) {
+          // (3, 2): position and velocity; (3, 3): and the acceleration.
+          auto state = [](const auto& m) {
+            if (m.shape(1) != 2 && m.shape(1) != 3) throw std::invalid_argument("an end state is (3, 2) or (3, 3)");
+            MincoS2::State s = MincoS2::State::Zero();
+            for (int r = 0; r < 3; ++r)
+              for (std::size_t c = 0; c < m.shape(1); ++c) s(r, c) = m(r, c);
+            return s;
+          };
           MincoS2 minco;
-          minco.set_conditions(to_state(head), to_state(tail), int(durations.shape(0)));
+          minco.set_conditions(state(head), state(tail), int(durations.shape(0)), head.shape(1) == 3,
+                               tail.shape(1) == 3);
           minco.set_parameters(to_points(waypoints), to_vector(durations));
           return nb::make_tuple(coefficients_array(minco.coefficients()), minco.energy());
         },
         "head"_a, "tail"_a, "waypoints"_a, "durations"_a,
-        "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity), "
-        "intermediate waypoints (N-1, 3) and durations (N,).");
+        "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity; "
+        "3 x 3: and acceleration, which frees the neighbouring junction's waypoint), the free intermediate "
+        "waypoints (K, 3) and durations (N,).");
 
   m.def("lbfgs_minimize",
         [](const std::function<nb::tuple(const Eigen::VectorXd&)>& fun, Vec x0, int memory, double g_epsilon,
