@@ -14,11 +14,16 @@ and the layer stays finite. Cells the SOLM did not evaluate (obstacles,
 unknown ground: NaN) stay NaN in ``cost`` and hold the cap in ``filled``, the
 finite array the trajectory optimiser interpolates.
 
+Transform: the normalised channel is raised to ``power`` (before the cap), so that
+the cost can separate a near-degenerate view from a good one as strongly as
+localization error does (docs/benefit.md measures which channel and power do).
+
 Channel ``none`` gives zero cost: the planner then finds shortest paths.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,14 +46,17 @@ class CostLayer:
     cap: float
 
 
-def cost_from_values(values, channel: str = "q_n", *, degenerate=None,
+def cost_from_values(values, channel: str = "q_n", *, degenerate=None, power: float = 1.0,
                      cap_percentile: float = 99.0) -> CostLayer:
     """The cost layer of one channel's array (NaN: not evaluated, +inf: degenerate);
-    ``degenerate`` optionally flags more cells to cap."""
+    ``degenerate`` optionally flags more cells to cap; ``power``: the exponent applied
+    to the normalised values."""
     if channel not in COST_CHANNELS:
         raise Lf3pmError(f"unknown cost channel {channel!r}; use one of {', '.join(COST_CHANNELS)}")
     if not 0 < cap_percentile <= 100:
         raise Lf3pmError(f"cap percentile must be in (0, 100], got {cap_percentile}")
+    if not (isinstance(power, (int, float)) and math.isfinite(power) and 0 < power <= 10):
+        raise Lf3pmError(f"cost power must be a number in (0, 10], got {power!r}")
     values = np.asarray(values, dtype=np.float64)
     if channel == "none":
         zeros = np.zeros(values.shape)
@@ -65,16 +73,16 @@ def cost_from_values(values, channel: str = "q_n", *, degenerate=None,
         scale = float(np.mean(values[finite]))
     if scale <= 0:
         scale = 1.0  # all zero: no place is better than another
-    cost = np.where(finite, values / scale, np.inf)
+    cost = np.where(finite, (values / scale) ** power, np.inf)
     cap = float(np.percentile(cost[finite], cap_percentile))
     cost = np.minimum(cost, cap)
     cost[np.isnan(values)] = np.nan
     return CostLayer(channel, cost, np.where(np.isnan(cost), cap, cost), scale, cap)
 
 
-def cost_from_solm(solm, channel: str = "q_n", *, cap_percentile: float = 99.0) -> CostLayer:
+def cost_from_solm(solm, channel: str = "q_n", *, power: float = 1.0, cap_percentile: float = 99.0) -> CostLayer:
     """The cost layer of ``solm``'s ``channel`` (shape (ny, nx) for r2, (yaw_bins,
-    ny, nx) for se2), with the SOLM's degenerate mask capped."""
+    ny, nx) for se2), raised to ``power``, with the SOLM's degenerate mask capped."""
     if solm.grid_spec.space not in ("r2", "se2"):
         raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {solm.grid_spec.space}")
     if channel == "none":
@@ -82,5 +90,5 @@ def cost_from_solm(solm, channel: str = "q_n", *, cap_percentile: float = 99.0) 
     if channel not in COST_CHANNELS:
         raise Lf3pmError(f"unknown cost channel {channel!r}; use one of {', '.join(COST_CHANNELS)}")
     return cost_from_values(solm.channel(channel), channel,
-                            degenerate=np.asarray(solm.channel("degenerate")).astype(bool),
+                            degenerate=np.asarray(solm.channel("degenerate")).astype(bool), power=power,
                             cap_percentile=cap_percentile)

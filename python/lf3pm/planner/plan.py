@@ -72,23 +72,26 @@ class Planner:
         self.solm = solm
         self.esdf = Esdf.from_solm(solm, unknown_policy=unknown_policy)
         self._esdf_field = self.esdf.grid_field()
-        self._layers: dict[str, CostLayer] = {}
+        self._layers: dict[tuple, CostLayer] = {}
 
-    def cost_layer(self, metric: str) -> CostLayer:
+    def cost_layer(self, metric: str, power: float = 1.0) -> CostLayer:
+        """The cost layer of a SOLM channel raised to ``power`` (cost_map.py), computed once."""
         if metric not in METRICS:
             raise Lf3pmError(f"metric must be one of {', '.join(METRICS)}, got {metric!r}")
-        if metric not in self._layers:
-            self._layers[metric] = cost_from_solm(self.solm, metric)
-        return self._layers[metric]
+        key = (metric, 1.0 if metric == "none" else float(power))
+        if key not in self._layers:
+            self._layers[key] = cost_from_solm(self.solm, metric, power=power)
+        return self._layers[key]
 
     def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = "q_n", weight: float = 1.0,
-             rho_T: float = 1.0, heuristic: bool = True) -> Plan:
+             power: float = 1.0, rho_T: float = 1.0, heuristic: bool = True) -> Plan:
         """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
-        (``none``: shortest and fastest only) with trade-off ``weight`` (lambda)."""
+        (``none``: shortest and fastest only) raised to ``power``, with trade-off ``weight``
+        (lambda)."""
         start, goal = as_pose(start, "start"), as_pose(goal, "goal")
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
-        layer = self.cost_layer(metric)
+        layer = self.cost_layer(metric, power)
         cost = None if metric == "none" else GridField(layer.filled, self.esdf.x0, self.esdf.y0, self.esdf.res)
         piece_length, corners = 2.0, False
         if robot.kind == "car" and robot.min_turn_radius > 0:
