@@ -16,6 +16,7 @@ from rich.table import Table
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
+from lf3pm.terrain import DEFAULT_HEIGHT
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
@@ -356,7 +357,7 @@ def solm_build(
                                                "(faster, approximate; docs/solm.md)."),
     ray_stride: int = typer.Option(1, help="Cast every K-th azimuth column of the pattern and scale "
                                            "the Gram (about K times faster, approximate; docs/solm.md)."),
-    height: float = typer.Option(1.0, help="Sensor height above the local ground (r2, se2), m."),
+    height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the local ground (r2, se2), m."),
     bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
         None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
     robot_radius: float = typer.Option(0.3, help="Robot radius for the obstacle mask (m)."),

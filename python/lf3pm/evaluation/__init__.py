@@ -9,9 +9,10 @@
 """
 
 from lf3pm.evaluation.mde import MdeResult, RegistrationTarget, mde
-from lf3pm.evaluation.odometry import OdometryResult, replay_odometry
+from lf3pm.evaluation.odometry import replay_odometry
+from lf3pm.evaluation.replay_result import ReplayResult
 from lf3pm.evaluation.trajectory import interpolate_poses, sample_trajectory
 from lf3pm.evaluation.trajectory_mde import TrajectoryMde, mde_along, pose_seed
 
-__all__ = ["MdeResult", "OdometryResult", "RegistrationTarget", "TrajectoryMde", "interpolate_poses",
+__all__ = ["MdeResult", "RegistrationTarget", "ReplayResult", "TrajectoryMde", "interpolate_poses",
            "mde", "mde_along", "pose_seed", "replay_odometry", "sample_trajectory"]
