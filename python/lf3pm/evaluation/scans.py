@@ -35,7 +35,8 @@ class ScanStream(Sequence):
     ``end``, ``points`` and ``stamps`` (absolute firing times) are what an
     odometry consumes. ``distortion=False`` casts every ray of a scan from the
     pose at its end instead. ``truth`` (M, 4, 4) holds the pose at each
-    scan's end, ``times`` (M,) the ends; ``seconds`` the simulation time so far."""
+    scan's end, ``times`` (M,) the ends; ``seconds`` the simulation time so far
+    and ``hits`` (M,) the returns of each scan simulated so far (-1: not yet)."""
 
     def __init__(self, map: Map, motion, sensor: Sensor, *, rate: float = 10.0, seed: int = 0,
                  noise: float | None = None, distortion: bool = True, threads: int = 0):
@@ -56,6 +57,7 @@ class ScanStream(Sequence):
         self.times = motion.t0 + np.arange(count) / self.rate
         self.truth = motion.pose(self.times)
         self.seconds = 0.0
+        self.hits = np.full(count, -1, dtype=np.int64)
 
     def __len__(self) -> int:
         return len(self.times)
@@ -82,4 +84,5 @@ class ScanStream(Sequence):
                               reference=self.truth[k], reference_points=raw["sensor_points"],
                               world_points=raw["world_points"], ray=raw["ray"])
         self.seconds += time.perf_counter() - start
+        self.hits[k] = len(scan.points)
         return scan
