@@ -361,7 +361,7 @@ def replay_command(
         if bag is not None:
             if os.path.lexists(bag):
                 raise Lf3pmError(f"{bag} exists: a bag is a new directory and lf3pm replaces nothing there")
-            lio_modules()  # the bag carries the simulated IMU
+            lio_modules("--bag (it carries the simulated IMU)")
         if method == "lio":
             lio_modules()
         from lf3pm.evaluation.motion import Motion

@@ -129,13 +129,14 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method
                                  versions=versions)
 
 
-def lio_modules():
-    """(simulate_imu, run_lio), or Lf3pmError when the LIO is not available."""
+def lio_modules(needed_by: str = "method lio"):
+    """(simulate_imu, run_lio), or Lf3pmError (naming what ``needed_by`` them)
+    when the IMU simulation or the LIO is not available."""
     try:
         from lf3pm.evaluation.imu import simulate_imu
         from lf3pm.evaluation.lio import run_lio
     except ImportError as err:
-        raise Lf3pmError(f"method lio is not available: {err}") from None
+        raise Lf3pmError(f"{needed_by} is not available: {err}") from None
     return simulate_imu, run_lio
 
 
