@@ -110,6 +110,10 @@ def test_smooth_ground_stays_near_the_true_ground_beside_an_obstacle(rough):
     x, y = -9 + 1.5 * t, np.zeros_like(t)
     motion = Motion.from_arrays(t, x, y, np.zeros_like(t), np.full_like(t, 1.5), 0 * t, 0 * t, map=rough)
     p = motion.position(t)
+    # z is held as a polynomial in time through g(x(t), y(t)) + height every 10 ms.
+    between = np.random.default_rng(2).uniform(0, 12, 500)
+    q = motion.position(between)
+    np.testing.assert_allclose(q[:, 2], motion.ground.height(q[:, 0], q[:, 1]) + DEFAULT_HEIGHT, atol=1e-7)
     height_above_ground = p[:, 2] - terrain(x, y)
     assert np.max(np.abs(height_above_ground - DEFAULT_HEIGHT)) < 0.05
     assert np.max(np.abs(motion.acceleration(t)[:, 2])) < 0.3
