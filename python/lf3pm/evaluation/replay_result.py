@@ -145,10 +145,12 @@ class ReplayResult:
 
 
 def _clean(value):
-    """JSON-ready: dicts recursively without per-pose lists, numpy scalars as
-    Python numbers, non-finite floats as None."""
+    """JSON-ready: dicts recursively without per-pose lists, numpy arrays as
+    lists and scalars as Python numbers, non-finite floats as None."""
     if isinstance(value, dict):
         return {k: _clean(v) for k, v in value.items() if k not in ("errors", "alignment")}
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
     if isinstance(value, (list, tuple)):
         return [_clean(v) for v in value]
     if isinstance(value, np.generic):
