@@ -41,7 +41,7 @@ def test_json_with_two_seeds_and_a_png(files, tmp_path):
     assert out["method"] == "localization" and out["seeds"] == [3, 4] and len(out["runs"]) == 2
     run = out["runs"][0]
     assert run["scans"] == 21 and run["ape"]["rmse"] < 0.02 and run["params"]["rate"] == 10.0
-    assert out["median"]["APE"] == pytest.approx(np.median([r["ape"]["rmse"] for r in out["runs"]]))
+    assert out["median"]["ape_rmse"] == pytest.approx(np.median([r["ape"]["rmse"] for r in out["runs"]]))
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

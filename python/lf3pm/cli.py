@@ -415,22 +415,24 @@ def replay_command(
                           highlight=False)
 
 
-_REPLAY_COLUMNS = (("APE", lambda r: r.ape["rmse"]), ("APE max", lambda r: r.ape["max"]),
-                   ("aligned", lambda r: r.ape_aligned["rmse"]),
-                   ("RPE scan", lambda r: r.rpe_frame["translation"]["rmse"]),
-                   ("RPE deg", lambda r: r.rpe_frame["rotation_deg"]["rmse"]),
-                   ("RPE 1 m", lambda r: r.rpe_metre["translation"]["rmse"]),
-                   ("degen", lambda r: int(r.degenerate.sum())), ("skip", lambda r: len(r.skipped)),
-                   ("scans/s", lambda r: r.scans_per_second["total"]))
+#: (JSON key, table header, value) of each figure the replay reports per seed.
+_REPLAY_COLUMNS = (("ape_rmse", "APE", lambda r: r.ape["rmse"]), ("ape_max", "APE max", lambda r: r.ape["max"]),
+                   ("ape_aligned_rmse", "aligned", lambda r: r.ape_aligned["rmse"]),
+                   ("rpe_scan_rmse", "RPE scan", lambda r: r.rpe_frame["translation"]["rmse"]),
+                   ("rpe_scan_deg_rmse", "RPE deg", lambda r: r.rpe_frame["rotation_deg"]["rmse"]),
+                   ("rpe_metre_rmse", "RPE 1 m", lambda r: r.rpe_metre["translation"]["rmse"]),
+                   ("degenerate_scans", "degen", lambda r: int(r.degenerate.sum())),
+                   ("skipped_scans", "skip", lambda r: len(r.skipped)),
+                   ("scans_per_second", "scans/s", lambda r: r.scans_per_second["total"]))
 
 
 def _replay_medians(results) -> dict:
     """Median over seeds of each reported figure (None where no seed has it)."""
     out = {}
-    for name, get in _REPLAY_COLUMNS:
+    for key, _, get in _REPLAY_COLUMNS:
         values = np.array([get(r) for r in results], dtype=float)
         values = values[np.isfinite(values)]
-        out[name] = float(np.median(values)) if len(values) else None
+        out[key] = float(np.median(values)) if len(values) else None
     return out
 
 
@@ -440,14 +442,14 @@ def _print_replay(results, summary: dict) -> None:
                         f"{first.params['rate']:g} Hz (rmse in m; RPE deg per scan)", box=box.SIMPLE_HEAD,
                   collapse_padding=True, pad_edge=False)
     table.add_column("seed")
-    for name, _ in _REPLAY_COLUMNS:
-        table.add_column(name, justify="right")
+    for _, header, _ in _REPLAY_COLUMNS:
+        table.add_column(header, justify="right")
     show = lambda v: "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else (
         str(v) if isinstance(v, int) else f"{v:.3g}")
     for r in results:
-        table.add_row(str(r.seed), *(show(get(r)) for _, get in _REPLAY_COLUMNS))
+        table.add_row(str(r.seed), *(show(get(r)) for _, _, get in _REPLAY_COLUMNS))
     if len(results) > 1:
-        table.add_row("median", *(show(summary[name]) for name, _ in _REPLAY_COLUMNS))
+        table.add_row("median", *(show(summary[key]) for key, _, _ in _REPLAY_COLUMNS))
     console.print(table)
 
 
