@@ -61,8 +61,9 @@ from lf3pm.sensors import Sensor
 SCAN_VOXEL = 0.25
 #: Largest standard deviation (m) range noise may leave in a direction that still
 #: counts as constrained. With sigma = 1.5 cm it takes (sigma / bound)^2 = 2.25
-#: points perfectly aligned with a direction to constrain it; a real corridor's
-#: axis has none (scaled eigenvalue ~1e-9), its other directions thousands.
+#: points perfectly aligned with a direction to constrain it. Measured: 1.9-2.4 mm
+#: in the worst direction of the boxes scene, 3.3 cm along a corridor's axis (the
+#: estimated normals at its wall-floor junctions carry a little information).
 DEGENERATE_STD = 0.01
 #: Correspondence gate (m) and iterations: small_gicp's usual values for
 #: registering a scan to a map from a prior good to a few tens of centimetres.
