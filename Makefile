@@ -39,6 +39,7 @@ bench: build
 	$(PY) bench/bench_esdf.py
 	$(PY) bench/bench_planner_backend.py
 	$(PY) bench/bench_odometry_replay.py
+	$(PY) bench/bench_replay.py
 
 clean:
 	rm -rf build out $(VENV)

@@ -12,6 +12,7 @@ from analytic_scenes import grid_plane
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.evaluation.moving_scan import firing_fractions, simulate_moving_scan
+from lf3pm.evaluation.trajectory import LinearMotion
 from lf3pm.pose import pose_matrices, pose_matrix
 from lf3pm.sensors import get_sensor
 
@@ -35,7 +36,8 @@ def scan_along(index, sensor, start, end, noise=0.0, seed=3, stream=2):
     """The scan ending at t = 1 s while the sensor goes from pose ``start`` (x y z yaw)
     at t = 1 - PERIOD to ``end`` at t = 1 at constant velocity."""
     t = np.array([1.0 - PERIOD, 1.0])
-    return simulate_moving_scan(index, t, np.array([start, end], dtype=float), 1.0, PERIOD, sensor.directions,
+    motion = LinearMotion(t, np.array([start, end], dtype=float))
+    return simulate_moving_scan(index, motion, 1.0, PERIOD, sensor.directions,
                                 sensor.min_range, sensor.max_range, noise=noise, seed=seed, stream=stream)
 
 
@@ -120,7 +122,8 @@ def test_kiss_icp_deskewing_recovers_the_reference_frame(wall, mid70, start):
 
 def test_bad_period(wall, mid70):
     with pytest.raises(Lf3pmError, match="period"):
-        simulate_moving_scan(wall, [0.0, 1.0], [[0, 0, 0, 0]] * 2, 1.0, 0.0, mid70.directions, 0.1, 100.0)
+        simulate_moving_scan(wall, LinearMotion([0.0, 1.0], [[0, 0, 0, 0]] * 2), 1.0, 0.0, mid70.directions,
+                             0.1, 100.0)
     with pytest.raises(ValueError, match="one pose per ray"):
         _core.simulate_moving_scan(wall, np.broadcast_to(np.eye(4), (3, 4, 4)).copy(), mid70.directions[:2],
                                    0.1, 100.0)

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional, Tuple
 
 import numpy as np
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
 
@@ -17,6 +19,7 @@ from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
 from lf3pm.planner.robots import DEFAULTS as ROBOT
+from lf3pm.terrain import DEFAULT_HEIGHT
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
@@ -326,6 +329,135 @@ def plan(
                           f"{summary['optimize_s'] * 1e3:.0f} ms")
 
 
+@app.command("replay")
+def replay_command(
+    trajectory: Path = typer.Argument(..., metavar="TRAJ.csv", help="Trajectory CSV as `lf3pm plan` writes it."),
+    map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
+    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
+    method: str = typer.Option("localization", help="localization (prior map), lio or odometry (KISS-ICP)."),
+    seeds: int = typer.Option(1, help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seed: int = typer.Option(0, help="First seed (range noise, odometry and IMU noise)."),
+    height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the smoothed ground (m)."),
+    rate: float = typer.Option(10.0, help="Scans per second."),
+    noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
+    threads: int = typer.Option(0, help="Scan simulation threads (0 = all cores)."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
+    bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
+                                       help="ROS 2 bag (directory) of the first seed's simulated stream."),
+):
+    """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
+    with user_errors():
+        from lf3pm.atomic import check_replaceable
+        from lf3pm.evaluation.replay import check_method, lio_modules, resolve_sensor
+
+        check_method(method, {})
+        if not (math.isfinite(rate) and rate > 0):
+            raise Lf3pmError(f"--rate must be a number > 0 Hz, got {rate}")
+        if not (math.isfinite(height) and height > 0):
+            raise Lf3pmError(f"--height must be a number > 0 m, got {height}")
+        if seeds < 1:
+            raise Lf3pmError(f"--seeds must be >= 1, got {seeds}")
+        if noise is not None and not (math.isfinite(noise) and noise >= 0):
+            raise Lf3pmError(f"--noise must be a number >= 0 m, got {noise}")
+        lidar = resolve_sensor(sensor, rate)
+        if png is not None:
+            check_replaceable(png)
+        if bag is not None:
+            if os.path.lexists(bag):
+                raise Lf3pmError(f"{bag} exists: a bag is a new directory and lf3pm replaces nothing there")
+            lio_modules("--bag (it carries the simulated IMU)")
+        if method == "lio":
+            lio_modules()
+        from lf3pm.evaluation.motion import Motion
+        from lf3pm.evaluation.replay import METHOD_PARAMS, replay, simulated_imu
+        from lf3pm.map import load_map
+        from lf3pm.planner.trajectory import read_csv
+
+        samples = read_csv(trajectory)
+        world = load_map(map_path, threads=threads)
+        motion = Motion.from_arrays(samples["t"], samples["x"], samples["y"], samples["yaw"], samples["vx"],
+                                    samples["vy"], samples["omega"], map=world, height=height)
+        target = None
+        if method == "localization":
+            from lf3pm.evaluation.mde import RegistrationTarget
+
+            target = RegistrationTarget(world, threads=threads)
+        results = []
+        with progress_bar() as step:
+            for s in range(seed, seed + seeds):
+                label = f"{method} replay, seed {s}"
+                step(label, None, 0, restart=True)
+                results.append(replay(world, motion, lidar, method, s, rate=rate, noise=noise, target=target,
+                                      threads=threads, progress=lambda done, total: step(label, total)))
+            bag_info = None
+            if bag is not None:
+                from lf3pm.evaluation.bag import write_bag
+                from lf3pm.evaluation.scans import ScanStream
+
+                scans = ScanStream(world, motion, lidar, rate=rate, seed=seed, noise=noise, threads=threads)
+                imu = simulated_imu(motion, seed, METHOD_PARAMS["lio"])
+                step(f"writing {bag}", len(scans), 0, restart=True)
+                bag_info = write_bag(bag, scans, imu, progress=lambda done, total: step(f"writing {bag}", total))
+        if png is not None:
+            from lf3pm.evaluation.replay_figures import replay_figure
+
+            replay_figure(results, png, map_points=world.points,
+                          title=f"lf3pm replay {trajectory.name}: {method}, {lidar.name}, {rate:g} Hz")
+        summary = _replay_medians(results)
+        if as_json:
+            print(json.dumps({"trajectory": str(trajectory), "map": str(map_path), "method": method,
+                              "sensor": lidar.name, "seeds": [r.seed for r in results],
+                              "runs": [r.to_dict() for r in results], "median": summary,
+                              "png": None if png is None else str(png), "bag": bag_info}))
+            return
+        _print_replay(results, summary)
+        if png is not None:
+            console.print(f"wrote {png}", highlight=False)
+        if bag_info is not None:
+            counts = ", ".join(f"{topic} {n}" for topic, n in bag_info["topics"].items())
+            console.print(f"wrote {bag} (ROS 2 bag, sqlite3, {bag_info['point_layout']} points): {counts}",
+                          highlight=False)
+
+
+#: (JSON key, table header, value) of each figure the replay reports per seed.
+_REPLAY_COLUMNS = (("ape_rmse", "APE", lambda r: r.ape["rmse"]), ("ape_max", "APE max", lambda r: r.ape["max"]),
+                   ("ape_aligned_rmse", "aligned", lambda r: r.ape_aligned["rmse"]),
+                   ("rpe_scan_rmse", "RPE scan", lambda r: r.rpe_frame["translation"]["rmse"]),
+                   ("rpe_scan_deg_rmse", "RPE deg", lambda r: r.rpe_frame["rotation_deg"]["rmse"]),
+                   ("rpe_metre_rmse", "RPE 1 m", lambda r: r.rpe_metre["translation"]["rmse"]),
+                   ("degenerate_scans", "degen", lambda r: int(r.degenerate.sum())),
+                   ("skipped_scans", "skip", lambda r: len(r.skipped)),
+                   ("scans_per_second", "scans/s", lambda r: r.scans_per_second["total"]))
+
+
+def _replay_medians(results) -> dict:
+    """Median over seeds of each reported figure (None where no seed has it)."""
+    out = {}
+    for key, _, get in _REPLAY_COLUMNS:
+        values = np.array([get(r) for r in results], dtype=float)
+        values = values[np.isfinite(values)]
+        out[key] = float(np.median(values)) if len(values) else None
+    return out
+
+
+def _print_replay(results, summary: dict) -> None:
+    first = results[0]
+    table = Table(title=f"replay: {first.method}, {first.sensor}, {first.scans} scans at "
+                        f"{first.params['rate']:g} Hz (rmse in m; RPE deg per scan)", box=box.SIMPLE_HEAD,
+                  collapse_padding=True, pad_edge=False)
+    table.add_column("seed")
+    for _, header, _ in _REPLAY_COLUMNS:
+        table.add_column(header, justify="right")
+    show = lambda v: "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else (
+        str(v) if isinstance(v, int) else f"{v:.3g}")
+    for r in results:
+        table.add_row(str(r.seed), *(show(get(r)) for _, _, get in _REPLAY_COLUMNS))
+    if len(results) > 1:
+        table.add_row("median", *(show(summary[key]) for key, _, _ in _REPLAY_COLUMNS))
+    console.print(table)
+
+
 @contextmanager
 def progress_bar():
     """A rich progress bar on stderr; yields step(label, total, advance=1, restart=False)
@@ -361,7 +493,7 @@ def solm_build(
                                                "(faster, approximate; docs/solm.md)."),
     ray_stride: int = typer.Option(1, help="Cast every K-th azimuth column of the pattern and scale "
                                            "the Gram (about K times faster, approximate; docs/solm.md)."),
-    height: float = typer.Option(1.0, help="Sensor height above the local ground (r2, se2), m."),
+    height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the local ground (r2, se2), m."),
     bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
         None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
     robot_radius: float = typer.Option(0.3, help="Robot radius for the obstacle mask (m)."),

@@ -10,8 +10,8 @@ over the period: ray i at fraction
 
 of the period, the last ray at the scan's reference time ``end`` and the first
 one ray interval after the previous scan's last. Ray i is cast from the pose
-interpolated at end - (1 - f_i) * period; before the trajectory's first time
-the sensor stands at its first pose (and after the last at the last).
+at end - (1 - f_i) * period; before the trajectory's first time the sensor
+stands at its first pose (and after the last at the last).
 
 KISS-ICP (``register_frame(points, timestamps)`` with ``data.deskew``) takes
 these per-ray points and f_i as timestamps: it rescales the timestamps to
@@ -29,28 +29,34 @@ import numpy as np
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.trajectory import check_trajectory, interpolate_poses
-from lf3pm.pose import pose_matrices
 
 
 @dataclass(frozen=True)
 class MovingScan:
     """The hits of one moving scan, in emission order.
 
-    ``points`` (H, 3): each in the sensor frame of its own firing (what the
-    sensor reports); ``timestamps`` (H,): firing time as a fraction of the scan
-    period, in (0, 1], increasing; ``reference`` (4, 4): the sensor-to-world
-    pose at the scan's reference time (its last ray); ``reference_points``
-    (H, 3): the hits in that frame (a perfectly deskewed scan);
-    ``world_points`` (H, 3); ``ray`` (H,): index of the sensor ray.
+    ``end`` (s): the scan's reference time, its last ray's; ``period`` (s): the
+    rays fire over (end - period, end]; ``points`` (H, 3): each hit in the
+    sensor frame of its own firing (what the sensor reports); ``timestamps``
+    (H,): firing time as a fraction of the period, in (0, 1], increasing;
+    ``reference`` (4, 4): the sensor-to-world pose at ``end``;
+    ``reference_points`` (H, 3): the hits in that frame (a perfectly deskewed
+    scan); ``world_points`` (H, 3); ``ray`` (H,): index of the sensor ray.
     """
 
+    end: float
+    period: float
     points: np.ndarray
     timestamps: np.ndarray
     reference: np.ndarray
     reference_points: np.ndarray
     world_points: np.ndarray
     ray: np.ndarray
+
+    @property
+    def stamps(self) -> np.ndarray:
+        """Absolute firing time of each hit (s), non-decreasing."""
+        return self.end - (1.0 - self.timestamps) * self.period
 
 
 def firing_fractions(count: int) -> np.ndarray:
@@ -61,25 +67,26 @@ def firing_fractions(count: int) -> np.ndarray:
     return np.arange(1, count + 1, dtype=np.float64) / count
 
 
-def simulate_moving_scan(index: _core.MapIndex, t, poses, end: float, period: float, directions,
+def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: float, directions,
                          min_range: float, max_range: float, *, noise: float = 0.0, seed: int = 0,
                          stream: int = 0, threads: int = 0) -> MovingScan:
     """The scan whose rays (``directions`` (K, 3), emission order) fire over
-    (end - period, end] while the sensor follows the trajectory (t (N,), poses
-    (N, 4) of x y z yaw). Noise as ``_core.simulate_scan``'s: ray k gets the same
-    range noise under the same seed and stream whatever the motion.
+    (end - period, end] while the sensor follows ``motion`` (anything with
+    ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:
+    lf3pm.evaluation.motion.Motion, lf3pm.evaluation.trajectory.LinearMotion).
+    Noise as ``_core.simulate_scan``'s: ray k gets the same range noise under
+    the same seed and stream whatever the motion.
     """
     if not (np.isfinite(period) and period > 0):
         raise Lf3pmError(f"the scan period must be > 0 s, got {period}")
     directions = np.ascontiguousarray(directions, dtype=np.float64)
     fractions = firing_fractions(len(directions))
-    t, poses = check_trajectory(t, poses)
-    times = np.clip(end - (1.0 - fractions) * period, t[0], t[-1])
-    ray_poses = pose_matrices(interpolate_poses(t, poses, times))
+    ray_poses = np.ascontiguousarray(motion.pose(end - (1.0 - fractions) * period))
     scan = _core.simulate_moving_scan(index, ray_poses, directions, min_range, max_range, noise=noise,
                                       seed=int(seed), stream=int(stream), threads=threads)
     reference = ray_poses[-1]  # the last ray fires at the reference time
     world = scan["world_points"]
-    return MovingScan(points=scan["sensor_points"], timestamps=fractions[scan["ray"]], reference=reference,
+    return MovingScan(end=float(end), period=float(period), points=scan["sensor_points"],
+                      timestamps=fractions[scan["ray"]], reference=reference,
                       reference_points=(world - reference[:3, 3]) @ reference[:3, :3],
                       world_points=world, ray=scan["ray"])

@@ -71,3 +71,21 @@ def sample_trajectory(t, x, y, yaw, *, every: float = 1.0, by: str = "time",
     else:
         raise Lf3pmError(f"sample by 'time' or 'distance', got {by!r}")
     return times, interpolate_poses(t, poses, np.minimum(times, t[-1]))
+
+
+class LinearMotion:
+    """Poses between samples (t (N,), poses (N, 4) of x y z yaw) by
+    :func:`interpolate_poses`, held at the end poses outside [t0, t1]: the
+    sampled trajectories ``mde_along`` and ``replay_odometry`` take, with the
+    ``t0``, ``t1`` and ``pose(times)`` of :class:`lf3pm.evaluation.motion.Motion`."""
+
+    def __init__(self, t, poses):
+        self.samples, self.poses = check_trajectory(t, poses)
+        self.t0, self.t1 = float(self.samples[0]), float(self.samples[-1])
+
+    def pose(self, times) -> np.ndarray:
+        """Sensor-to-world matrices (n, 4, 4) at ``times``."""
+        from lf3pm.pose import pose_matrices
+
+        times = np.clip(np.atleast_1d(np.asarray(times, dtype=np.float64)), self.t0, self.t1)
+        return pose_matrices(interpolate_poses(self.samples, self.poses, times))

@@ -115,3 +115,50 @@ def _powers(c, tau, order: int):
     else:
         basis = [np.zeros_like(tau), np.zeros_like(tau), np.full_like(tau, 2.0), 6 * tau]
     return np.einsum("nk,nkd->nd", np.stack(basis, axis=1), c)
+
+
+def read_csv(path) -> dict:
+    """Reads a trajectory CSV as :meth:`Trajectory.to_csv` writes it: a header naming
+    at least the columns ``t,x,y,yaw,vx,vy,omega`` (any order, extra columns
+    ignored), then one row of numbers per sample. Returns a dict of float64
+    arrays by column name. Raises Lf3pmError, naming the line, for a missing
+    or unreadable file, a missing column, a row of the wrong length, a field
+    that is not a number, a non-finite value, fewer than 2 rows or times that
+    do not increase strictly."""
+    try:
+        with open(path, encoding="utf-8") as fp:
+            lines = fp.read().splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise Lf3pmError(f"{path}: cannot read the trajectory ({getattr(err, 'strerror', None) or err})") from None
+    lines = [(n, line) for n, line in enumerate(lines, start=1) if line.strip()]
+    if not lines:
+        raise Lf3pmError(f"{path}: empty file, expected a header {','.join(CSV_COLUMNS)}")
+    header = [name.strip() for name in lines[0][1].split(",")]
+    missing = [c for c in CSV_COLUMNS if c not in header]
+    if missing:
+        raise Lf3pmError(f"{path}: the header lacks the column(s) {', '.join(missing)} "
+                         f"(expected {','.join(CSV_COLUMNS)})")
+    rows = []
+    for n, line in lines[1:]:
+        fields = line.split(",")
+        if len(fields) != len(header):
+            raise Lf3pmError(f"{path}:{n}: {len(fields)} fields, the header has {len(header)}")
+        try:
+            rows.append([float(f) for f in fields])
+        except ValueError:
+            raise Lf3pmError(f"{path}:{n}: a field is not a number: {line.strip()[:80]!r}") from None
+    if len(rows) < 2:
+        raise Lf3pmError(f"{path}: {len(rows)} sample(s); a trajectory needs at least 2")
+    table = np.asarray(rows, dtype=np.float64)
+    used = [header.index(c) for c in CSV_COLUMNS]
+    bad = ~np.isfinite(table[:, used])
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: {CSV_COLUMNS[c]} is not finite ({table[r, used[c]]})")
+    out = {c: table[:, header.index(c)].copy() for c in CSV_COLUMNS}
+    step = np.diff(out["t"])
+    if np.any(step <= 0):
+        r = int(np.argmax(step <= 0)) + 1
+        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: time {out['t'][r]:g} does not follow "
+                         f"{out['t'][r - 1]:g}: times must increase strictly")
+    return out

@@ -72,11 +72,11 @@ from pathlib import Path
 
 from lf3pm.errors import SensorError
 
-from ._model import Sensor
+from ._model import Sensor, spinning_rings
 from ._presets import DEFAULT_INTEGRATION_TIME, PRESET_NAMES, find_preset, presets
 from ._yaml import load_sensor_yaml
 
-__all__ = ["Sensor", "SensorError", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES",
+__all__ = ["Sensor", "SensorError", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES", "spinning_rings",
            "DEFAULT_INTEGRATION_TIME"]
 
 

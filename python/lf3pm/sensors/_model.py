@@ -209,3 +209,19 @@ def pattern_directions(pattern: np.ndarray, count: int, start: int = 0) -> np.nd
     idx = (start + np.arange(count)) % pattern.shape[0]
     rows = pattern[idx]
     return directions_from_angles(rows[:, 0], rows[:, 1])
+
+
+def spinning_rings(sensor: Sensor) -> np.ndarray | None:
+    """Ring (beam) index of every ray (K,) of a spinning sensor, 0 for its lowest
+    beam; None for a sensor whose rays do not come in columns of one set of
+    beams (Livox patterns). A spinning sensor lists its rays column by column,
+    the beams of a column sharing one azimuth."""
+    azimuth, elevation = sensor.angles()
+    same = np.abs(np.angle(np.exp(1j * (azimuth - azimuth[0])))) < 1e-9
+    beams = int(np.argmin(same)) if not same.all() else len(same)
+    if sensor.num_rays % beams:
+        return None
+    columns = elevation.reshape(-1, beams)
+    if not np.allclose(columns, columns[0], atol=1e-9):
+        return None
+    return np.tile(np.argsort(np.argsort(columns[0], kind="stable"), kind="stable"), len(columns))

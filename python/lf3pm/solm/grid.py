@@ -17,6 +17,7 @@ import numpy as np
 
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map
+from lf3pm.terrain import DEFAULT_HEIGHT
 
 SPACES = ("r2", "se2", "r3")
 
@@ -33,7 +34,7 @@ class SolmGrid:
     ny: int
     yaw_bins: int = 1
     z_levels: tuple = ()
-    height: float = 1.0
+    height: float = DEFAULT_HEIGHT
 
     @property
     def shape(self) -> tuple:
@@ -62,7 +63,7 @@ class SolmGrid:
 
 
 def make_grid(world: Map, space: str, res: float, *, bounds=None, yaw_bins: int = 36,
-              height: float = 1.0, z_levels=None) -> SolmGrid:
+              height: float = DEFAULT_HEIGHT, z_levels=None) -> SolmGrid:
     """The grid over ``bounds`` (xmin, ymin, xmax, ymax; default the map's extent)."""
     if space not in SPACES:
         raise Lf3pmError(f"unknown space {space!r}; use one of {', '.join(SPACES)}")

@@ -1,0 +1,177 @@
+"""``replay``: a planned trajectory replayed with simulated sensors through a
+state estimator, scored against the truth (docs/replay.md).
+
+One scan stream (scans.py) along one motion (motion.py) feeds the method:
+
+- ``localization``: registration to the prior map from a wheel-odometry
+  prediction, keeping the prediction where registration is degenerate
+  (localization.py) -- the deployment a SOLM is made for;
+- ``lio``: a simulated IMU (imu.py) and the scans through a LiDAR-inertial
+  odometry from PyPI (lio.py);
+- ``odometry``: LiDAR-only KISS-ICP (odometry.py).
+
+Every method starts at the true first pose and returns a :class:`ReplayResult`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+
+from lf3pm.errors import Lf3pmError
+from lf3pm.evaluation.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
+                                           MIN_POINTS, SCAN_VOXEL, WheelOdometry, localization_params, localize)
+from lf3pm.evaluation.mde import RegistrationTarget
+from lf3pm.evaluation.motion import Motion
+from lf3pm.evaluation.odometry import kiss_icp_params, run_kiss_icp
+from lf3pm.evaluation.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.evaluation.scans import ScanStream
+from lf3pm.map import Map, load_map
+from lf3pm.sensors import Sensor, get_sensor, spinning_rings
+from lf3pm.terrain import DEFAULT_HEIGHT
+
+METHODS = ("localization", "lio", "odometry")
+
+#: Each method's parameters and defaults (docs/replay.md says why).
+METHOD_PARAMS = {
+    "localization": {"scale_error": WheelOdometry.scale_error, "yaw_noise": WheelOdometry.yaw_noise,
+                     "scan_voxel": SCAN_VOXEL, "degenerate_std": DEGENERATE_STD, "remap": True,
+                     "max_correspondence_distance": MAX_CORRESPONDENCE_DISTANCE,
+                     "max_iterations": MAX_ITERATIONS, "min_points": MIN_POINTS, "registration_threads": 1},
+    "odometry": {"voxel_size": 1.0, "min_points": 100, "deskew": True},
+    "lio": {"imu_rate": 200.0, "imu_preset": None, "imu_noise": True},
+}
+
+
+def resolve_sensor(sensor: Sensor | str, rate: float) -> Sensor:
+    """The sensor of a replay at ``rate`` Hz: a non-repetitive (Livox or pattern)
+    sensor integrates over one period, 1 / rate s; a spinning sensor keeps its
+    columns (its model is one revolution whatever the rate)."""
+    if isinstance(sensor, Sensor):
+        return sensor
+    base = get_sensor(sensor)
+    if spinning_rings(base) is not None or not (math.isfinite(rate) and rate > 0):
+        return base
+    return get_sensor(sensor, integration_time=1.0 / rate)
+
+
+def check_method(method: str, params: dict) -> dict:
+    """The method's parameters: its defaults updated by ``params``. Raises
+    Lf3pmError for an unknown method or parameter."""
+    if method not in METHODS:
+        raise Lf3pmError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
+    defaults = METHOD_PARAMS[method]
+    unknown = sorted(set(params) - set(defaults))
+    if unknown and method != "lio":  # the LIO passes the rest to run_lio
+        raise Lf3pmError(f"unknown parameter(s) for {method}: {', '.join(unknown)}; "
+                         f"known: {', '.join(defaults)}")
+    return {**defaults, **params}
+
+
+def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method: str = "localization",
+           seed: int = 0, *, rate: float = 10.0, height: float = DEFAULT_HEIGHT, noise: float | None = None,
+           target: RegistrationTarget | None = None, threads: int = 0, progress=None, **params) -> ReplayResult:
+    """Replays a trajectory with ``method`` (module docstring) and scores it.
+
+    ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion` or the
+    CSV ``lf3pm plan`` writes (the sensor ``height`` m above the smooth ground).
+    ``sensor``: a preset name, YAML file or Sensor. ``seed``: the scans' range
+    noise (scan k: stream k), the wheel odometry's and the IMU's noise.
+    ``rate``: scans per second. ``noise``: range noise sigma (m; default the
+    sensor's). ``target``: the map prepared for registration (localization),
+    reusable across replays of one map. ``threads``: scan simulation (0 = all
+    cores). ``progress(done, total)`` is called after each scan. ``params``:
+    the method's own (``METHOD_PARAMS``; lio passes unknown ones to run_lio).
+    Raises Lf3pmError for bad input.
+    """
+    params = check_method(method, params)
+    if not (math.isfinite(rate) and rate > 0):
+        raise Lf3pmError(f"the scan rate must be > 0 Hz, got {rate}")
+    if not isinstance(map, Map):
+        map = load_map(map)
+    sensor = resolve_sensor(sensor, rate)
+    if isinstance(motion_or_csv, Motion):
+        motion = motion_or_csv
+    elif isinstance(motion_or_csv, (str, os.PathLike)):
+        motion = Motion.from_csv(motion_or_csv, map, height=height)
+    else:
+        raise Lf3pmError(f"replay takes a Motion or a trajectory CSV, got {type(motion_or_csv).__name__}")
+    scans = ScanStream(map, motion, sensor, rate=rate, seed=seed, noise=noise, threads=threads)
+    common = {"rate": float(rate), "seed": int(seed), "noise": scans.noise, "noise_stream": "scan index",
+              "height": motion.height, "ground": {"cell": motion.ground.cell,
+                                                  "smoothing": motion.ground.smoothing,
+                                                  "max_step": motion.ground.max_step},
+              "span_s": [motion.t0, motion.t1]}
+    if method == "localization":
+        if target is None:
+            target = RegistrationTarget(map, threads=threads)
+        elif target.map_sha256 != map.sha256:
+            raise Lf3pmError("the registration target was prepared from another map")
+        odometry = WheelOdometry(params["scale_error"], params["yaw_noise"])
+        settings = {k: params[k] for k in ("scan_voxel", "degenerate_std", "remap",
+                                           "max_correspondence_distance", "max_iterations", "min_points")}
+        run = localize(scans, target, sensor, odometry=odometry, seed=seed, threads=params["registration_threads"],
+                       progress=progress, **settings)
+        method_params = localization_params(odometry, **settings)
+        versions = library_versions("small_gicp")
+    elif method == "odometry":
+        run = run_kiss_icp(scans, sensor, scans.truth[0], voxel_size=params["voxel_size"],
+                           deskew=params["deskew"], min_points=params["min_points"], threads=threads,
+                           progress=progress)
+        method_params = {"min_points": params["min_points"],
+                         "kiss_icp": kiss_icp_params(sensor, params["voxel_size"], params["deskew"])}
+        versions = library_versions("kiss-icp")
+    else:
+        run, method_params, versions = _lio(scans, motion, sensor, seed, params)
+    return ReplayResult.from_run(run, method=method, sensor=sensor.name, seed=int(seed), scans=scans,
+                                 params={**common, method: method_params}, map_sha256=map.sha256,
+                                 versions=versions)
+
+
+def lio_modules(needed_by: str = "method lio"):
+    """(simulate_imu, run_lio), or Lf3pmError (naming what ``needed_by`` them)
+    when the IMU simulation or the LIO is not available."""
+    try:
+        from lf3pm.evaluation.imu import simulate_imu
+        from lf3pm.evaluation.lio import run_lio
+    except ImportError as err:
+        raise Lf3pmError(f"{needed_by} is not available: {err}") from None
+    return simulate_imu, run_lio
+
+
+def simulated_imu(motion: Motion, seed: int, params: dict):
+    """The IMU stream of a replay (the same for the LIO and the bag)."""
+    simulate_imu, _ = lio_modules()
+    options = {"rate": float(params["imu_rate"]), "seed": int(seed), "noise": bool(params["imu_noise"])}
+    if params["imu_preset"] is not None:
+        options["preset"] = params["imu_preset"]
+    return simulate_imu(motion, **options)
+
+
+def _lio(scans: ScanStream, motion: Motion, sensor: Sensor, seed: int, params: dict):
+    _, run_lio = lio_modules()
+    imu = simulated_imu(motion, seed, params)
+    extra = {k: v for k, v in params.items() if k not in METHOD_PARAMS["lio"]}
+    simulated_before, start = scans.seconds, time.perf_counter()
+    try:
+        out = run_lio(scans, imu, sensor, initial_pose=scans.truth[0], **extra)
+    except ImportError as err:
+        raise Lf3pmError(f"method lio is not available: {err}") from None
+    # run_lio pulls the scans, so their simulation happened inside it.
+    seconds = time.perf_counter() - start - (scans.seconds - simulated_before)
+    report = {k: v for k, v in _fields(out).items() if k not in ("times", "poses")}
+    name = str(report.get("name", "lio"))
+    run = Estimate(poses=out.poses, hits=scans.hits.copy(), skipped=list(report.pop("skipped", [])),
+                   seconds=seconds, report=report)
+    method_params = {"imu": {k: params[k] for k in METHOD_PARAMS["lio"]}, "options": extra}
+    return run, method_params, {**library_versions(), name: report.get("version")}
+
+
+def _fields(out) -> dict:
+    """The public attributes of run_lio's result."""
+    from dataclasses import asdict, is_dataclass
+
+    if is_dataclass(out):
+        return asdict(out)
+    return {k: v for k, v in vars(out).items() if not k.startswith("_")}

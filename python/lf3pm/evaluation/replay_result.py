@@ -1,0 +1,160 @@
+"""The result of one replay, the same for every method (localization, lio,
+odometry): truth and estimate per scan, per-scan flags, the errors (evo) and
+everything needed to reproduce it. Plain arrays, dicts and strings only, so it
+pickles (a study runs replays in worker processes)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lf3pm.evaluation.trajectory_metrics import ape_translation, rpe
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What an estimator made of a scan stream: ``poses`` (M, 4, 4) at the scans'
+    ends, ``hits`` (M,) per scan, ``skipped`` scan indices it did not use,
+    ``seconds`` spent estimating (not simulating), ``degenerate_directions``
+    (M,) where it tracks them, ``report``: anything else it said."""
+
+    poses: np.ndarray
+    hits: np.ndarray
+    skipped: list
+    seconds: float
+    degenerate_directions: np.ndarray | None = None
+    report: dict = field(default_factory=dict)
+
+
+def library_versions(*packages: str) -> dict:
+    """Installed versions of lf3pm, evo (the metrics) and ``packages``."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {}
+    for name in ("lf3pm", "evo", *packages):
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """A replay of ``method`` with ``sensor`` under ``seed``.
+
+    ``times`` (M,): the scans' ends (s); ``truth``, ``estimate`` (M, 4, 4):
+    sensor-to-world poses there; ``hits`` (M,): returns per scan;
+    ``skipped``: indices of the scans the estimator did not use (too few
+    points; the estimate kept its prediction); ``degenerate_directions`` (M,):
+    per scan, the directions in which registration was degenerate and the
+    estimate followed its prior (localization; zeros for the others).
+    ``ape``: APE translation without alignment (the estimate starts at the
+    true first pose, the headline number); ``ape_aligned`` after the SE(3)
+    Umeyama alignment; ``rpe_frame`` over one scan, ``rpe_metre`` over 1 m of
+    path. ``seconds_per_scan``: wall time split into "simulate" (the scans) and
+    "estimate" (the method). ``params``: every parameter of the run;
+    ``versions``: lf3pm and the libraries that produced the estimate and the
+    metrics; ``report``: what the estimator itself said (e.g. a lost track).
+    """
+
+    method: str
+    sensor: str
+    seed: int
+    times: np.ndarray = field(repr=False)
+    truth: np.ndarray = field(repr=False)
+    estimate: np.ndarray = field(repr=False)
+    hits: np.ndarray = field(repr=False)
+    skipped: list
+    degenerate_directions: np.ndarray = field(repr=False)
+    ape: dict
+    ape_aligned: dict
+    rpe_frame: dict
+    rpe_metre: dict
+    seconds_per_scan: dict
+    params: dict
+    map_sha256: str
+    versions: dict
+    report: dict = field(default_factory=dict)
+
+    @classmethod
+    def evaluate(cls, *, times, truth, estimate, degenerate_directions=None, **fields) -> "ReplayResult":
+        """The result with its metrics computed from ``truth`` and ``estimate``."""
+        truth, estimate = np.asarray(truth, float), np.asarray(estimate, float)
+        directions = (np.zeros(len(truth), np.int8) if degenerate_directions is None
+                      else np.asarray(degenerate_directions, np.int8))
+        return cls(times=np.asarray(times, float), truth=truth, estimate=estimate,
+                   degenerate_directions=directions, ape=ape_translation(truth, estimate),
+                   ape_aligned=ape_translation(truth, estimate, align=True),
+                   rpe_frame=rpe(truth, estimate, delta=1, unit="frames"),
+                   rpe_metre=rpe(truth, estimate, delta=1.0, unit="m"), **fields)
+
+    @classmethod
+    def from_run(cls, run: Estimate, *, scans, **fields) -> "ReplayResult":
+        """The result of ``run`` on the ScanStream ``scans`` (its times, truth and
+        simulation time)."""
+        count = len(scans)
+        return cls.evaluate(times=scans.times, truth=scans.truth, estimate=run.poses, hits=run.hits,
+                            skipped=list(run.skipped), degenerate_directions=run.degenerate_directions,
+                            seconds_per_scan={"simulate": scans.seconds / count, "estimate": run.seconds / count},
+                            report=dict(run.report), **fields)
+
+    @property
+    def scans(self) -> int:
+        return len(self.times)
+
+    @property
+    def degenerate(self) -> np.ndarray:
+        """Per scan (M,): whether any direction was degenerate."""
+        return self.degenerate_directions > 0
+
+    @property
+    def errors(self) -> np.ndarray:
+        """Per scan (M,): the translation error |t(estimate) - t(truth)| (m)."""
+        return np.asarray(self.ape["errors"])
+
+    def to_dict(self, trajectories: bool = False) -> dict:
+        """JSON-ready summary (NaN as None, per-pose error lists dropped); with
+        ``trajectories`` also the times, the x y z of truth and estimate and the
+        per-scan errors."""
+        out = {"method": self.method, "sensor": self.sensor, "seed": self.seed, "scans": self.scans,
+               "skipped": [int(k) for k in self.skipped],
+               "degenerate_scans": int(np.count_nonzero(self.degenerate)),
+               "degenerate_directions": self.degenerate_directions.tolist(),
+               "ape": _clean(self.ape), "ape_aligned": _clean(self.ape_aligned),
+               "rpe_frame": _clean(self.rpe_frame), "rpe_metre": _clean(self.rpe_metre),
+               "seconds_per_scan": _clean(self.seconds_per_scan),
+               "scans_per_second": _clean(self.scans_per_second), "params": _clean(self.params),
+               "map_sha256": self.map_sha256, "versions": dict(self.versions), "report": _clean(self.report)}
+        if trajectories:
+            out["times"] = self.times.tolist()
+            out["truth_xyz"] = self.truth[:, :3, 3].tolist()
+            out["estimate_xyz"] = self.estimate[:, :3, 3].tolist()
+            out["errors"] = self.errors.tolist()
+        return out
+
+    @property
+    def scans_per_second(self) -> dict:
+        """Throughput: scans per second of simulation, of estimation and of both."""
+        s = self.seconds_per_scan
+        inverse = lambda x: 1.0 / x if x > 0 else math.inf
+        return {"simulate": inverse(s["simulate"]), "estimate": inverse(s["estimate"]),
+                "total": inverse(s["simulate"] + s["estimate"])}
+
+
+def _clean(value):
+    """JSON-ready: dicts recursively without per-pose lists, numpy arrays as
+    lists and scalars as Python numbers, non-finite floats as None."""
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items() if k not in ("errors", "alignment")}
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

@@ -1,0 +1,99 @@
+"""`lf3pm replay` from the command line: a table, one JSON object, a PNG, and one
+line with exit status 2 for every kind of bad input."""
+
+import importlib.util
+import json
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
+from typer.testing import CliRunner
+
+from lf3pm.cli import app
+from lf3pm.planner.trajectory import Trajectory
+from lf3pm.scenes import build_scene
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """The boxes scene as a map file and a 2 s trajectory across it (CSV)."""
+    folder = tmp_path_factory.mktemp("replay")
+    np.save(folder / "boxes.npy", build_scene("boxes").points)
+    spline = CubicSpline([0.0, 1.0, 2.0], [[-2.0, 0.0, 0.0], [-1.2, 0.3, 0.3], [-0.4, 0.4, 0.0]],
+                         bc_type="clamped")
+    Trajectory(coefficients=np.transpose(spline.c[::-1], (1, 0, 2)).copy(),
+               durations=np.diff(spline.x)).to_csv(folder / "traj.csv")
+    return folder
+
+
+def replay(*args):
+    return runner.invoke(app, ["replay", *map(str, args)])
+
+
+def test_json_with_two_seeds_and_a_png(files, tmp_path):
+    png = tmp_path / "replay.png"
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--seeds", 2, "--seed", 3, "--json",
+                  "--png", png)
+    assert done.exit_code == 0, done.output
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    assert out["method"] == "localization" and out["seeds"] == [3, 4] and len(out["runs"]) == 2
+    run = out["runs"][0]
+    assert run["scans"] == 21 and run["ape"]["rmse"] < 0.02 and run["params"]["rate"] == 10.0
+    assert out["median"]["ape_rmse"] == pytest.approx(np.median([r["ape"]["rmse"] for r in out["runs"]]))
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_table_for_odometry(files):
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "odometry", "--sensor", "mid70",
+                  "--rate", 5)
+    assert done.exit_code == 0, done.output
+    assert "replay: odometry, mid70, 11 scans at 5 Hz" in done.stdout and "APE" in done.stdout
+
+
+BAD_CSV = {
+    "malformed": "t,x,y,yaw,vx,vy,omega\n0,-2,0,0,0,0,0\n1,-1,zero,0,0,0,0\n",
+    "missing": "t,x,y,yaw\n0,-2,0,0\n1,-1,0,0\n",
+    "nonfinite": "t,x,y,yaw,vx,vy,omega\n0,-2,0,0,0,0,0\n1,-1,nan,0,0,0,0\n",
+    "decreasing": "t,x,y,yaw,vx,vy,omega\n0,-2,0,0,0,0,0\n1,-1,0,0,0,0,0\n0.5,-0.5,0,0,0,0,0\n",
+    "outside": "t,x,y,yaw,vx,vy,omega\n0,-2,0,0,0,0,0\n1,50,0,0,0,0,0\n",
+}
+
+
+@pytest.mark.parametrize("kind, match", [("malformed", "not a number"), ("missing", "lacks the column"),
+                                         ("nonfinite", "y is not finite"), ("decreasing", "increase strictly"),
+                                         ("outside", "leaves the map")])
+def test_bad_trajectories(files, tmp_path, kind, match):
+    csv = tmp_path / f"{kind}.csv"
+    csv.write_text(BAD_CSV[kind])
+    done = replay(csv, "--map", files / "boxes.npy")
+    assert done.exit_code == 2 and match in done.stderr and len(done.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--method", "slam"], "unknown method"),
+    (["--sensor", "hdl-64"], "unknown sensor"),
+    (["--rate", "0"], "--rate"),
+    (["--rate", "nan"], "--rate"),
+    (["--seeds", "0"], "--seeds"),
+    (["--height", "-1"], "--height"),
+])
+def test_bad_options(files, args, match):
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", *args)
+    assert done.exit_code == 2 and match in done.stderr and len(done.stderr.strip().splitlines()) == 1
+
+
+def test_outputs_replace_only_regular_files(files, tmp_path):
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--png", tmp_path)
+    assert done.exit_code == 2 and "is a directory" in done.stderr
+    existing = tmp_path / "old.bag"
+    existing.mkdir()
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--bag", existing)
+    assert done.exit_code == 2 and "exists" in done.stderr
+
+
+@pytest.mark.skipif(importlib.util.find_spec("lf3pm.evaluation.lio") is not None, reason="the LIO is installed")
+def test_lio_unavailable_is_one_line(files):
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio")
+    assert done.exit_code == 2 and "method lio is not available" in done.stderr
