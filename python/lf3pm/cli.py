@@ -18,6 +18,7 @@ from rich.table import Table
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
+from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
 from lf3pm.planner.robots import DEFAULTS as ROBOT
 from lf3pm.terrain import DEFAULT_HEIGHT
 
@@ -276,6 +277,34 @@ def experiment_gobi(
         console.print(f"wrote {out}/summary.json, gobi.md, trajectories.png, along.png, trajectories/")
 
 
+@experiment_app.command("benefit")
+def experiment_benefit(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
+    quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
+    seeds: int = typer.Option(3, help="Replay seeds per plan and method."),
+    workers: int = typer.Option(2, help="Replay processes."),
+    pair_seed: int = typer.Option(0, help="Seed of the start/goal pairs."),
+    guidance: Optional[list[str]] = typer.Option(
+        None, metavar="NAME=CHANNEL:POWER:WEIGHT",
+        help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
+):
+    """Guided against unguided plans on several maps, judged by localization and LIO replays."""
+    with user_errors():
+        from lf3pm.experiments import benefit
+
+        for name, value in (("seeds", seeds), ("workers", workers)):
+            if value < 1:
+                raise Lf3pmError(f"--{name} must be >= 1, got {value}")
+        if pair_seed < 0:
+            raise Lf3pmError(f"--pair-seed must be >= 0, got {pair_seed}")
+        candidates = [benefit.parse_guidance(g) for g in guidance] if guidance else None
+        with progress_bar() as step:
+            benefit.run(out, quick=quick, seeds=seeds, workers=workers, pair_seed=pair_seed,
+                        guidance=candidates, progress=step)
+        console.print((out / "benefit.md").read_text())
+        console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
+
+
 @app.command()
 def plan(
     solm_path: Path = typer.Option(..., "--solm", metavar="S.zarr", help="A built r2 or se2 SOLM."),
@@ -284,8 +313,11 @@ def plan(
     out: Path = typer.Option(..., "-o", "--out", metavar="TRAJ.csv",
                              help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."),
     robot: str = typer.Option(ROBOT["kind"], help="omni, diff (differential drive) or car."),
-    metric: str = typer.Option("q_n", help="SOLM channel guiding the plan: q_n, q_min, step_norm or none."),
-    weight: float = typer.Option(1.0, help="lambda: cost of a median cell relative to path length/time."),
+    metric: str = typer.Option(DEFAULT_CHANNEL, help="SOLM channel guiding the plan: q_n, q_min, step_norm or none."),
+    weight: float = typer.Option(DEFAULT_WEIGHT, help="lambda: an edge through cells of cost c costs length (1 + "
+                                                      "lambda c); a median cell has c = 1 (docs/benefit.md)."),
+    power: float = typer.Option(DEFAULT_POWER, help="Exponent applied to the channel (over its median) before the "
+                                                    "weight (docs/benefit.md)."),
     vmax_lon: float = typer.Option(ROBOT["vmax_lon"], help="Longitudinal speed limit (m/s)."),
     vmax_lat: float = typer.Option(ROBOT["vmax_lat"], help="Lateral speed limit (m/s; omni)."),
     vmax_norm: Optional[float] = typer.Option(
@@ -310,7 +342,7 @@ def plan(
                         amax_lat=amax_lat, alpha_max=alpha_max, min_turn_radius=min_turn_radius,
                         r_safe=r_safe, vmax_norm=vmax_norm)
         solm = Solm.open(solm_path)
-        result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight)
+        result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight, power=power)
         result.trajectory.to_csv(out)
         if png is not None:
             from lf3pm.map import load_map

@@ -20,11 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
+from lf3pm.experiments.data import shared_data_dir
 from lf3pm.metric import evaluate
 from lf3pm.map import load_map
 from lf3pm.sensors import get_sensor
-
-REPO = Path(__file__).resolve().parents[2]
 
 #: (map file, sensor, poses x y z yaw). Both maps are single scans in their
 #: sensor frame. The room scan holds a cluster of returns within 0.2 m of its
@@ -35,11 +34,6 @@ DEMO_CASES = [
     ("outdoor_urban64_2021-10-26-16-21-29-468.pcd", "os1-64",
      [(0.0, 0.0, 0.0, 0.0), (8.0, 0.0, 0.0, 0.0), (-10.0, 0.5, 0.0, 0.0)]),
 ]
-
-
-def shared_data_dir() -> Path:
-    """The shared data folder: $LF3PM_DATA, else ../shared/data beside the repository."""
-    return Path(os.environ.get("LF3PM_DATA", REPO.parent / "shared" / "data"))
 
 
 def plot_scan(path: Path, world, result, title: str) -> None:

@@ -24,7 +24,7 @@ from scipy.stats import spearmanr
 from lf3pm import __version__
 from lf3pm.atomic import atomic_write
 from lf3pm.calibration import fit_calibration
-from lf3pm.demo import shared_data_dir
+from lf3pm.experiments.data import shared_data_dir
 from lf3pm.evaluation import RegistrationTarget, mde
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.map import load_map

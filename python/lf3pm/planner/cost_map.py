@@ -32,6 +32,12 @@ from lf3pm.errors import Lf3pmError
 
 COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
 
+#: The shipped guidance: channel, power and weight lambda (docs/benefit.md: the study
+#: that chose them). `lf3pm plan`, Planner.plan and the experiments default to these.
+DEFAULT_CHANNEL = "q_n"
+DEFAULT_POWER = 1.0
+DEFAULT_WEIGHT = 1.0
+
 
 @dataclass(frozen=True)
 class CostLayer:

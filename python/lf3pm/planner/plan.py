@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.cost_map import CostLayer, cost_from_solm
+from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT, CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
 from lf3pm.planner.grid import GridField
@@ -83,8 +83,9 @@ class Planner:
             self._layers[key] = cost_from_solm(self.solm, metric, power=power)
         return self._layers[key]
 
-    def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = "q_n", weight: float = 1.0,
-             power: float = 1.0, rho_T: float = 1.0, heuristic: bool = True) -> Plan:
+    def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = DEFAULT_CHANNEL,
+             weight: float = DEFAULT_WEIGHT, power: float = DEFAULT_POWER, rho_T: float = 1.0,
+             heuristic: bool = True) -> Plan:
         """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
         (``none``: shortest and fastest only) raised to ``power``, with trade-off ``weight``
         (lambda)."""

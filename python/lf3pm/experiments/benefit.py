@@ -1,0 +1,400 @@
+"""The benefit study: do SOLM-guided plans localize better than the shortest ones?
+
+    lf3pm experiment benefit -o DIR [--quick] [--seeds 3] [--workers 2]
+
+On several maps (procedural scenes built for the question and real maps), seeded
+start/goal pairs are drawn from each map's start and goal zones. Each pair is
+planned for one robot (omni or diff, alternating) with no metric (``none``) and
+with each guidance of :data:`GUIDANCE` (the SOLM channels q_n, q_min and
+step_norm as they are, and the shipped default: channel, power and weight of
+lf3pm.planner.cost_map). Every plan is replayed with the ``localization`` method
+(registration to the prior map from drifting wheel odometry, docs/replay.md) on
+``seeds`` seeds, and the default and unguided plans also with ``lio``. Per pair,
+a plan's error is its APE rmse (translation, no alignment), the median over
+seeds; paired_stats.py compares each guidance with ``none``.
+
+Outputs: DIR/summary.json (every pair, plan and replay, the comparisons and the
+parameters), DIR/benefit.md (the tables), DIR/scatter.png (errors of guided
+against unguided plans), DIR/ratios.png (ratios per map), DIR/examples/*.png
+(one pair per map over its SOLM). Intermediate results (SOLMs, trajectories,
+one JSON per replay) stay in DIR, so an interrupted study resumes where it
+stopped. Replays run in ``workers`` processes (spawn: small_gicp and the
+simulator use threads).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field, replace
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+from lf3pm.atomic import atomic_write
+from lf3pm.errors import Lf3pmError
+from lf3pm.experiments.paired_stats import FAILURE_APE, compare
+from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
+
+@dataclass(frozen=True)
+class Guidance:
+    """A way to plan: a SOLM ``channel`` raised to ``power`` with trade-off ``weight``."""
+
+    name: str
+    channel: str
+    power: float = 1.0
+    weight: float = 1.0
+
+
+def parse_guidance(text: str) -> Guidance:
+    """``NAME=CHANNEL:POWER:WEIGHT`` (e.g. ``cube=q_n:3:1``) as a Guidance."""
+    from lf3pm.planner.cost_map import COST_CHANNELS
+
+    try:
+        name, spec = text.split("=", 1)
+        channel, power, weight = spec.split(":")
+        g = Guidance(name.strip(), channel.strip(), float(power), float(weight))
+    except ValueError:
+        raise Lf3pmError(f"guidance {text!r}: expected NAME=CHANNEL:POWER:WEIGHT, e.g. cube=q_n:3:1") from None
+    if not g.name or g.channel not in COST_CHANNELS or g.channel == "none":
+        raise Lf3pmError(f"guidance {text!r}: channel must be one of q_n, q_min, step_norm")
+    if not (math.isfinite(g.power) and 0 < g.power <= 10 and math.isfinite(g.weight) and g.weight >= 0):
+        raise Lf3pmError(f"guidance {text!r}: power must be in (0, 10] and weight finite and >= 0")
+    return g
+
+
+UNGUIDED = Guidance("none", "none", 1.0, 0.0)
+#: The guidance compared with ``none``; the last is the shipped default.
+GUIDANCE = (Guidance("q_n", "q_n"), Guidance("q_min", "q_min"), Guidance("step_norm", "step_norm"),
+            Guidance("default", DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT))
+#: Replayed with the LIO as well as by localization.
+LIO_GUIDANCE = ("none", "default")
+
+
+@dataclass(frozen=True)
+class MapCase:
+    """One map of the study and how its SOLM is built and its pairs drawn.
+
+    ``source``: ``scene:NAME`` (a procedural scene, seed 0, ``scene_params``) or a
+    file in the shared data folder. ``zones``: {"start": (xmin, ymin, xmax, ymax),
+    "goal": ...} for files (scenes bring their own). Pairs are at least
+    ``min_distance`` m apart; with ``both_ways`` every other pair runs goal to start.
+    """
+
+    name: str
+    source: str
+    sensor: str
+    space: str
+    res: float
+    pairs: int
+    robots: tuple = ("omni", "diff")
+    yaw_bins: int = 36
+    yaw_reuse: bool = False
+    ray_stride: int = 1
+    scene_params: dict = field(default_factory=dict)
+    bounds: tuple | None = None
+    zones: dict | None = None
+    min_distance: float = 10.0
+    both_ways: bool = False
+
+
+#: The reduced Gobi scene of the demo (experiments/gobi.py): town and open desert.
+_GOBI = {"length": 115.0, "width": 90.0, "west": 25.0, "town_radius": 25.0, "warehouse_distance": 60.0,
+         "buildings": 4, "stones": 150}
+
+CASES = (
+    MapCase("tunnel", "scene:tunnel", "vlp16", "r2", 0.5, 8, ray_stride=4, both_ways=True, min_distance=40.0),
+    MapCase("orientation", "scene:orientation", "mid70", "se2", 1.0, 8, yaw_reuse=True, ray_stride=2,
+            min_distance=20.0),
+    MapCase("gobi", "scene:gobi", "mid70", "se2", 1.0, 8, yaw_reuse=True, ray_stride=2, scene_params=_GOBI,
+            bounds=(-15.0, -30.0, 55.0, 30.0), zones={"start": (-8.0, -8.0, 8.0, 8.0),
+                                                      "goal": (30.0, -20.0, 45.0, 20.0)}, min_distance=25.0),
+    MapCase("houses", "scene:houses", "vlp16", "r2", 0.5, 8, ray_stride=4, both_ways=True),
+    MapCase("room", "indoor_pcl_room_scan1.pcd", "vlp16", "r2", 0.25, 4, ray_stride=4, both_ways=True,
+            min_distance=5.0),
+    MapCase("street", "outdoor_urban64_2021-10-26-16-21-29-468.pcd", "vlp16", "r2", 0.5, 4, ray_stride=4,
+            both_ways=True),
+)
+
+#: `--quick`: two small maps, two pairs each, one seed (the test suite's run).
+QUICK = (replace(CASES[0], pairs=2, scene_params={"length": 30.0}),
+         replace(CASES[1], pairs=2, res=2.0, yaw_bins=12))
+
+
+def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pair_seed: int = 0,
+        cases: tuple | None = None, guidance: tuple | None = None, progress=None) -> dict:
+    """Runs (or resumes) the study into ``out`` and returns the summary. ``guidance``
+    replaces :data:`GUIDANCE` (candidates to compare, e.g. when choosing the default;
+    only one named ``default`` is also replayed with the LIO)."""
+    out = Path(out)
+    if seeds < 1 or workers < 1:
+        raise Lf3pmError(f"seeds and workers must be >= 1, got {seeds} and {workers}")
+    cases = cases if cases is not None else (QUICK if quick else CASES)
+    guidance = tuple(guidance) if guidance is not None else GUIDANCE
+    names = [g.name for g in guidance]
+    if len(set(names)) != len(names) or "none" in names:
+        raise Lf3pmError(f"guidance names must be distinct and not 'none', got {', '.join(names)}")
+    if quick:
+        seeds = 1
+    step = progress or (lambda label, total, advance=1, restart=False: None)
+    started = time.perf_counter()
+    out.mkdir(parents=True, exist_ok=True)
+    records, tasks = [], []
+    for number, case in enumerate(cases):
+        step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
+        solm_path = _build_solm(case, out)
+        pairs = _plan_pairs(case, solm_path, out, np.random.SeedSequence([pair_seed, number]), guidance)
+        for pair in pairs:
+            records.append(pair)
+            for name, plan in pair["plans"].items():
+                lio = name in LIO_GUIDANCE and "default" in names
+                for method in ("localization", "lio") if lio else ("localization",):
+                    for seed in range(seeds):
+                        tasks.append((case, plan["csv"], method, seed,
+                                      _replay_path(out, case, pair["pair"], name, method, seed)))
+        step(f"{case.name}: {len(pairs)} pairs planned", len(cases))
+    _run_replays(tasks, workers, step)
+    summary = _summarise(out, cases, guidance, records, seeds, pair_seed, time.perf_counter() - started)
+    with atomic_write(out / "summary.json") as fp:
+        fp.write(json.dumps(summary, indent=1).encode())
+    with atomic_write(out / "benefit.md") as fp:
+        fp.write(report(summary).encode())
+    from lf3pm.experiments.benefit_figures import example_figures, ratio_figure, scatter_figure
+
+    scatter_figure(summary, out / "scatter.png")
+    ratio_figure(summary, out / "ratios.png")
+    example_figures(cases, summary, out)
+    return summary
+
+
+# --- maps and SOLMs -------------------------------------------------------------------
+
+def load_case_map(case: MapCase):
+    """(Map, zones) of a case; the same for the main process and every worker."""
+    from lf3pm.map import load_map
+
+    if case.source.startswith("scene:"):
+        from lf3pm.scenes import build_scene
+
+        scene = build_scene(case.source.split(":", 1)[1], seed=0, **case.scene_params)
+        zones = case.zones or {name: tuple(zone) for name, zone in scene.zones.items()}
+        return load_map(scene.points), zones
+    from lf3pm.experiments.data import shared_data_dir
+
+    if case.zones is None:
+        raise Lf3pmError(f"map case {case.name}: a map file needs its start and goal zones")
+    return load_map(shared_data_dir() / case.source), dict(case.zones)
+
+
+def _build_solm(case: MapCase, out: Path) -> Path:
+    from lf3pm.sensors import get_sensor
+    from lf3pm.solm import build_solm, make_grid
+
+    world, _ = load_case_map(case)
+    grid = make_grid(world, case.space, case.res, bounds=case.bounds, yaw_bins=case.yaw_bins)
+    path = out / "solm" / f"{case.name}.zarr"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    build_solm(world, get_sensor(case.sensor), grid, path, seed=0, yaw_reuse=case.yaw_reuse,
+               ray_stride=case.ray_stride)
+    return path
+
+
+# --- pairs and plans ------------------------------------------------------------------
+
+def _plan_pairs(case: MapCase, solm_path: Path, out: Path, seed: np.random.SeedSequence,
+                guidance: tuple) -> list[dict]:
+    """``case.pairs`` seeded pairs, each planned with every guidance (a draw that some
+    guidance cannot plan is replaced), trajectories written as CSV."""
+    from lf3pm.planner.plan import Planner
+    from lf3pm.planner.robots import Robot
+    from lf3pm.solm import Solm
+
+    _, zones = load_case_map(case)
+    planner = Planner(Solm.open(solm_path))
+    rng = np.random.default_rng(seed)
+    folder = out / "trajectories" / case.name
+    folder.mkdir(parents=True, exist_ok=True)
+    pairs, attempts = [], 0
+    while len(pairs) < case.pairs:
+        attempts += 1
+        if attempts > 50 * case.pairs:
+            raise Lf3pmError(f"map case {case.name}: found only {len(pairs)} of {case.pairs} plannable pairs "
+                             f"in {attempts - 1} draws")
+        number = len(pairs)
+        robot = Robot(case.robots[number % len(case.robots)])
+        ends = ("goal", "start") if case.both_ways and number % 2 else ("start", "goal")
+        a, b = (_draw(planner, zones[end], robot, rng) for end in ends)
+        if a is None or b is None or math.hypot(b[0] - a[0], b[1] - a[1]) < case.min_distance:
+            continue
+        heading = math.atan2(b[1] - a[1], b[0] - a[0])
+        start, goal = (a[0], a[1], heading), (b[0], b[1], heading)
+        plans = {}
+        try:
+            for g in (UNGUIDED,) + guidance:
+                plan = planner.plan(start, goal, robot=robot, metric=g.channel, weight=g.weight, power=g.power)
+                csv = folder / f"{number:02d}_{robot.kind}_{g.name}.csv"
+                plan.trajectory.to_csv(csv)
+                summary = plan.summary()
+                plans[g.name] = {"csv": str(csv), "length_m": summary["trajectory_length_m"],
+                                 "duration_s": summary["duration_s"], "violations": summary["violations"]}
+        except Lf3pmError:
+            continue
+        pairs.append({"case": case.name, "pair": number, "robot": robot.kind, "start": start, "goal": goal,
+                      "plans": plans})
+    return pairs
+
+
+def _draw(planner, zone, robot, rng, tries: int = 200):
+    """A random traversable cell centre inside ``zone`` (None if none found)."""
+    g = planner.esdf
+    free = g.traversable(robot.r_safe + 0.1)
+    xmin, ymin, xmax, ymax = zone
+    for _ in range(tries):
+        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+        ix, iy = int((x - g.x0) // g.res), int((y - g.y0) // g.res)
+        if 0 <= ix < g.nx and 0 <= iy < g.ny and free[iy, ix]:
+            return g.x0 + (ix + 0.5) * g.res, g.y0 + (iy + 0.5) * g.res
+    return None
+
+
+# --- replays --------------------------------------------------------------------------
+
+def _replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str, seed: int) -> Path:
+    return out / "replays" / case.name / f"{pair:02d}_{guidance}_{method}_{seed}.json"
+
+
+def _run_replays(tasks: list, workers: int, step) -> None:
+    """Runs the replays whose JSON is missing, ``workers`` at a time."""
+    todo = [t for t in tasks if not t[-1].exists()]
+    label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
+    step(label, len(todo), 0, restart=True)
+    if not todo:
+        return
+    if workers == 1:
+        for task in todo:
+            _replay_task(task)
+            step(label, len(todo))
+        return
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+        for _ in pool.map(_replay_task, todo):
+            step(label, len(todo))
+
+
+_MAPS: dict = {}  # per process: case name -> (Map, registration target)
+
+
+def _replay_task(task) -> None:
+    """One replay (in a worker): its summary written atomically as JSON."""
+    from lf3pm.evaluation.mde import RegistrationTarget
+    from lf3pm.evaluation.replay import replay
+
+    case, csv, method, seed, path = task
+    if case.name not in _MAPS:
+        world, _ = load_case_map(case)
+        _MAPS[case.name] = (world, RegistrationTarget(world, threads=1))
+    world, target = _MAPS[case.name]
+    result = replay(world, csv, case.sensor, method, seed, target=target, threads=1)
+    errors = np.asarray(result.errors)
+    record = {"ape_rmse": result.ape["rmse"], "ape_median": result.ape["median"], "ape_max": result.ape["max"],
+              "scans": result.scans, "degenerate_share": float(np.mean(result.degenerate)),
+              "seconds": float(sum(result.seconds_per_scan.values()) * result.scans),
+              "errors_every_second": errors[:: max(1, int(round(result.params["rate"])))].tolist()}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as fp:
+        fp.write(json.dumps(record).encode())
+
+
+# --- analysis -------------------------------------------------------------------------
+
+def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pair_seed: int,
+               seconds: float) -> dict:
+    by_name = {case.name: case for case in cases}
+    for pair in records:
+        case = by_name[pair["case"]]
+        for guidance, plan in pair["plans"].items():
+            for method in ("localization", "lio"):
+                runs = [json.loads(p.read_text()) for p in
+                        (_replay_path(out, case, pair["pair"], guidance, method, s) for s in range(seeds))
+                        if p.exists()]
+                if runs:
+                    plan[method] = {"ape": float(np.median([r["ape_rmse"] for r in runs])),
+                                    "ape_per_seed": [r["ape_rmse"] for r in runs],
+                                    "degenerate_share": float(np.median([r["degenerate_share"] for r in runs])),
+                                    "scans": runs[0]["scans"], "errors_every_second": runs[0]["errors_every_second"]}
+    comparisons = {}
+    names = [g.name for g in guidance]
+    for method, compared in (("localization", names), ("lio", [n for n in LIO_GUIDANCE if n in names])):
+        comparisons[method] = {name: _compare(records, name, method) for name in compared}
+        if "default" in names:
+            comparisons[method]["default_by_map"] = {
+                case.name: _compare([r for r in records if r["case"] == case.name], "default", method)
+                for case in cases}
+    return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
+            "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
+            "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
+            "comparisons": comparisons, "goal": _goal(comparisons)}
+
+
+def _compare(records: list, guidance: str, method: str) -> dict:
+    rows = [r["plans"] for r in records if method in r["plans"][guidance] and method in r["plans"]["none"]]
+    if not rows:
+        return {"pairs": 0}
+    floor = 1e-4  # 0.1 mm: an APE below it is rounding, and ratios need a positive error
+    return compare([max(p[guidance][method]["ape"], floor) for p in rows],
+                   [max(p["none"][method]["ape"], floor) for p in rows],
+                   guided_length=[p[guidance]["length_m"] for p in rows],
+                   unguided_length=[p["none"]["length_m"] for p in rows],
+                   guided_duration=[p[guidance]["duration_s"] for p in rows],
+                   unguided_duration=[p["none"]["duration_s"] for p in rows])
+
+
+def _goal(comparisons: dict) -> dict:
+    """The issue's goal for the default guidance, each part True or False."""
+    loc, lio = comparisons["localization"].get("default", {}), comparisons["lio"].get("default", {})
+    if not loc.get("pairs"):
+        return {}
+    return {"median_ape_cut_50pct": loc["median_ratio"] <= 0.5,
+            "wilcoxon_p_below_0.01": bool(loc["wilcoxon_p"] < 0.01),
+            "worse_on_at_most_10pct": loc["share_worse"] <= 0.1,
+            "length_overhead_at_most_15pct": loc["median_length_overhead"] <= 0.15,
+            "lio_agrees_in_direction": bool(lio.get("pairs")) and lio["median_ratio"] < 1.0}
+
+
+def report(summary: dict) -> str:
+    """The Markdown tables of a summary."""
+    def row(name, c):
+        if not c.get("pairs"):
+            return f"| {name} | 0 | | | | | | | |"
+        lo, hi = c["median_ratio_ci95"]
+        return (f"| {name} | {c['pairs']} | {c['median_ratio']:.2f} [{lo:.2f}, {hi:.2f}] | {c['wilcoxon_p']:.2g} | "
+                f"{100 * c['share_worse']:.0f} % | {100 * c['failure_rate_guided']:.0f} % / "
+                f"{100 * c['failure_rate_unguided']:.0f} % | {100 * c['median_length_overhead']:+.1f} % | "
+                f"{100 * c['median_duration_overhead']:+.1f} % | {1000 * c['median_error_guided']:.0f} / "
+                f"{1000 * c['median_error_unguided']:.0f} |")
+
+    header = ("| guidance | pairs | median APE ratio [95 % CI] | Wilcoxon p | worse | failures guided / none "
+              f"(APE > {summary['failure_ape_m']:g} m) | length overhead | duration overhead | median APE (mm) "
+              "guided / none |\n|---|---|---|---|---|---|---|---|---|")
+    specs = "; ".join(f"{g['name']}: {g['channel']} to the power {g['power']:g}, weight {g['weight']:g}"
+                      for g in summary["guidance"] if g["name"] != "none")
+    lines = ["# Benefit study: localization along guided and unguided plans", "",
+             f"{len(summary['pairs'])} pairs on {len(summary['cases'])} maps, {summary['seeds']} seed(s) per "
+             f"replay, pair seed {summary['pair_seed']}. Guidance: {specs}. Runtime "
+             f"{summary['runtime_s'] / 60:.0f} min.", "",
+             "## Localization (registration to the prior map from wheel odometry)", "", header]
+    comps = summary["comparisons"]
+    lines += [row(g["name"], comps["localization"][g["name"]]) for g in summary["guidance"] if g["name"] != "none"]
+    if "default" in comps["lio"]:
+        lines += ["", "## LIO", "", header, row("default", comps["lio"]["default"])]
+    for method, title in (("localization", "localization"), ("lio", "LIO")):
+        if "default_by_map" in comps[method]:
+            lines += ["", f"## Default guidance against none, per map ({title})", "", header]
+            lines += [row(name, c) for name, c in comps[method]["default_by_map"].items()]
+    goal = summary["goal"]
+    if goal:
+        lines += ["", "Goal (issue): " + "; ".join(f"{k.replace('_', ' ')}: {'yes' if v else 'no'}"
+                                                  for k, v in goal.items()) + "."]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,131 @@
+"""Figures of the benefit study (experiments/benefit.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from lf3pm.solm.figures import save_figure
+
+_MARKERS = "osD^vP*X"
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _errors(summary: dict, guidance: str, method: str):
+    """(case, unguided APE, guided APE) of every pair replayed both ways."""
+    out = []
+    for pair in summary["pairs"]:
+        plans = pair["plans"]
+        if method in plans[guidance] and method in plans["none"]:
+            out.append((pair["case"], plans["none"][method]["ape"], plans[guidance][method]["ape"]))
+    return out
+
+
+def scatter_figure(summary: dict, path: Path) -> None:
+    """APE of each guided plan against its unguided twin, log-log, one panel per
+    guidance (localization) and one for the LIO; below the diagonal guidance helped."""
+    plt = _plt()
+    panels = [(g["name"], "localization") for g in summary["guidance"] if g["name"] != "none"]
+    if "default" in summary["comparisons"]["lio"]:
+        panels.append(("default", "lio"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 3.9), dpi=110, squeeze=False)
+    cases = [c["name"] for c in summary["cases"]]
+    for ax, (guidance, method) in zip(axes[0], panels):
+        rows = _errors(summary, guidance, method)
+        values = [v for _, a, b in rows for v in (a, b)] or [1e-3, 1.0]
+        lo, hi = max(min(values) / 1.5, 1e-4), max(values) * 1.5
+        ax.plot([lo, hi], [lo, hi], "k-", lw=0.8)
+        ax.plot([lo, hi], [lo / 2, hi / 2], "k:", lw=0.8)
+        for number, case in enumerate(cases):
+            pts = np.array([(a, b) for c, a, b in rows if c == case]).reshape(-1, 2)
+            ax.scatter(np.maximum(pts[:, 0], lo), np.maximum(pts[:, 1], lo), s=18,
+                       marker=_MARKERS[number % len(_MARKERS)], label=case)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(lo, hi)
+        ax.set_ylim(lo, hi)
+        ax.set_aspect("equal")
+        ax.set_xlabel("APE rmse, no guidance (m)")
+        ax.set_ylabel(f"APE rmse, {guidance} (m)")
+        c = summary["comparisons"][method][guidance]
+        ratio = f"median ratio {c['median_ratio']:.2f}" if c.get("pairs") else "no pairs"
+        ax.set_title(f"{method}: {guidance}\n{ratio}", fontsize=9)
+    axes[0][0].legend(fontsize=7, loc="upper left")
+    fig.suptitle("Each point a start/goal pair; below the solid line guidance localizes better, "
+                 "below the dotted line by half", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, Path(path))
+
+
+def ratio_figure(summary: dict, path: Path) -> None:
+    """Per map, the ratio APE(default) / APE(none) of every pair (localization and LIO)."""
+    if not any(g["name"] == "default" for g in summary["guidance"]):
+        return
+    plt = _plt()
+    cases = [c["name"] for c in summary["cases"]]
+    fig, ax = plt.subplots(figsize=(max(6, 1.3 * len(cases)), 4), dpi=110)
+    for offset, method, colour in ((-0.15, "localization", "tab:blue"), (0.15, "lio", "tab:orange")):
+        rows = _errors(summary, "default", method)
+        for number, case in enumerate(cases):
+            r = np.array([b / max(a, 1e-4) for c, a, b in rows if c == case])
+            if r.size:
+                ax.scatter(np.full(r.size, number + offset), r, s=16, color=colour,
+                           label=method if number == 0 else None)
+                ax.plot([number + offset - 0.1, number + offset + 0.1], [np.median(r)] * 2, color=colour, lw=2)
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(cases)), cases)
+    ax.set_ylabel("APE ratio, default guidance / none")
+    ax.set_title("Below 1: guidance localizes better (bars: medians)", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, Path(path))
+
+
+def example_figures(cases, summary: dict, out: Path) -> None:
+    """For each map, its first pair's unguided and default trajectories over the SOLM, and
+    their localization error along the way."""
+    from lf3pm.planner.trajectory import read_csv
+    from lf3pm.solm import Solm
+    from lf3pm.solm.figures import draw_heat_map
+
+    plt = _plt()
+    folder = out / "examples"
+    folder.mkdir(parents=True, exist_ok=True)
+    for case in cases:
+        pair = next((p for p in summary["pairs"] if p["case"] == case.name), None)
+        if pair is None or "default" not in pair["plans"]:
+            continue
+        solm = Solm.open(out / "solm" / f"{case.name}.zarr")
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 9), dpi=110, gridspec_kw={"height_ratios": [3, 1]})
+        channel = next(g["channel"] for g in summary["guidance"] if g["name"] == "default")
+        draw_heat_map(fig, top, solm, channel=channel, reduce="min")
+        for name, colour in (("none", "white"), ("default", "tab:red")):
+            plan = pair["plans"][name]
+            t, x, y, yaw = (read_csv(plan["csv"])[k] for k in ("t", "x", "y", "yaw"))
+            every = max(1, len(t) // 30)
+            label = f"{name}: {plan['length_m']:.0f} m"
+            if "localization" in plan:
+                label += f", localization APE {100 * plan['localization']['ape']:.1f} cm"
+                err = plan["localization"]["errors_every_second"]
+                bottom.plot(np.arange(len(err)), err, color="k" if name == "none" else colour, label=name)
+            top.plot(x, y, "-", color=colour, lw=1.6, label=label, zorder=4)
+            top.quiver(x[::every], y[::every], np.cos(yaw[::every]), np.sin(yaw[::every]), color=colour,
+                       scale=40, width=0.002, zorder=5)
+        top.legend(loc="lower right", fontsize=8, facecolor="0.6")
+        top.set_title(f"{case.name}: pair {pair['pair']} ({pair['robot']}, {case.sensor}), heading ticks",
+                      fontsize=9)
+        bottom.set_xlabel("time (s)")
+        bottom.set_ylabel("localization error (m)")
+        bottom.legend(fontsize=8)
+        fig.tight_layout()
+        save_figure(fig, folder / f"{case.name}.png")
