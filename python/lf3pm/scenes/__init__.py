@@ -7,6 +7,7 @@ seed::
     from lf3pm.scenes import build_scene, describe_scenes
     scene = build_scene("houses", seed=0)          # params override the defaults
     scene.points, scene.reference_pose, scene.free_radius
+    scene.zones                                     # {"start": Zone, "goal": Zone} for studies
 
 ``SCENES`` maps each name to its builder ``build(seed=0, **params) -> Scene``;
 see docs/scenes.md for what each scene holds and its parameters.
@@ -15,15 +16,16 @@ see docs/scenes.md for what each scene holds and its parameters.
 from __future__ import annotations
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.scenes import boxes, gobi, house_meadow, houses, meadow, wall
-from lf3pm.scenes.scene import Scene
+from lf3pm.scenes import boxes, gobi, house_meadow, houses, meadow, orientation, tunnel, wall
+from lf3pm.scenes.scene import Scene, Zone, resolve_params
 
-_MODULES = (houses, house_meadow, meadow, wall, gobi, boxes)
+_MODULES = (houses, house_meadow, meadow, wall, gobi, boxes, tunnel, orientation)
 
 #: Scene name -> builder ``build(seed=0, **params) -> Scene``.
 SCENES = {module.NAME: module.build for module in _MODULES}
 
-__all__ = ["SCENES", "Scene", "build_scene", "describe_scenes", "scene_defaults", "scene_names"]
+__all__ = ["SCENES", "Scene", "Zone", "build_scene", "describe_scenes", "scene_defaults", "scene_names",
+           "scene_zones"]
 
 
 def scene_names() -> list[str]:
@@ -39,6 +41,16 @@ def describe_scenes() -> list[tuple[str, str]]:
 def scene_defaults(name: str) -> dict:
     """The default parameters of scene ``name``."""
     return dict(_module(name).DEFAULTS)
+
+
+def scene_zones(name: str, **params) -> dict:
+    """The planning-study zones of scene ``name`` with ``params`` (name -> :class:`Zone`;
+    empty for scenes without any), without building the scene: the same rectangles as
+    ``build_scene(name, **params).zones``. A drawn position can still fall on an
+    obstacle (a box, a pillar): keep the SOLM's traversable cells."""
+    module = _module(name)
+    zones = getattr(module, "zones", None)
+    return zones(resolve_params(module.NAME, module.DEFAULTS, params)) if zones else {}
 
 
 def build_scene(name: str, seed: int = 0, **params) -> Scene:

@@ -14,7 +14,7 @@ import numpy as np
 
 from lf3pm.scenes.buildings import Opening, wall
 from lf3pm.scenes.geometry import box, rectangle, stack
-from lf3pm.scenes.scene import Scene, check_seed, finish, require, resolve_params
+from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "boxes"
 DESCRIPTION = ("Lab room 12 x 8 x 3 m (walls, floor, ceiling, a door) with 12 boxes of five sizes "
@@ -35,6 +35,15 @@ DEFAULTS = {
 #: Box sizes (length, width, height), m: a shoebox, moving boxes, a crate, a tall box.
 _SIZES = np.array([[0.4, 0.3, 0.3], [0.6, 0.4, 0.4], [0.8, 0.6, 0.6], [1.2, 0.8, 0.8],
                    [0.5, 0.5, 1.2]])
+
+
+def zones(params: dict) -> dict:
+    """The study's zones: strips 1.5 m deep along the room's two short walls, 0.7 m
+    clear of the walls (boxes may stand in them: a study keeps the traversable cells)."""
+    L, W = params["room_length"], params["room_width"]
+    x0, x1, y0, y1 = -L / 3, 2 * L / 3, -W / 2, W / 2
+    return {"start": Zone(x0 + 0.7, y0 + 0.7, x0 + 2.2, y1 - 0.7),
+            "goal": Zone(x1 - 2.2, y0 + 0.7, x1 - 0.7, y1 - 0.7)}
 
 
 def build(seed: int = 0, **params) -> Scene:
@@ -86,4 +95,4 @@ def build(seed: int = 0, **params) -> Scene:
             top = size * rng.uniform(0.5, 0.8)
             top[2] = min(top[2], H - size[2] - 0.3)
             parts.append(box(rng, (x, y, size[2]), top, yaw + rng.uniform(-0.3, 0.3), s, j))
-    return finish(NAME, DESCRIPTION, seed, p, stack(parts))
+    return finish(NAME, DESCRIPTION, seed, p, stack(parts), zones=zones(p))

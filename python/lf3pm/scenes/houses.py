@@ -15,7 +15,7 @@ import numpy as np
 
 from lf3pm.scenes.buildings import house
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, stack
-from lf3pm.scenes.scene import Scene, check_seed, finish, require, resolve_params
+from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "houses"
 DESCRIPTION = ("A block of 6 pitched-roof houses (doors, windows, recesses) along a 10 m street "
@@ -34,6 +34,13 @@ DEFAULTS = {
 }
 
 
+def zones(params: dict) -> dict:
+    """The study's zones, in the street (2 m clear of its edges, whatever the
+    layout): ``start`` 15-25 m west of the origin, ``goal`` 5-15 m east of it."""
+    half = params["street_width"] / 2 - 2.0
+    return {"start": Zone(-25.0, -half, -15.0, half), "goal": Zone(5.0, -half, 15.0, half)}
+
+
 def build(seed: int = 0, **params) -> Scene:
     """Builds the houses scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
@@ -43,6 +50,7 @@ def build(seed: int = 0, **params) -> Scene:
     require(p["extent"] >= 1.5 * p["lot_pitch"] + 2.0 and
             p["extent"] >= p["street_width"] / 2 + 12.0, NAME, "extent is too small for the block")
     require(p["wall_spacing"] > 0 and p["ground_spacing"] > 0, NAME, "spacings must be > 0")
+    require(p["street_width"] >= 5.0, NAME, "street_width must be >= 5 m")
     rng = np.random.default_rng(seed)
 
     shift = rng.uniform(-0.2, 0.2) * p["lot_pitch"]  # the origin is not in front of a house's middle
@@ -64,4 +72,4 @@ def build(seed: int = 0, **params) -> Scene:
     e = p["extent"]
     parts.append(heightfield_points(rng, Heightfield.flat(), (-e, e), (-e, e), p["ground_spacing"],
                                     p["jitter"]))
-    return finish(NAME, DESCRIPTION, seed, p, stack(parts))
+    return finish(NAME, DESCRIPTION, seed, p, stack(parts), zones=zones(p))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -17,6 +18,20 @@ FREE_BAND_LOW = 0.2
 FREE_BAND_HIGH = 2.5
 
 
+class Zone(NamedTuple):
+    """An axis-aligned rectangle of the ground, metres: xmin <= x <= xmax, ymin <= y <= ymax."""
+
+    xmin: float
+    ymin: float
+    xmax: float
+    ymax: float
+
+    def contains(self, x, y):
+        """Whether (x, y) lies in the zone (arrays broadcast)."""
+        return ((np.asarray(x) >= self.xmin) & (np.asarray(x) <= self.xmax)
+                & (np.asarray(y) >= self.ymin) & (np.asarray(y) <= self.ymax))
+
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     """A procedural test scene: a point-cloud map and a known free sensor pose.
@@ -26,7 +41,10 @@ class Scene:
     free_radius: no map point lies within this horizontal distance (m) of the
     reference pose's x, y between ``FREE_BAND_LOW`` and ``FREE_BAND_HIGH``
     above the ground there. params: every parameter the scene was built with,
-    defaults included.
+    defaults included. zones: named ground rectangles (:class:`Zone`) that
+    planning studies draw start and goal positions from (docs/scenes.md says
+    which pairs; a drawn position can still fall on an obstacle, so a study
+    checks it against the SOLM's traversable cells).
     """
 
     name: str
@@ -36,6 +54,7 @@ class Scene:
     description: str
     seed: int
     params: dict
+    zones: dict = field(default_factory=dict)
 
     @property
     def size(self) -> int:
@@ -106,7 +125,7 @@ def mow(points: np.ndarray, x: float, y: float, radius: float, ground, height: f
 
 
 def finish(name: str, description: str, seed: int, params: dict, points: np.ndarray,
-           ground_z: float = 0.0) -> Scene:
+           ground_z: float = 0.0, zones: dict | None = None) -> Scene:
     """Packs the points into a Scene, after checking that the reference pose is free."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     require(params["sensor_height"] > 0, name, "sensor_height must be > 0")
@@ -118,5 +137,6 @@ def finish(name: str, description: str, seed: int, params: dict, points: np.ndar
                              f"lie within it (the closest {closest:.2f} m from the origin)")
     points.setflags(write=False)
     pose = (0.0, 0.0, float(ground_z + params["sensor_height"]), 0.0)
+    zones = {key: Zone(*map(float, rect)) for key, rect in (zones or {}).items()}
     return Scene(name=name, points=points, reference_pose=pose, free_radius=float(radius),
-                 description=description, seed=seed, params=dict(params))
+                 description=description, seed=seed, params=dict(params), zones=zones)
