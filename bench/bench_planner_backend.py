@@ -18,7 +18,8 @@ import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
+import argparse
+import math  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -76,8 +77,8 @@ def main() -> None:
     waypoints, cost, esdf = scenario(args.seed)
     print(f"path ~{np.sum(np.hypot(*np.diff(waypoints[:, :2], axis=0).T)):.0f} m, seed {args.seed}, "
           f"rel_cost_tol {args.rel_cost_tol}, one thread")
-    robots = {"omni": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0),
-              "omni |v|": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0, vmax_norm=1.5),
+    robots = {"omni box": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0, vmax_norm=math.inf),
+              "omni": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0),
               "diff": Robot("diff", vmax_lon=1.5, wmax=1.0),
               "car": Robot("car", vmax_lon=1.5, wmax=1.0, min_turn_radius=2.0)}
     for kind, robot in robots.items():
