@@ -147,7 +147,35 @@ def test_unknown_settings_and_bad_input_raise_one_line(run):
         run_lio(scans[:3], object(), sensor, initial_pose=first)
     with pytest.raises(Lf3pmError, match="after the first scan"):
         run_lio(scans[:3], type(imu)(**{**imu.__dict__, "t": imu.t + 10.0}), sensor, initial_pose=first)
+    with pytest.raises(Lf3pmError, match="by section"):
+        run_lio(scans[:3], imu, sensor, initial_pose=first, mapping=0.5)
     with pytest.raises(Lf3pmError, match="threads"):
         run_lio(scans[:3], imu, sensor, initial_pose=first, threads=0)
     with pytest.raises(Lf3pmError):
         run_lio(scans[:3], imu, sensor, initial_pose=np.eye(3))
+
+
+def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
+    """The worker dying (here by SIGSEGV, as a segfault in the odometry would)
+    becomes an Lf3pmError naming where, not a dead caller."""
+    import lf3pm.evaluation.lio as lio
+
+    worker = tmp_path / "crash.py"
+    worker.write_text("import os, signal\nprint('about to crash', flush=True)\nos.kill(os.getpid(), signal.SIGSEGV)\n")
+    monkeypatch.setattr(lio, "_WORKER", str(worker))
+    motion, sensor, scans, imu, first, _ = run
+    with pytest.raises(Lf3pmError, match=r"genz-lio crashed \(signal 11\) while starting: about to crash"):
+        run_lio(scans[:3], imu, sensor, initial_pose=first)
+
+
+def test_the_filter_is_told_the_imu_preset_noise(run):
+    from lf3pm.evaluation.imu import ImuPreset
+    from lf3pm.evaluation.lio import NOISE_INFLATION, imu_noise_model
+
+    imu = run[3]
+    sigma = imu.preset.sigmas(200.0)
+    model = imu_noise_model(imu)
+    assert model["acc_cov"] == pytest.approx(NOISE_INFLATION * sigma["accel_white"] ** 2)
+    assert model["b_gyr_cov"] == pytest.approx(NOISE_INFLATION * (imu.preset.gyro_bias_random_walk ** 2) * 200.0)
+    silent = type(imu)(**{**imu.__dict__, "preset": ImuPreset("ideal", "", 0.0, 0.0, 0.0, 0.0, "")})
+    assert imu_noise_model(silent) == {} and imu_noise_model(object()) == {}

@@ -120,8 +120,8 @@ class ImuSamples:
     ``t`` (K,) s, increasing; ``accel`` (K, 3) specific force in m/s^2 in the
     IMU (= sensor) frame, (0, 0, +9.81) when level at rest; ``gyro`` (K, 3)
     rad/s in the IMU frame. ``accel_bias`` and ``gyro_bias`` (K, 3): the biases
-    the samples carry (zero without noise); ``preset``, ``seed``, ``rate``,
-    ``noise``: how they were made.
+    the samples carry (zero without noise); ``preset`` (the noise model),
+    ``seed``, ``rate``, ``noise``: how they were made.
     """
 
     t: np.ndarray = field(repr=False)
@@ -129,7 +129,7 @@ class ImuSamples:
     gyro: np.ndarray = field(repr=False)
     accel_bias: np.ndarray = field(repr=False)
     gyro_bias: np.ndarray = field(repr=False)
-    preset: str
+    preset: ImuPreset
     seed: int
     rate: float
     noise: bool
@@ -189,7 +189,7 @@ def simulate_imu(motion, *, rate: float = 200.0, preset: str | ImuPreset = DEFAU
         accel = accel + accel_bias + s["accel_white"] * streams[0].standard_normal((len(t), 3))
         gyro = gyro + gyro_bias + s["gyro_white"] * streams[2].standard_normal((len(t), 3))
     return ImuSamples(t=t, accel=accel, gyro=gyro, accel_bias=accel_bias, gyro_bias=gyro_bias,
-                      preset=model.name, seed=int(seed), rate=rate, noise=bool(noise))
+                      preset=model, seed=int(seed), rate=rate, noise=bool(noise))
 
 
 def _random_walk(rng: np.random.Generator, count: int, step: float) -> np.ndarray:
