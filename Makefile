@@ -15,7 +15,7 @@ $(PY):
 # requirements live in .venv, the C++ core rebuilds on import when sources change.
 $(STAMP): $(PY) pyproject.toml CMakeLists.txt
 	$(PY) -m pip install -q $(BUILD_DEPS)
-	$(PY) -m pip install -q --no-build-isolation -Ceditable.rebuild=true -e ".[test]"
+	$(PY) -m pip install -q --no-build-isolation -Ceditable.rebuild=true -e ".[test,lio]"
 	touch $(STAMP)
 
 build: $(STAMP)
