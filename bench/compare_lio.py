@@ -42,6 +42,7 @@ import lf3pm  # noqa: E402
 from lf3pm.evaluation.imu import simulate_imu  # noqa: E402
 from lf3pm.evaluation.lio import run_lio  # noqa: E402
 from lf3pm.evaluation.moving_scan import simulate_moving_scan  # noqa: E402
+from lf3pm.evaluation.trajectory import LinearMotion  # noqa: E402
 from lf3pm.evaluation.trajectory_metrics import ape_translation  # noqa: E402
 from lf3pm.experiments.free_poses import GroundGrid  # noqa: E402
 from lf3pm.scenes import build_scene  # noqa: E402
@@ -100,7 +101,7 @@ def make_scans(world, motion, sensor, noise):
     scans = []
     for k in range(int(math.floor((motion.t1 - motion.t0) / PERIOD + 1e-9))):
         end = motion.t0 + (k + 1) * PERIOD
-        s = simulate_moving_scan(world.index, t, poses, end, PERIOD, sensor.scan_directions(k), sensor.min_range,
+        s = simulate_moving_scan(world.index, LinearMotion(t, poses), end, PERIOD, sensor.scan_directions(k), sensor.min_range,
                                  sensor.max_range, noise=noise, seed=0, stream=k, threads=1)
         scans.append(Scan(end, s.points, end - (1.0 - s.timestamps) * PERIOD))
     return scans

@@ -14,6 +14,7 @@ from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.evaluation.imu import simulate_imu
 from lf3pm.evaluation.moving_scan import simulate_moving_scan
+from lf3pm.evaluation.trajectory import LinearMotion
 from lf3pm.evaluation.trajectory_metrics import ape_translation
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import get_sensor
@@ -38,7 +39,7 @@ def scans_along(index, motion, sensor, noise=0.0, seed=0):
     scans = []
     for k in range(int(math.floor((motion.t1 - motion.t0) / PERIOD + 1e-9))):
         end = motion.t0 + (k + 1) * PERIOD
-        s = simulate_moving_scan(index, t, poses, end, PERIOD, sensor.scan_directions(k), sensor.min_range,
+        s = simulate_moving_scan(index, LinearMotion(t, poses), end, PERIOD, sensor.scan_directions(k), sensor.min_range,
                                  sensor.max_range, noise=noise, seed=seed, stream=k, threads=1)
         scans.append(Scan(end, s.points, end - (1.0 - s.timestamps) * PERIOD))
     return scans
