@@ -256,21 +256,22 @@ def experiment_correlation(
 
 @experiment_app.command("gobi")
 def experiment_gobi(
-    out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM is resumed on a rerun)."),
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
-    weight: Optional[float] = typer.Option(None, help="lambda: cost of a median cell relative to time "
-                                                      "(default: the setup's)."),
+    seeds: Optional[int] = typer.Option(None, help="Replay seeds per plan and method (default: the setup's)."),
     seed: int = typer.Option(0, help="Seed of the scene, the noise and the disturbances."),
 ):
-    """Plans town -> warehouse guided by q_n, q_min, |dx*| and none; compares S and odometry."""
+    """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
     with user_errors():
         from dataclasses import replace
 
         from lf3pm.experiments import gobi
 
         setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=seed)
-        if weight is not None:
-            setup = replace(setup, weight=weight)
+        if seeds is not None:
+            if seeds < 1:
+                raise Lf3pmError(f"--seeds must be >= 1, got {seeds}")
+            setup = replace(setup, replay_seeds=seeds)
         with progress_bar() as step:
             gobi.run(out, setup, progress=step)
         console.print((out / "gobi.md").read_text())
@@ -297,7 +298,9 @@ def experiment_benefit(
                 raise Lf3pmError(f"--{name} must be >= 1, got {value}")
         if pair_seed < 0:
             raise Lf3pmError(f"--pair-seed must be >= 0, got {pair_seed}")
-        candidates = [benefit.parse_guidance(g) for g in guidance] if guidance else None
+        from lf3pm.experiments.guidance import parse_guidance
+
+        candidates = [parse_guidance(g) for g in guidance] if guidance else None
         with progress_bar() as step:
             benefit.run(out, quick=quick, seeds=seeds, workers=workers, pair_seed=pair_seed,
                         guidance=candidates, progress=step)

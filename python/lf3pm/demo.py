@@ -1,8 +1,9 @@
 """`make demo`: the main job end to end, then the metric on real maps.
 
 1. A reduced Gobi scene (115 x 90 m): its Mid-70 SE(2) SOLM, plans from the
-   town to the warehouse guided by q_n, q_min, |dx*| and none, the MDE along
-   each and a KISS-ICP odometry replay (lf3pm.experiments.gobi), in out/gobi/.
+   town to the warehouse guided by q_n, q_min, |dx*|, the shipped default and
+   none, the MDE along each and localization and LIO replays along them
+   (lf3pm.experiments.gobi), in out/gobi/.
 2. The LF-3PM metric at a few poses on the real maps in ../shared/data.
 out/report.md gathers both; figures are PNGs in out/ and out/gobi/.
 
@@ -105,8 +106,8 @@ def main() -> None:
     with atomic_write(report) as fp:
         fp.write(("# lf3pm demo\n\n## 1. Perception-aware planning on a reduced Gobi scene\n\n"
                   + gobi_report.split("\n", 1)[1]
-                  + "\nFigures: gobi/trajectories.png (plans over the SOLM), gobi/along.png (MDE and "
-                    "odometry error along them), gobi/solm_q_n.png.\n\n"
+                  + "\nFigures: gobi/trajectories.png (plans over the SOLM), gobi/along.png (MDE, "
+                    "localization and LIO error along them), gobi/solm_q_n.png.\n\n"
                     "## 2. The LF-3PM metric on real maps\n\n"
                     "Noise: each sensor's range noise, seed 0; association: FAST-LIO k-NN (k = 5); "
                     "w1 = w2 = 0.5; no scan downsampling.\n\n" + table + "\n").encode())
@@ -117,14 +118,15 @@ def main() -> None:
 
 
 def demo_gobi(out: Path) -> str:
-    """The reduced Gobi experiment from scratch (its SOLM rebuilt); returns its table."""
+    """The reduced Gobi experiment from scratch (its SOLM and replays redone); returns its table."""
     import shutil
 
     from lf3pm.experiments import gobi
     from lf3pm.solm import Solm
     from lf3pm.solm.figures import heat_map
 
-    shutil.rmtree(out / "solm.zarr", ignore_errors=True)
+    for stale in ("solm.zarr", "replays"):
+        shutil.rmtree(out / stale, ignore_errors=True)
     t = time.perf_counter()
     gobi.run(out, gobi.REDUCED, progress=_print_phases())
     heat_map(Solm.open(out / "solm.zarr"), out / "solm_q_n.png", channel="q_n", reduce="min")

@@ -160,3 +160,20 @@ class Motion:
     def pose(self, t) -> np.ndarray:
         """Sensor-to-world matrices (n, 4, 4), level."""
         return pose_matrices(self._channels(t, 0))
+
+
+class RestFirst:
+    """``motion`` preceded by ``seconds`` at rest at its first pose (what a LiDAR-inertial
+    odometry needs to initialise: it takes the first IMU samples for a still sensor's).
+    The same methods as :class:`Motion`; t0 is ``seconds`` earlier."""
+
+    def __init__(self, motion, seconds: float):
+        if not (np.isfinite(seconds) and seconds >= 0):
+            raise Lf3pmError(f"the rest before the motion must be >= 0 s, got {seconds}")
+        self.motion, self.rest = motion, float(seconds)
+        self.t0, self.t1 = motion.t0 - self.rest, motion.t1
+
+    def __getattr__(self, name):
+        # position, velocity, ... clamp to the motion's own span: at rest before it.
+        return getattr(self.motion, name)
+

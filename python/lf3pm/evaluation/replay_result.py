@@ -92,12 +92,20 @@ class ReplayResult:
                    rpe_metre=rpe(truth, estimate, delta=1.0, unit="m"), **fields)
 
     @classmethod
-    def from_run(cls, run: Estimate, *, scans, **fields) -> "ReplayResult":
+    def from_run(cls, run: Estimate, *, scans, first: int = 0, **fields) -> "ReplayResult":
         """The result of ``run`` on the ScanStream ``scans`` (its times, truth and
-        simulation time)."""
-        count = len(scans)
-        return cls.evaluate(times=scans.times, truth=scans.truth, estimate=run.poses, hits=run.hits,
-                            skipped=list(run.skipped), degenerate_directions=run.degenerate_directions,
+        simulation time), scored from scan ``first`` on (earlier scans: a rest before the
+        trajectory, for the estimator to initialise), the estimate re-anchored there to
+        the true pose (an odometry's frame is arbitrary; what it did while the robot stood
+        still is not the trajectory's)."""
+        count, keep = len(scans), slice(first, None)
+        directions = run.degenerate_directions
+        estimate = run.poses[keep]
+        if first:
+            estimate = scans.truth[first] @ np.linalg.inv(estimate[0]) @ estimate
+        return cls.evaluate(times=scans.times[keep], truth=scans.truth[keep], estimate=estimate,
+                            hits=run.hits[keep], skipped=[k - first for k in run.skipped if k >= first],
+                            degenerate_directions=None if directions is None else directions[keep],
                             seconds_per_scan={"simulate": scans.seconds / count, "estimate": run.seconds / count},
                             report=dict(run.report), **fields)
 

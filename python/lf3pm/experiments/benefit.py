@@ -27,79 +27,17 @@ from __future__ import annotations
 import json
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass, field, replace
-from multiprocessing import get_context
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
+from lf3pm.experiments.guidance import GUIDANCE, LIO_GUIDANCE, UNGUIDED
+from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, compare
-from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
-
-@dataclass(frozen=True)
-class Guidance:
-    """A way to plan: a SOLM ``channel`` raised to ``power`` with trade-off ``weight``."""
-
-    name: str
-    channel: str
-    power: float = 1.0
-    weight: float = 1.0
-
-
-def parse_guidance(text: str) -> Guidance:
-    """``NAME=CHANNEL:POWER:WEIGHT`` (e.g. ``cube=q_n:3:1``) as a Guidance."""
-    from lf3pm.planner.cost_map import COST_CHANNELS
-
-    try:
-        name, spec = text.split("=", 1)
-        channel, power, weight = spec.split(":")
-        g = Guidance(name.strip(), channel.strip(), float(power), float(weight))
-    except ValueError:
-        raise Lf3pmError(f"guidance {text!r}: expected NAME=CHANNEL:POWER:WEIGHT, e.g. cube=q_n:3:1") from None
-    if not g.name or g.channel not in COST_CHANNELS or g.channel == "none":
-        raise Lf3pmError(f"guidance {text!r}: channel must be one of q_n, q_min, step_norm")
-    if not (math.isfinite(g.power) and 0 < g.power <= 10 and math.isfinite(g.weight) and g.weight >= 0):
-        raise Lf3pmError(f"guidance {text!r}: power must be in (0, 10] and weight finite and >= 0")
-    return g
-
-
-UNGUIDED = Guidance("none", "none", 1.0, 0.0)
-#: The guidance compared with ``none``; the last is the shipped default.
-GUIDANCE = (Guidance("q_n", "q_n"), Guidance("q_min", "q_min"), Guidance("step_norm", "step_norm"),
-            Guidance("default", DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT))
-#: Replayed with the LIO as well as by localization.
-LIO_GUIDANCE = ("none", "default")
-
-
-@dataclass(frozen=True)
-class MapCase:
-    """One map of the study and how its SOLM is built and its pairs drawn.
-
-    ``source``: ``scene:NAME`` (a procedural scene, seed 0, ``scene_params``) or a
-    file in the shared data folder. ``zones``: {"start": (xmin, ymin, xmax, ymax),
-    "goal": ...} for files (scenes bring their own). Pairs are at least
-    ``min_distance`` m apart; with ``both_ways`` every other pair runs goal to start.
-    """
-
-    name: str
-    source: str
-    sensor: str
-    space: str
-    res: float
-    pairs: int
-    robots: tuple = ("omni", "diff")
-    yaw_bins: int = 36
-    yaw_reuse: bool = False
-    ray_stride: int = 1
-    scene_params: dict = field(default_factory=dict)
-    bounds: tuple | None = None
-    zones: dict | None = None
-    min_distance: float = 10.0
-    both_ways: bool = False
-
+from lf3pm.experiments.replay_tasks import load_replay, run_replays
 
 #: The reduced Gobi scene of the demo (experiments/gobi.py): town and open desert.
 _GOBI = {"length": 115.0, "width": 90.0, "west": 25.0, "town_radius": 25.0, "warehouse_distance": 60.0,
@@ -153,7 +91,7 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
     records, tasks = [], []
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
-        solm_path = _build_solm(case, out)
+        solm_path = build_case_solm(case, out / "solm" / f"{case.name}.zarr")
         pairs = _plan_pairs(case, solm_path, out, np.random.SeedSequence([pair_seed, number]), guidance)
         for pair in pairs:
             records.append(pair)
@@ -164,7 +102,7 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
                         tasks.append((case, plan["csv"], method, seed,
                                       _replay_path(out, case, pair["pair"], name, method, seed)))
         step(f"{case.name}: {len(pairs)} pairs planned", len(cases))
-    _run_replays(tasks, workers, step)
+    run_replays(tasks, workers, step)
     summary = _summarise(out, cases, guidance, records, seeds, pair_seed, time.perf_counter() - started)
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())
@@ -179,36 +117,6 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
 
 
 # --- maps and SOLMs -------------------------------------------------------------------
-
-def load_case_map(case: MapCase):
-    """(Map, zones) of a case; the same for the main process and every worker."""
-    from lf3pm.map import load_map
-
-    if case.source.startswith("scene:"):
-        from lf3pm.scenes import build_scene
-
-        scene = build_scene(case.source.split(":", 1)[1], seed=0, **case.scene_params)
-        zones = case.zones or {name: tuple(zone) for name, zone in scene.zones.items()}
-        return load_map(scene.points), zones
-    from lf3pm.experiments.data import shared_data_dir
-
-    if case.zones is None:
-        raise Lf3pmError(f"map case {case.name}: a map file needs its start and goal zones")
-    return load_map(shared_data_dir() / case.source), dict(case.zones)
-
-
-def _build_solm(case: MapCase, out: Path) -> Path:
-    from lf3pm.sensors import get_sensor
-    from lf3pm.solm import build_solm, make_grid
-
-    world, _ = load_case_map(case)
-    grid = make_grid(world, case.space, case.res, bounds=case.bounds, yaw_bins=case.yaw_bins)
-    path = out / "solm" / f"{case.name}.zarr"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    build_solm(world, get_sensor(case.sensor), grid, path, seed=0, yaw_reuse=case.yaw_reuse,
-               ray_stride=case.ray_stride)
-    return path
-
 
 # --- pairs and plans ------------------------------------------------------------------
 
@@ -274,47 +182,6 @@ def _replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str
     return out / "replays" / case.name / f"{pair:02d}_{guidance}_{method}_{seed}.json"
 
 
-def _run_replays(tasks: list, workers: int, step) -> None:
-    """Runs the replays whose JSON is missing, ``workers`` at a time."""
-    todo = [t for t in tasks if not t[-1].exists()]
-    label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
-    step(label, len(todo), 0, restart=True)
-    if not todo:
-        return
-    if workers == 1:
-        for task in todo:
-            _replay_task(task)
-            step(label, len(todo))
-        return
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
-        for _ in pool.map(_replay_task, todo):
-            step(label, len(todo))
-
-
-_MAPS: dict = {}  # per process: case name -> (Map, registration target)
-
-
-def _replay_task(task) -> None:
-    """One replay (in a worker): its summary written atomically as JSON."""
-    from lf3pm.evaluation.mde import RegistrationTarget
-    from lf3pm.evaluation.replay import replay
-
-    case, csv, method, seed, path = task
-    if case.name not in _MAPS:
-        world, _ = load_case_map(case)
-        _MAPS[case.name] = (world, RegistrationTarget(world, threads=1))
-    world, target = _MAPS[case.name]
-    result = replay(world, csv, case.sensor, method, seed, target=target, threads=1)
-    errors = np.asarray(result.errors)
-    record = {"ape_rmse": result.ape["rmse"], "ape_median": result.ape["median"], "ape_max": result.ape["max"],
-              "scans": result.scans, "degenerate_share": float(np.mean(result.degenerate)),
-              "seconds": float(sum(result.seconds_per_scan.values()) * result.scans),
-              "errors_every_second": errors[:: max(1, int(round(result.params["rate"])))].tolist()}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(path) as fp:
-        fp.write(json.dumps(record).encode())
-
-
 # --- analysis -------------------------------------------------------------------------
 
 def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pair_seed: int,
@@ -324,7 +191,7 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
         case = by_name[pair["case"]]
         for guidance, plan in pair["plans"].items():
             for method in ("localization", "lio"):
-                runs = [json.loads(p.read_text()) for p in
+                runs = [load_replay(p) for p in
                         (_replay_path(out, case, pair["pair"], guidance, method, s) for s in range(seeds))
                         if p.exists()]
                 if runs:
@@ -356,7 +223,9 @@ def _compare(records: list, guidance: str, method: str) -> dict:
                    guided_length=[p[guidance]["length_m"] for p in rows],
                    unguided_length=[p["none"]["length_m"] for p in rows],
                    guided_duration=[p[guidance]["duration_s"] for p in rows],
-                   unguided_duration=[p["none"]["duration_s"] for p in rows])
+                   unguided_duration=[p["none"]["duration_s"] for p in rows],
+                   guided_seeds=[p[guidance][method]["ape_per_seed"] for p in rows],
+                   unguided_seeds=[p["none"][method]["ape_per_seed"] for p in rows])
 
 
 def _goal(comparisons: dict) -> dict:
@@ -367,6 +236,7 @@ def _goal(comparisons: dict) -> dict:
     return {"median_ape_cut_50pct": loc["median_ratio"] <= 0.5,
             "wilcoxon_p_below_0.01": bool(loc["wilcoxon_p"] < 0.01),
             "worse_on_at_most_10pct": loc["share_worse"] <= 0.1,
+            "worse_beyond_seed_noise_on_at_most_10pct": bool(loc["share_worse_beyond_noise"] <= 0.1),
             "length_overhead_at_most_15pct": loc["median_length_overhead"] <= 0.15,
             "lio_agrees_in_direction": bool(lio.get("pairs")) and lio["median_ratio"] < 1.0}
 
@@ -377,13 +247,16 @@ def report(summary: dict) -> str:
         if not c.get("pairs"):
             return f"| {name} | 0 | | | | | | | |"
         lo, hi = c["median_ratio_ci95"]
+        beyond = c["share_worse_beyond_noise"]
+        beyond = "n/a" if beyond is None or not math.isfinite(beyond) else f"{100 * beyond:.0f} %"
         return (f"| {name} | {c['pairs']} | {c['median_ratio']:.2f} [{lo:.2f}, {hi:.2f}] | {c['wilcoxon_p']:.2g} | "
-                f"{100 * c['share_worse']:.0f} % | {100 * c['failure_rate_guided']:.0f} % / "
+                f"{100 * c['share_worse']:.0f} % ({beyond}) | {100 * c['failure_rate_guided']:.0f} % / "
                 f"{100 * c['failure_rate_unguided']:.0f} % | {100 * c['median_length_overhead']:+.1f} % | "
                 f"{100 * c['median_duration_overhead']:+.1f} % | {1000 * c['median_error_guided']:.0f} / "
                 f"{1000 * c['median_error_unguided']:.0f} |")
 
-    header = ("| guidance | pairs | median APE ratio [95 % CI] | Wilcoxon p | worse | failures guided / none "
+    header = ("| guidance | pairs | median APE ratio [95 % CI] | Wilcoxon p | worse (beyond seed noise) | "
+              "failures guided / none "
               f"(APE > {summary['failure_ape_m']:g} m) | length overhead | duration overhead | median APE (mm) "
               "guided / none |\n|---|---|---|---|---|---|---|---|---|")
     specs = "; ".join(f"{g['name']}: {g['channel']} to the power {g['power']:g}, weight {g['weight']:g}"

@@ -1,15 +1,17 @@
-"""The paper's Gobi experiment: plan from inside the town to the warehouse with
-a Livox Mid-70 on an omnidirectional robot, guided by q_n, by q_min, by the
-predictor the correlation study ships (|dx*|, the ``step_norm`` channel) and by
-no metric; compare the trajectories by S, the sum of MDE along them, and by a
-real LiDAR odometry (KISS-ICP) replayed on simulated scans along them.
+"""The paper's Gobi experiment: plan from inside the town to the warehouse with a
+Livox Mid-70 on an omnidirectional robot, guided by q_n, q_min, |dx*| (the
+``step_norm`` channel), the shipped default and no metric; compare the
+trajectories by S, the sum of MDE along them (the paper's figure of merit), by
+localization against the map (the deployment a SOLM is for) and by a
+LiDAR-inertial odometry (the paper's FAST-LIO2 setting), both replayed on
+simulated scans (docs/replay.md, docs/lio.md).
 
     lf3pm experiment gobi -o DIR [--reduced]
 
-Writes DIR/summary.json (keyed by q_n, q_min, step_norm, none), DIR/gobi.md
-(the table), DIR/trajectories.png (over the q_n SOLM), DIR/along.png (MDE and
-odometry error along each trajectory), DIR/trajectories/<metric>.csv and the
-SOLM itself (DIR/solm.zarr: resumed if the run is repeated).
+Writes DIR/summary.json (keyed by guidance), DIR/gobi.md (the table),
+DIR/trajectories.png (over the q_n SOLM), DIR/along.png (MDE, localization and
+LIO error along each trajectory), DIR/trajectories/<guidance>.csv, and keeps
+DIR/solm.zarr and DIR/replays/ (a rerun resumes them).
 """
 
 from __future__ import annotations
@@ -22,20 +24,18 @@ import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.evaluation import RegistrationTarget
-from lf3pm.evaluation.odometry import replay_odometry
 from lf3pm.evaluation.trajectory import sample_trajectory
 from lf3pm.evaluation.trajectory_mde import mde_along
-from lf3pm.map import load_map
+from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
+from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
+from lf3pm.experiments.replay_tasks import load_replay, run_replays
 from lf3pm.planner.plan import Planner
 from lf3pm.planner.robots import Robot
-from lf3pm.scenes import build_scene
 from lf3pm.sensors import get_sensor
-from lf3pm.solm import Solm, build_solm, make_grid
+from lf3pm.solm import Solm
 
-#: Guidance compared, in the order of the table; ``step_norm`` is |dx*|, the
-#: input of the shipped MDE predictor (calibration.py; monotone in it).
-METRICS = ("q_n", "q_min", "step_norm", "none")
 PAPER = "paper (its Gobi figure): S = 43.66 guided by q_n against 64.98 by q_min"
+METHODS = ("localization", "lio")
 
 
 @dataclass(frozen=True)
@@ -49,18 +49,10 @@ class GobiSetup:
     margin: float = 15.0           # m of SOLM west of the town centre and each side of the route
     half_width: float = 30.0       # m of SOLM north and south of the route
     goal_offset: float = 20.0      # m west of the warehouse centre (its west face is 12 m west)
-    weight: float = 1.0            # lambda: cost of a median cell relative to time
-    vmax: float = 1.0              # m/s, longitudinal and lateral (box limits, as in the issue)
-    wmax: float = 1.0              # rad/s
-    r_safe: float = 0.3            # m beyond the SOLM's robot radius
     mde_every: float = 1.0         # s between MDE poses
     mde_trials: int = 5
-    # KISS-ICP's voxel: its outdoor default (max range / 100 = 1.3 m) lost track of
-    # a Mid-70 moving sideways in the town (APE 5.3 m over 20 m); 0.5 m: 1.6 m.
-    odometry_voxel: float = 0.5
-    # Scans taken while the robot moves, deskewed by KISS-ICP (docs/odometry_replay.md).
-    odometry_motion_distortion: bool = True
-    sensor_height: float = 1.0
+    replay_seeds: int = 3          # per plan and method
+    workers: int = 2               # replay processes
     seed: int = 0
 
 
@@ -68,7 +60,19 @@ FULL = GobiSetup(scene_params={})
 #: A smaller desert (115 x 90 m, warehouse 60 m east, 4 buildings) for the demo.
 REDUCED = GobiSetup(scene_params={"length": 115.0, "width": 90.0, "west": 25.0, "town_radius": 25.0,
                                   "warehouse_distance": 60.0, "buildings": 4, "stones": 150},
-                    mde_every=2.0, mde_trials=3)
+                    mde_every=2.0, mde_trials=3, replay_seeds=2)
+
+
+def map_case(setup: GobiSetup) -> MapCase:
+    """The experiment's map as a MapCase (scene, SOLM bounds and resolution)."""
+    from lf3pm.scenes import scene_defaults
+
+    params = {**scene_defaults("gobi"), **setup.scene_params}
+    goal_x = params["warehouse_distance"] - setup.goal_offset
+    return MapCase("gobi", "scene:gobi", "mid70", "se2", setup.solm_res, yaw_bins=setup.yaw_bins,
+                   yaw_reuse=True, ray_stride=setup.ray_stride, scene_params=dict(setup.scene_params),
+                   scene_seed=setup.seed,
+                   bounds=(-setup.margin, -setup.half_width, goal_x + setup.margin, setup.half_width))
 
 
 def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
@@ -76,54 +80,47 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
     out = Path(out)
     (out / "trajectories").mkdir(parents=True, exist_ok=True)
     step = progress or (lambda label, total, advance=1, restart=False: None)
-    phases = 3 * len(METRICS)
-    scene = build_scene("gobi", seed=setup.seed, **setup.scene_params)
-    world = load_map(scene.points)
-    mid70 = get_sensor("mid70")
-    wx = scene.params["warehouse_distance"]
-    goal = (wx - setup.goal_offset, 0.0, 0.0)
+    guidance = (UNGUIDED,) + GUIDANCE
+    case = map_case(setup)
+    world, _ = load_case_map(case)
+    goal = (case.bounds[2] - setup.margin, 0.0, 0.0)
     start = (0.0, 0.0, 0.0)  # the town square (the scene's free reference pose)
-    bounds = (-setup.margin, -setup.half_width, goal[0] + setup.margin, setup.half_width)
-    grid = make_grid(world, "se2", setup.solm_res, bounds=bounds, yaw_bins=setup.yaw_bins,
-                     height=setup.sensor_height)
-    label = f"SOLM se2 {grid.shape} at {setup.solm_res} m, Mid-70"
-    step(label, grid.yaw_bins * grid.ny * grid.nx, 0, restart=True)
-    build_solm(world, mid70, grid, out / "solm.zarr", seed=setup.seed, yaw_reuse=True,
-               ray_stride=setup.ray_stride, progress=lambda cells, total: step(label, total, cells))
-    step("planning", phases, 0, restart=True)
-    solm = Solm.open(out / "solm.zarr")
+    step(f"SOLM se2 at {setup.solm_res} m, Mid-70", 1, 0, restart=True)
+    solm = Solm.open(build_case_solm(case, out / "solm.zarr", world))
     planner = Planner(solm)
-    # Box limits, as the issue asks: they let the robot move diagonally 1.41x faster and
-    # the time term yaws it for that; a limit on |v| too (Robot.vmax_norm) was measured in
-    # docs/gobi.md and left out (it flipped the S order and clipped a blocked cell's corner).
-    robot = Robot("omni", vmax_lon=setup.vmax, vmax_lat=setup.vmax, wmax=setup.wmax, r_safe=setup.r_safe)
+    robot = Robot("omni")
+    step("planning and MDE along the plans", len(guidance), 0, restart=True)
     target = RegistrationTarget(world)
     ground = solm.channel("ground_z")
-    results, plans = {}, {}
-    for metric in METRICS:
-        step(f"plan guided by {metric}", phases, 0)
-        plan = planner.plan(start, goal, robot=robot, metric=metric, weight=setup.weight)
-        plans[metric] = plan
+    mid70 = get_sensor("mid70")
+    results, plans, tasks = {}, {}, []
+    for g in guidance:
+        plan = planner.plan(start, goal, robot=robot, metric=g.channel, weight=g.weight, power=g.power)
+        plans[g.name] = plan
+        csv = out / "trajectories" / f"{g.name}.csv"
+        plan.trajectory.to_csv(csv)
         samples = plan.trajectory.sample(100.0)
-        plan.trajectory.to_csv(out / "trajectories" / f"{metric}.csv")
-        z = _ground_under(ground, solm, samples["x"], samples["y"]) + setup.sensor_height
+        z = _ground_under(ground, solm, samples["x"], samples["y"]) + solm.grid_spec.height
         times, poses = sample_trajectory(samples["t"], samples["x"], samples["y"], samples["yaw"],
                                          every=setup.mde_every, z=z)
-        step(f"MDE at {len(poses)} poses along the {metric} trajectory", phases)
         along = mde_along(world, poses, mid70, trials=setup.mde_trials, seed=setup.seed, target=target)
-        step(f"odometry replay along the {metric} trajectory", phases)
-        full_poses = np.stack([samples["x"], samples["y"], z, samples["yaw"]], axis=1)
-        odometry = replay_odometry(world, samples["t"], full_poses, mid70, seed=setup.seed,
-                                   voxel_size=setup.odometry_voxel,
-                                   motion_distortion=setup.odometry_motion_distortion)
-        step(f"{metric} done", phases)
-        results[metric] = {**plan.summary(), "S": along.s, "mde_poses": len(poses),
+        results[g.name] = {**plan.summary(), "guidance": asdict(g), "S": along.s, "mde_poses": len(poses),
                            "mde_refused": len(along.refused), "mde": _finite_list(along.mde),
-                           "mde_times": times.tolist(), "odometry": odometry.to_dict(trajectories=True)}
-    summary = {"experiment": "gobi", "setup": asdict(setup), "start": start, "goal": goal,
-               "sensor": "mid70", "robot": asdict(robot), "map_points": world.size,
-               "map_sha256": world.sha256, "paper": PAPER, "results": results,
-               "finding": _finding(results)}
+                           "mde_times": times.tolist()}
+        tasks += [(case, str(csv), method, seed, out / "replays" / f"{g.name}_{method}_{seed}.json")
+                  for method in METHODS for seed in range(setup.replay_seeds)]
+        step("planning and MDE along the plans", len(guidance))
+    run_replays(tasks, setup.workers, step)
+    for name, result in results.items():
+        for method in METHODS:
+            runs = [load_replay(out / "replays" / f"{name}_{method}_{s}.json") for s in range(setup.replay_seeds)]
+            result[method] = {"ape": float(np.median([r["ape_rmse"] for r in runs])),
+                              "ape_per_seed": [r["ape_rmse"] for r in runs],
+                              "degenerate_share": float(np.median([r["degenerate_share"] for r in runs])),
+                              "times": runs[0]["times_every_second"], "errors": runs[0]["errors_every_second"]}
+    summary = {"experiment": "gobi", "setup": asdict(setup), "start": start, "goal": goal, "sensor": "mid70",
+               "robot": asdict(robot), "map_points": world.size, "map_sha256": world.sha256, "paper": PAPER,
+               "results": results, "finding": _finding(results)}
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())
     with atomic_write(out / "gobi.md") as fp:
@@ -146,33 +143,31 @@ def _finite_list(values) -> list:
 
 
 def _finding(results: dict) -> dict:
-    s = {m: results[m]["S"] for m in METRICS}
-    ape = {m: results[m]["odometry"]["ape"]["rmse"] for m in METRICS}
-    return {"S_lowest": min(s, key=s.get), "S_q_n_below_q_min": s["q_n"] < s["q_min"],
-            "S_q_n_below_none": s["q_n"] < s["none"], "ape_lowest": min(ape, key=lambda k: ape[k] or 1e9),
-            "same_order_in_odometry": sorted(s, key=s.get) == sorted(ape, key=lambda k: ape[k] or 1e9)}
+    lowest = {key: min(results, key=lambda m: results[m][key] if key == "S" else results[m][key]["ape"])
+              for key in ("S",) + METHODS}
+    return {"S_lowest": lowest["S"], "localization_lowest": lowest["localization"], "lio_lowest": lowest["lio"],
+            "default_below_none": {key: (results["default"]["S"] < results["none"]["S"]) if key == "S" else
+                                   (results["default"][key]["ape"] < results["none"][key]["ape"])
+                                   for key in ("S",) + METHODS}}
 
 
 def _table(summary: dict) -> str:
+    seeds = summary["setup"]["replay_seeds"]
     lines = ["# Gobi experiment (Mid-70, omnidirectional robot)", "",
              f"Start {summary['start']} (town square), goal {summary['goal']} (west of the warehouse). "
-             f"{summary['paper']}.", "",
-             "| guidance | length (m) | duration (s) | S (sum of MDE) | MDE poses | odometry APE rmse (m) "
-             "| APE max (m) | RPE per m (m) |", "|---|---|---|---|---|---|---|---|"]
-    for metric, r in summary["results"].items():
-        odo = r["odometry"]
-        lines.append(f"| {metric} | {r['trajectory_length_m']:.1f} | {r['duration_s']:.1f} | {r['S']:.4g} | "
-                     f"{r['mde_poses'] - r['mde_refused']} | {_num(odo['ape']['rmse'])} | "
-                     f"{_num(odo['ape']['max'])} | {_num(odo['rpe_metre'].get('translation', {}).get('rmse'))} |")
+             f"{summary['paper']}. APE: rmse of the translation error, median over {seeds} seed(s).", "",
+             "| guidance | length (m) | duration (s) | S (sum of MDE) | MDE poses | localization APE (m) "
+             "| degenerate scans | LIO APE (m) |", "|---|---|---|---|---|---|---|---|"]
+    for name, r in summary["results"].items():
+        loc, lio = r["localization"], r["lio"]
+        lines.append(f"| {name} | {r['trajectory_length_m']:.1f} | {r['duration_s']:.1f} | {r['S']:.4g} | "
+                     f"{r['mde_poses'] - r['mde_refused']} | {loc['ape']:.3g} | "
+                     f"{100 * loc['degenerate_share']:.0f} % | {lio['ape']:.3g} |")
     f = summary["finding"]
-    lines += ["", f"Lowest S: {f['S_lowest']}; S(q_n) < S(q_min): {f['S_q_n_below_q_min']}; "
-                  f"S(q_n) < S(none): {f['S_q_n_below_none']}; lowest odometry APE: {f['ape_lowest']}; "
-                  f"same ordering by S and by APE: {f['same_order_in_odometry']}.", ""]
+    below = ", ".join(f"{k}: {'yes' if v else 'no'}" for k, v in f["default_below_none"].items())
+    lines += ["", f"Lowest S: {f['S_lowest']}; lowest localization APE: {f['localization_lowest']}; lowest LIO "
+                  f"APE: {f['lio_lowest']}. Default guidance below none by {below}.", ""]
     return "\n".join(lines)
-
-
-def _num(value) -> str:
-    return "n/a" if value is None else f"{value:.3g}"
 
 
 def _figures(out: Path, solm: Solm, world, plans: dict, results: dict) -> None:
@@ -182,19 +177,20 @@ def _figures(out: Path, solm: Solm, world, plans: dict, results: dict) -> None:
     from lf3pm.solm.figures import save_figure
 
     plans_figure(solm, plans, out / "trajectories.png", map_points=world.points,
-                 labels={m: f"{m}: S = {results[m]['S']:.3g}" for m in plans},
+                 labels={m: f"{m}: localization APE {100 * results[m]['localization']['ape']:.1f} cm, "
+                            f"LIO {results[m]['lio']['ape']:.2f} m" for m in plans},
                  title="Trajectories over the Mid-70 SOLM (q_n, min over yaw); dotted: grid paths")
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), dpi=110, sharex=True)
-    for metric, r in results.items():
-        colour = "k" if metric == "none" else COLOURS[metric]
-        top.plot(r["mde_times"], [np.nan if v is None else v for v in r["mde"]], "o-", ms=3,
-                 color=colour, label=metric)
-        odo = r["odometry"]
-        err = np.linalg.norm(np.asarray(odo["estimate_xyz"]) - np.asarray(odo["truth_xyz"]), axis=1)
-        bottom.plot(odo["times"], err, color=colour, label=metric)
-    top.set_yscale("log")
-    top.set_ylabel("MDE")
-    top.legend(fontsize=8)
-    bottom.set_ylabel("KISS-ICP position error (m)")
-    bottom.set_xlabel("time along the trajectory (s)")
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), dpi=110, sharex=True)
+    for name, r in results.items():
+        colour = "k" if name == "none" else COLOURS[name]
+        axes[0].plot(r["mde_times"], [np.nan if v is None else v for v in r["mde"]], "o-", ms=3, color=colour,
+                     label=name)
+        for ax, method in zip(axes[1:], METHODS):
+            ax.plot(r[method]["times"], r[method]["errors"], color=colour, label=name)
+    axes[0].set_yscale("log")
+    axes[0].set_ylabel("MDE")
+    axes[0].legend(fontsize=8)
+    axes[1].set_ylabel("localization error (m)")
+    axes[2].set_ylabel("LIO error (m)")
+    axes[2].set_xlabel("time along the trajectory (s; replays: seed 0)")
     save_figure(fig, out / "along.png")

@@ -7,7 +7,10 @@ For each start/goal pair i there is one error per plan, a_i (guided) and b_i
   confidence interval over pairs (seeded);
 - the two-sided Wilcoxon signed-rank p of log a_i - log b_i (scipy; pairs with
   equal errors are dropped, as the test's ``wilcox`` zero method does);
-- the share of pairs where guidance is worse (r_i > 1);
+- the share of pairs where guidance is worse (r_i > 1), and where it is worse beyond
+  the replays' own noise: given each plan's errors over seeds, the guided mean
+  exceeds the unguided by more than twice the standard error of their difference
+  (NaN with one seed);
 - failure rates: the share of pairs whose error exceeds ``failure`` (1 m);
 - the median overheads of path length and duration, a_len / b_len - 1.
 """
@@ -47,9 +50,24 @@ def wilcoxon_p(guided, unguided) -> float:
     return float(wilcoxon(d).pvalue)
 
 
+def worse_beyond_noise(guided_seeds, unguided_seeds) -> float:
+    """Share of pairs whose guided mean error exceeds the unguided one by more than
+    twice the standard error of the difference (lists of per-seed errors per pair)."""
+    flags = []
+    for a, b in zip(guided_seeds, unguided_seeds):
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        if min(a.size, b.size) < 2:
+            return math.nan
+        se = math.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size)
+        flags.append(a.mean() - b.mean() > 2.0 * se)
+    return float(np.mean(flags)) if flags else math.nan
+
+
 def compare(guided, unguided, *, guided_length=None, unguided_length=None, guided_duration=None,
-            unguided_duration=None, failure: float = FAILURE_APE, seed: int = 0) -> dict:
-    """The paired comparison of the module docstring. Errors must be positive and finite."""
+            unguided_duration=None, guided_seeds=None, unguided_seeds=None, failure: float = FAILURE_APE,
+            seed: int = 0) -> dict:
+    """The paired comparison of the module docstring. Errors must be positive and finite;
+    ``*_seeds``: each pair's per-seed errors (for the share worse beyond noise)."""
     a, b = np.asarray(guided, float), np.asarray(unguided, float)
     if a.shape != b.shape or a.ndim != 1:
         raise Lf3pmError(f"paired errors need two equal-length lists, got {a.shape} and {b.shape}")
@@ -59,6 +77,8 @@ def compare(guided, unguided, *, guided_length=None, unguided_length=None, guide
     out = {"pairs": int(a.size), "median_ratio": float(np.median(ratios)) if a.size else math.nan,
            "median_ratio_ci95": median_ratio_ci(ratios, seed=seed), "wilcoxon_p": wilcoxon_p(a, b),
            "share_worse": float(np.mean(ratios > 1.0)) if a.size else math.nan,
+           "share_worse_beyond_noise": (worse_beyond_noise(guided_seeds, unguided_seeds)
+                                        if guided_seeds is not None else math.nan),
            "failure_rate_guided": float(np.mean(a > failure)) if a.size else math.nan,
            "failure_rate_unguided": float(np.mean(b > failure)) if a.size else math.nan,
            "median_error_guided": float(np.median(a)) if a.size else math.nan,

@@ -9,7 +9,8 @@ import numpy as np
 from lf3pm.solm.figures import draw_heat_map, new_figure, save_figure
 from lf3pm.solm.reader import Solm
 
-COLOURS = {"q_n": "tab:red", "q_min": "tab:orange", "step_norm": "tab:purple", "none": "white"}
+COLOURS = {"q_n": "tab:red", "q_min": "tab:orange", "step_norm": "tab:purple", "default": "tab:green",
+           "none": "white"}
 
 
 def plans_figure(solm: Solm, plans: dict, path: Path, *, channel: str = "q_n",

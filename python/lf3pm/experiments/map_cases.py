@@ -1,0 +1,68 @@
+"""A map an experiment plans on: where it comes from and how its SOLM is built."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lf3pm.errors import Lf3pmError
+
+
+@dataclass(frozen=True)
+class MapCase:
+    """One map of a study, how its SOLM is built and where its pairs are drawn.
+
+    ``source``: ``scene:NAME`` (a procedural scene, ``scene_seed``, ``scene_params``) or a
+    file in the shared data folder. ``zones``: {"start": (xmin, ymin, xmax, ymax),
+    "goal": ...} for files (scenes bring their own). Pairs are at least
+    ``min_distance`` m apart; with ``both_ways`` every other pair runs goal to start.
+    """
+
+    name: str
+    source: str
+    sensor: str
+    space: str
+    res: float
+    pairs: int = 0
+    robots: tuple = ("omni", "diff")
+    yaw_bins: int = 36
+    yaw_reuse: bool = False
+    ray_stride: int = 1
+    scene_params: dict = field(default_factory=dict)
+    scene_seed: int = 0
+    bounds: tuple | None = None
+    zones: dict | None = None
+    min_distance: float = 10.0
+    both_ways: bool = False
+
+
+def load_case_map(case: MapCase):
+    """(Map, zones) of a case; the same in the main process and in every worker."""
+    from lf3pm.map import load_map
+
+    if case.source.startswith("scene:"):
+        from lf3pm.scenes import build_scene
+
+        scene = build_scene(case.source.split(":", 1)[1], seed=case.scene_seed, **case.scene_params)
+        zones = case.zones or {name: tuple(zone) for name, zone in scene.zones.items()}
+        return load_map(scene.points), zones
+    from lf3pm.experiments.data import shared_data_dir
+
+    if case.zones is None:
+        raise Lf3pmError(f"map case {case.name}: a map file needs its start and goal zones")
+    return load_map(shared_data_dir() / case.source), dict(case.zones)
+
+
+def build_case_solm(case: MapCase, path: Path, world=None) -> Path:
+    """Builds (or resumes) the case's SOLM into ``path`` (seed 0); ``world`` reuses a loaded map."""
+    from lf3pm.sensors import get_sensor
+    from lf3pm.solm import build_solm, make_grid
+
+    if world is None:
+        world, _ = load_case_map(case)
+    grid = make_grid(world, case.space, case.res, bounds=case.bounds, yaw_bins=case.yaw_bins)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    build_solm(world, get_sensor(case.sensor), grid, path, seed=0, yaw_reuse=case.yaw_reuse,
+               ray_stride=case.ray_stride)
+    return path

@@ -1,0 +1,70 @@
+"""Many replays of planned trajectories, in worker processes, each saved as it ends.
+
+A task is (MapCase, trajectory CSV, method, seed, JSON path). A worker loads each
+map (and prepares it for registration) once; a replay's summary is written
+atomically to its JSON path, so an interrupted experiment resumes by skipping
+the tasks whose JSON exists. Workers use the spawn start method: small_gicp,
+the simulator and the LIO's own child process use threads, and forking after
+OpenMP hangs (shared BUILD-NOTES).
+"""
+
+from __future__ import annotations
+
+import json
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+
+import numpy as np
+
+from lf3pm.atomic import atomic_write
+from lf3pm.experiments.map_cases import load_case_map
+
+
+def run_replays(tasks: list, workers: int, step) -> None:
+    """Runs the tasks whose JSON is missing, ``workers`` at a time, calling
+    step(label, total, advance=1, restart=False) as they end."""
+    todo = [t for t in tasks if not t[-1].exists()]
+    label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
+    step(label, len(todo), 0, restart=True)
+    if not todo:
+        return
+    if workers == 1:
+        for task in todo:
+            replay_task(task)
+            step(label, len(todo))
+        return
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+        for _ in pool.map(replay_task, todo):
+            step(label, len(todo))
+
+
+def load_replay(path) -> dict:
+    """A finished replay's summary (replay_task's JSON)."""
+    return json.loads(open(path, encoding="utf-8").read())
+
+
+_MAPS: dict = {}  # per process: case name -> (Map, registration target)
+
+
+def replay_task(task) -> None:
+    """One replay: APE (rmse, median, max), scans, the share of degenerate scans,
+    seconds, and the error once per second, written atomically as JSON."""
+    from lf3pm.evaluation.mde import RegistrationTarget
+    from lf3pm.evaluation.replay import replay
+
+    case, csv, method, seed, path = task
+    if case.name not in _MAPS:
+        world, _ = load_case_map(case)
+        _MAPS[case.name] = (world, RegistrationTarget(world, threads=1))
+    world, target = _MAPS[case.name]
+    result = replay(world, csv, case.sensor, method, seed, target=target, threads=1)
+    errors = np.asarray(result.errors)
+    every = max(1, int(round(result.params["rate"])))
+    record = {"ape_rmse": result.ape["rmse"], "ape_median": result.ape["median"], "ape_max": result.ape["max"],
+              "scans": result.scans, "degenerate_share": float(np.mean(result.degenerate)),
+              "seconds": float(sum(result.seconds_per_scan.values()) * result.scans),
+              "times_every_second": (result.times[::every] - result.times[0]).tolist(),
+              "errors_every_second": errors[::every].tolist()}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as fp:
+        fp.write(json.dumps(record).encode())
