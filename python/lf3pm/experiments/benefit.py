@@ -155,12 +155,32 @@ def _plan_pairs(case: MapCase, solm_path: Path, out: Path, seed: np.random.SeedS
                 plan.trajectory.to_csv(csv)
                 summary = plan.summary()
                 plans[g.name] = {"csv": str(csv), "length_m": summary["trajectory_length_m"],
-                                 "duration_s": summary["duration_s"], "violations": summary["violations"]}
+                                 "duration_s": summary["duration_s"], "violations": summary["violations"],
+                                 "solm_mean": _solm_means(planner, plan)}
         except Lf3pmError:
             continue
         pairs.append({"case": case.name, "pair": number, "robot": robot.kind, "start": start, "goal": goal,
                       "plans": plans})
     return pairs
+
+
+#: SOLM channels whose mean along each trajectory the summary records (calibration).
+CHANNELS = ("q_n", "q_min", "step_norm")
+
+
+def _solm_means(planner, plan) -> dict:
+    """Each channel's time mean along the trajectory (at 10 Hz, interpolated, at the
+    trajectory's yaw), in the channel's own units (degenerate cells at its cap)."""
+    from lf3pm.planner.grid import GridField
+
+    s = plan.trajectory.sample(10.0)
+    out = {}
+    for channel in CHANNELS:
+        layer = planner.cost_layer(channel, 1.0)
+        g = planner.esdf
+        field = GridField(layer.filled, g.x0, g.y0, g.res)
+        out[channel] = float(np.mean(field.sample(s["x"], s["y"], s["yaw"])[0]) * layer.scale)
+    return out
 
 
 def _draw(planner, zone, robot, rng, tries: int = 200):
@@ -189,10 +209,10 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
     by_name = {case.name: case for case in cases}
     for pair in records:
         case = by_name[pair["case"]]
-        for guidance, plan in pair["plans"].items():
+        for name, plan in pair["plans"].items():
             for method in ("localization", "lio"):
                 runs = [load_replay(p) for p in
-                        (_replay_path(out, case, pair["pair"], guidance, method, s) for s in range(seeds))
+                        (_replay_path(out, case, pair["pair"], name, method, s) for s in range(seeds))
                         if p.exists()]
                 if runs:
                     plan[method] = {"ape": float(np.median([r["ape_rmse"] for r in runs])),
@@ -210,7 +230,32 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
             "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
             "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
-            "comparisons": comparisons, "goal": _goal(comparisons)}
+            "comparisons": comparisons, "calibration": _calibration(records), "goal": _goal(comparisons)}
+
+
+def _calibration(records: list) -> dict:
+    """How each channel's mean along a trajectory predicts its localization APE, over
+    every plan: Spearman rho pooled and within maps (mean), and the slope b of
+    log APE = a + b log(mean channel) (pooled least squares): the power at which the
+    channel's cost ratios track APE ratios."""
+    from scipy.stats import spearmanr
+
+    out = {}
+    for channel in CHANNELS:
+        rows = [(pair["case"], plan["solm_mean"][channel], plan["localization"]["ape"])
+                for pair in records for plan in pair["plans"].values()
+                if "localization" in plan and plan["solm_mean"].get(channel, 0) > 0]
+        if len(rows) < 3:
+            continue
+        case, q, ape = (np.array(c) for c in zip(*rows))
+        ape = np.maximum(ape.astype(float), 1e-4)
+        within = [spearmanr(q[case == c], ape[case == c])[0] for c in np.unique(case)
+                  if np.sum(case == c) >= 5 and np.ptp(ape[case == c]) > 0]
+        slope = np.polyfit(np.log(q.astype(float)), np.log(ape), 1)[0]
+        out[channel] = {"plans": len(rows), "spearman_pooled": float(spearmanr(q, ape)[0]),
+                        "spearman_within_mean": float(np.nanmean(within)) if within else math.nan,
+                        "log_log_slope": float(slope)}
+    return out
 
 
 def _compare(records: list, guidance: str, method: str) -> dict:
@@ -274,6 +319,13 @@ def report(summary: dict) -> str:
         if "default_by_map" in comps[method]:
             lines += ["", f"## Default guidance against none, per map ({title})", "", header]
             lines += [row(name, c) for name, c in comps[method]["default_by_map"].items()]
+    cal = summary.get("calibration", {})
+    if cal:
+        lines += ["", "## Which channel predicts localization error (every plan's mean along its trajectory)", "",
+                  "| channel | plans | Spearman rho pooled | mean rho within maps | slope of log APE on log channel |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {ch} | {c['plans']} | {c['spearman_pooled']:.2f} | {c['spearman_within_mean']:.2f} | "
+                  f"{c['log_log_slope']:.2f} |" for ch, c in cal.items()]
     goal = summary["goal"]
     if goal:
         lines += ["", "Goal (issue): " + "; ".join(f"{k.replace('_', ' ')}: {'yes' if v else 'no'}"
