@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from lf3pm.errors import Lf3pmError
 from lf3pm.planner import Planner, Robot
 from lf3pm.planner.grid import GridField
 from lf3pm.planner.shortcut import shortcut_path
@@ -88,3 +89,66 @@ def _cost(a, b, cost, weight, mode, step=RES / 4):
         return 0.0
     c = cost.sample(x, y, yaw)[0]
     return length * (1 + weight * np.mean(0.5 * (c[1:] + c[:-1])))
+
+
+@pytest.fixture(scope="module")
+def orientation_planner(tmp_path_factory):
+    """The orientation scene's SE(2) Mid-70 SOLM (1 m cells, 36 bins, thinned scans)."""
+    from lf3pm.map import load_map
+    from lf3pm.scenes import build_scene
+    from lf3pm.sensors import get_sensor
+    from lf3pm.solm import Solm, build_solm, make_grid
+
+    world = load_map(build_scene("orientation").points)
+    grid = make_grid(world, "se2", 1.0, yaw_bins=36)
+    path = tmp_path_factory.mktemp("orientation") / "s.zarr"
+    build_solm(world, get_sensor("mid70"), grid, path, yaw_reuse=True, ray_stride=8)
+    return Planner(Solm.open(path))
+
+
+def _densify(poses, step=0.05):
+    """The path's poses with points every ``step`` (x-y, yaw at 0.5 m/rad) between them."""
+    out = [poses[0]]
+    for a, b in zip(poses[:-1], poses[1:]):
+        n = max(1, int(math.ceil(max(math.hypot(*(b[:2] - a[:2])), 0.5 * abs(b[2] - a[2])) / step)))
+        out += list(a + np.linspace(0, 1, n + 1)[1:, None] * (b - a))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("weight", [1.0, 5.0])
+def test_trajectory_keeps_the_front_ends_cost_on_random_se2_queries(orientation_planner, weight):
+    """The front end's objective, integral of (1 + weight c) (ds + 0.5 |d yaw|) with c the
+    cost layer at the pose's yaw, is at most 5 % higher along the trajectory than along the
+    front-end path, on random queries whose start and goal yaws are their cells' cheapest
+    (a given yaw that is not the cheapest costs a turn either way)."""
+    planner = orientation_planner
+    layer = planner.cost_layer("q_n")
+    g = planner.esdf
+    cost = GridField(layer.filled, g.x0, g.y0, g.res)
+    bins = layer.filled.shape[0]
+
+    def objective(x, y, yaw):
+        ds = np.hypot(np.diff(x), np.diff(y)) + 0.5 * np.abs(np.diff(yaw))
+        c = cost.sample(x, y, yaw)[0]
+        return float(np.sum(ds * (1 + weight * 0.5 * (c[1:] + c[:-1]))))
+
+    ys, xs = np.nonzero(g.traversable(0.3))
+    rng = np.random.default_rng(0)
+    ratios = []
+    while len(ratios) < 10:
+        i, j = rng.choice(len(xs), 2, replace=False)
+        if math.hypot(xs[i] - xs[j], ys[i] - ys[j]) * g.res < 8:
+            continue
+        start, goal = ((g.x0 + (xs[k] + 0.5) * g.res, g.y0 + (ys[k] + 0.5) * g.res,
+                        2 * math.pi / bins * np.argmin(layer.filled[:, ys[k], xs[k]])) for k in (i, j))
+        try:
+            plan = planner.plan(start, goal, robot=Robot("omni"), metric="q_n", weight=weight)
+        except Lf3pmError:  # a cell behind the building, cut off from the open ground
+            continue
+        front = np.array(plan.path.poses, float)
+        front[0], front[-1] = start, goal
+        front[:, 2] = np.unwrap(front[:, 2])
+        front = _densify(front)
+        s = plan.trajectory.sample(100.0)
+        ratios.append(objective(s["x"], s["y"], s["yaw"]) / objective(front[:, 0], front[:, 1], front[:, 2]))
+    assert max(ratios) <= 1.05, ratios
