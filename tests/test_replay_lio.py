@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 import lf3pm
 from lf3pm.cli import app
 from lf3pm.evaluation.motion import Motion
-from lf3pm.evaluation.replay import replay
+from lf3pm.evaluation.replay import LIO_REST, replay
 from lf3pm.scenes import build_scene
 
 
@@ -47,12 +47,12 @@ def simulate_imu(motion, *, rate=200.0, preset="fake", seed=0, noise=True):
 
 
 def run_lio(scans, imu, sensor, *, initial_pose, **params):
-    """Consumes every scan; returns the truth shifted by 1 cm along x."""
+    """Consumes every scan; returns the truth shifted along x by 1 mm per scan."""
     calls["lio"] = {"params": params, "initial_pose": initial_pose, "imu_samples": len(imu.t)}
     ends = np.array([scan.end for scan in scans])
     poses = scans.truth.copy()
-    poses[:, 0, 3] += 0.01
-    return FakeEstimate(times=ends, poses=poses, skipped=[3])
+    poses[:, 0, 3] += 0.001 * np.arange(len(poses))
+    return FakeEstimate(times=ends, poses=poses, skipped=[3, len(ends) - 2])
 
 
 @pytest.fixture
@@ -77,10 +77,15 @@ def test_lio_dispatch(fake_lio, boxes):
     world, motion = boxes
     result = replay(world, motion, "vlp16", "lio", seed=7, imu_rate=100.0, window=3)
     assert calls["imu"] == {"rate": 100.0, "seed": 7, "noise": True}
-    assert calls["lio"]["params"] == {"window": 3} and calls["lio"]["imu_samples"] == 101
+    # The IMU covers the rest the LIO gets before the motion (replay.LIO_REST) and the 1 s of motion.
+    assert calls["lio"]["params"] == {"window": 3}
+    assert calls["lio"]["imu_samples"] == round(LIO_REST * 100.0) + 101
     np.testing.assert_array_equal(calls["lio"]["initial_pose"], result.truth[0])
-    assert result.method == "lio" and result.ape["rmse"] == pytest.approx(0.01)
-    assert result.skipped == [3] and result.versions["fake-lio"] == "9.9"
+    # Scored from the trajectory's start, re-anchored there: the drift counts from that scan.
+    drift = 0.001 * np.arange(len(result.truth))
+    assert result.method == "lio" and result.ape["rmse"] == pytest.approx(np.sqrt(np.mean(drift**2)))
+    # Scan 3 lies in the rest, the one before last in the trajectory: indices count from its start.
+    assert result.skipped == [len(result.truth) - 2] and result.versions["fake-lio"] == "9.9"
     assert result.report["lost_track"] is False and result.hits.min() > 1000
     # The simulation inside run_lio is counted as simulation, not as estimation.
     assert result.seconds_per_scan["simulate"] > 5 * result.seconds_per_scan["estimate"]

@@ -66,7 +66,7 @@ CASES = (
 )
 
 #: `--quick`: two small maps, two pairs each, one seed (the test suite's run).
-QUICK = (replace(CASES[0], pairs=2, scene_params={"length": 20.0}, min_distance=20.0),
+QUICK = (replace(CASES[0], pairs=2, scene_params={"length": 20.0, "pillars": 8}, min_distance=20.0),
          replace(CASES[1], pairs=2, res=2.0, yaw_bins=12))
 
 
@@ -99,8 +99,8 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
                 lio = name in LIO_GUIDANCE and "default" in names
                 for method in ("localization", "lio") if lio else ("localization",):
                     for seed in range(seeds):
-                        tasks.append((case, plan["csv"], method, seed,
-                                      _replay_path(out, case, pair["pair"], name, method, seed)))
+                        tasks.append((case, str(out / plan["csv"]), method, seed,
+                                      replay_path(out, case, pair["pair"], name, method, seed)))
         step(f"{case.name}: {len(pairs)} pairs planned", len(cases))
     run_replays(tasks, workers, step)
     summary = _summarise(out, cases, guidance, records, seeds, pair_seed, time.perf_counter() - started)
@@ -154,7 +154,7 @@ def _plan_pairs(case: MapCase, solm_path: Path, out: Path, seed: np.random.SeedS
                 csv = folder / f"{number:02d}_{robot.kind}_{g.name}.csv"
                 plan.trajectory.to_csv(csv)
                 summary = plan.summary()
-                plans[g.name] = {"csv": str(csv), "length_m": summary["trajectory_length_m"],
+                plans[g.name] = {"csv": str(csv.relative_to(out)), "length_m": summary["trajectory_length_m"],
                                  "duration_s": summary["duration_s"], "violations": summary["violations"],
                                  "solm_mean": _solm_means(planner, plan)}
         except Lf3pmError:
@@ -198,7 +198,8 @@ def _draw(planner, zone, robot, rng, tries: int = 200):
 
 # --- replays --------------------------------------------------------------------------
 
-def _replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str, seed: int) -> Path:
+def replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str, seed: int) -> Path:
+    """Where the study keeps one replay's JSON (replay_tasks.replay_task)."""
     return out / "replays" / case.name / f"{pair:02d}_{guidance}_{method}_{seed}.json"
 
 
@@ -207,18 +208,20 @@ def _replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str
 def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pair_seed: int,
                seconds: float) -> dict:
     by_name = {case.name: case for case in cases}
+    replay_seconds = 0.0
     for pair in records:
         case = by_name[pair["case"]]
         for name, plan in pair["plans"].items():
             for method in ("localization", "lio"):
                 runs = [load_replay(p) for p in
-                        (_replay_path(out, case, pair["pair"], name, method, s) for s in range(seeds))
+                        (replay_path(out, case, pair["pair"], name, method, s) for s in range(seeds))
                         if p.exists()]
+                replay_seconds += sum(r["seconds"] for r in runs)
                 if runs:
                     plan[method] = {"ape": float(np.median([r["ape_rmse"] for r in runs])),
                                     "ape_per_seed": [r["ape_rmse"] for r in runs],
                                     "degenerate_share": float(np.median([r["degenerate_share"] for r in runs])),
-                                    "scans": runs[0]["scans"], "errors_every_second": runs[0]["errors_every_second"]}
+                                    "scans": runs[0]["scans"]}
     comparisons = {}
     names = [g.name for g in guidance]
     for method, compared in (("localization", names), ("lio", [n for n in LIO_GUIDANCE if n in names])):
@@ -227,10 +230,25 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
             comparisons[method]["default_by_map"] = {
                 case.name: _compare([r for r in records if r["case"] == case.name], "default", method)
                 for case in cases}
+            comparisons[method]["default_by_robot"] = {
+                kind: _compare([r for r in records if r["robot"] == kind], "default", method)
+                for kind in sorted({r["robot"] for r in records})}
+            comparisons[method]["default_at_risk"] = _compare([r for r in records if _at_risk(r)], "default", method)
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
+            "replay_cpu_s": replay_seconds,
             "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
             "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
             "comparisons": comparisons, "calibration": _calibration(records), "goal": _goal(comparisons)}
+
+
+#: A pair is "at risk" when its unguided plan has at least this share of its scans
+#: degenerate under localization: there guidance has something to avoid.
+AT_RISK_SHARE = 0.1
+
+
+def _at_risk(pair: dict) -> bool:
+    unguided = pair["plans"]["none"].get("localization")
+    return unguided is not None and unguided["degenerate_share"] >= AT_RISK_SHARE
 
 
 def _calibration(records: list) -> dict:
@@ -309,7 +327,8 @@ def report(summary: dict) -> str:
     lines = ["# Benefit study: localization along guided and unguided plans", "",
              f"{len(summary['pairs'])} pairs on {len(summary['cases'])} maps, {summary['seeds']} seed(s) per "
              f"replay, pair seed {summary['pair_seed']}. Guidance: {specs}. Runtime "
-             f"{summary['runtime_s'] / 60:.0f} min.", "",
+             f"{summary['runtime_s'] / 60:.0f} min (this invocation; a resumed study counts only its own "
+             f"part), replays {summary['replay_cpu_s'] / 60:.0f} CPU-minutes in all.", "",
              "## Localization (registration to the prior map from wheel odometry)", "", header]
     comps = summary["comparisons"]
     lines += [row(g["name"], comps["localization"][g["name"]]) for g in summary["guidance"] if g["name"] != "none"]
@@ -317,8 +336,12 @@ def report(summary: dict) -> str:
         lines += ["", "## LIO", "", header, row("default", comps["lio"]["default"])]
     for method, title in (("localization", "localization"), ("lio", "LIO")):
         if "default_by_map" in comps[method]:
-            lines += ["", f"## Default guidance against none, per map ({title})", "", header]
+            lines += ["", f"## Default guidance against none, per map, per robot and at risk ({title})", "",
+                      header.replace("| guidance |", "| pairs of |")]
             lines += [row(name, c) for name, c in comps[method]["default_by_map"].items()]
+            lines += [row(f"{kind} robot", c) for kind, c in comps[method]["default_by_robot"].items()]
+            lines += [row(f"at risk (none: >= {100 * AT_RISK_SHARE:.0f} % degenerate scans)",
+                          comps[method]["default_at_risk"])]
     cal = summary.get("calibration", {})
     if cal:
         lines += ["", "## Which channel predicts localization error (every plan's mean along its trajectory)", "",

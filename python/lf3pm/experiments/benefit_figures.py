@@ -94,6 +94,8 @@ def ratio_figure(summary: dict, path: Path) -> None:
 def example_figures(cases, summary: dict, out: Path) -> None:
     """For each map, its first pair's unguided and default trajectories over the SOLM, and
     their localization error along the way."""
+    from lf3pm.experiments.benefit import replay_path
+    from lf3pm.experiments.replay_tasks import load_replay
     from lf3pm.planner.trajectory import read_csv
     from lf3pm.solm import Solm
     from lf3pm.solm.figures import draw_heat_map
@@ -111,17 +113,18 @@ def example_figures(cases, summary: dict, out: Path) -> None:
         draw_heat_map(fig, top, solm, channel=channel, reduce="min")
         for name, colour in (("none", "white"), ("default", "tab:red")):
             plan = pair["plans"][name]
-            t, x, y, yaw = (read_csv(plan["csv"])[k] for k in ("t", "x", "y", "yaw"))
+            t, x, y, yaw = (read_csv(out / plan["csv"])[k] for k in ("t", "x", "y", "yaw"))
             every = max(1, len(t) // 30)
             label = f"{name}: {plan['length_m']:.0f} m"
             if "localization" in plan:
                 label += f", localization APE {100 * plan['localization']['ape']:.1f} cm"
-                err = plan["localization"]["errors_every_second"]
-                bottom.plot(np.arange(len(err)), err, color="k" if name == "none" else colour, label=name)
+                first = load_replay(replay_path(out, case, pair["pair"], name, "localization", 0))
+                bottom.plot(first["times_every_second"], first["errors_every_second"],
+                            color="k" if name == "none" else colour, label=f"{name} (seed 0)")
             top.plot(x, y, "-", color=colour, lw=1.6, label=label, zorder=4)
             top.quiver(x[::every], y[::every], np.cos(yaw[::every]), np.sin(yaw[::every]), color=colour,
-                       scale=40, width=0.002, zorder=5)
-        top.legend(loc="lower right", fontsize=8, facecolor="0.6")
+                       scale=28, width=0.003, zorder=5)
+        top.legend(loc="best", fontsize=8, facecolor="0.6")
         top.set_title(f"{case.name}: pair {pair['pair']} ({pair['robot']}, {case.sensor}), heading ticks",
                       fontsize=9)
         bottom.set_xlabel("time (s)")
