@@ -464,6 +464,8 @@ _REPLAY_COLUMNS = (("ape_rmse", "APE", lambda r: r.ape["rmse"]), ("ape_max", "AP
                    ("degenerate_scans", "degen", lambda r: int(r.degenerate.sum())),
                    ("skipped_scans", "skip", lambda r: len(r.skipped)),
                    ("scans_per_second", "scans/s", lambda r: r.scans_per_second["total"]))
+#: The figures of _REPLAY_COLUMNS in metres (the JSON keeps metres; the table shows mm).
+_REPLAY_METRES = {"ape_rmse", "ape_max", "ape_aligned_rmse", "rpe_scan_rmse", "rpe_metre_rmse"}
 
 
 def _replay_medians(results) -> dict:
@@ -479,17 +481,19 @@ def _replay_medians(results) -> dict:
 def _print_replay(results, summary: dict) -> None:
     first = results[0]
     table = Table(title=f"replay: {first.method}, {first.sensor}, {first.scans} scans at "
-                        f"{first.params['rate']:g} Hz (rmse in m; RPE deg per scan)", box=box.SIMPLE_HEAD,
+                        f"{first.params['rate']:g} Hz (rmse in mm; RPE deg per scan)", box=box.SIMPLE_HEAD,
                   collapse_padding=True, pad_edge=False)
     table.add_column("seed")
     for _, header, _ in _REPLAY_COLUMNS:
         table.add_column(header, justify="right")
     show = lambda v: "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else (
         str(v) if isinstance(v, int) else f"{v:.3g}")
+    # Translations in mm: in metres eleven columns of 0.00xxx do not fit 80 characters.
+    mm = lambda key, v: v * 1000.0 if v is not None and key in _REPLAY_METRES else v
     for r in results:
-        table.add_row(str(r.seed), *(show(get(r)) for _, _, get in _REPLAY_COLUMNS))
+        table.add_row(str(r.seed), *(show(mm(key, get(r))) for key, _, get in _REPLAY_COLUMNS))
     if len(results) > 1:
-        table.add_row("median", *(show(summary[key]) for key, _, _ in _REPLAY_COLUMNS))
+        table.add_row("median", *(show(mm(key, summary[key])) for key, _, _ in _REPLAY_COLUMNS))
     console.print(table)
 
 
