@@ -204,3 +204,15 @@ def test_thinned_build_is_close_to_exact(boxes, built, tmp_path):
     rel = np.abs(q[ok] / exact[ok] - 1)
     # Measured on gobi (bench/bench_solm.py, stride 4): median 1.8 %, p95 4.4 %.
     assert ok.sum() > 50 and np.median(rel) < 0.05 and np.percentile(rel, 95) < 0.15
+
+
+def test_the_same_map_by_another_path_resumes_the_build(boxes, tmp_path, monkeypatch):
+    scene, _, sensor = boxes
+    write_points(tmp_path / "boxes.pcd", scene.points)
+    monkeypatch.chdir(tmp_path)
+    relative, absolute = lf3pm.load_map("boxes.pcd"), lf3pm.load_map(tmp_path / "boxes.pcd")
+    assert relative.source != absolute.source and relative.sha256 == absolute.sha256
+    grid = make_grid(relative, "r2", 1.0, bounds=BOUNDS)
+    first = build_solm(relative, sensor, grid, tmp_path / "s.zarr", tile=3, max_tiles=1)
+    second = build_solm(absolute, sensor, grid, tmp_path / "s.zarr", tile=3)
+    assert not first["complete"] and second["complete"] and second["built_now"] == first["tiles"] - 1

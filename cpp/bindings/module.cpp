@@ -143,24 +143,10 @@ NB_MODULE(_core, m) {
       .def_prop_ro("memory_bytes", &MapIndex::memory_bytes)
       .def_prop_ro("points", [](const MapIndex& self) { return points_to_numpy(self.points()); },
                    "Map points in index order (sorted by voxel), float64 N x 3.", nb::rv_policy::move)
-      .def_prop_ro("order", [](const MapIndex& self) {
-             std::vector<std::uint32_t> o = self.order();
-             return to_numpy(std::move(o), {self.size()});
-           }, "order[i] = input index of point i.", nb::rv_policy::move)
       .def_prop_ro("normals", [](const MapIndex& self) {
              std::vector<Eigen::Vector3d> v(self.size());
              for (std::size_t i = 0; i < v.size(); ++i) v[i] = self.normal(i);
              return points_to_numpy(v);
-           }, nb::rv_policy::move)
-      .def_prop_ro("centroids", [](const MapIndex& self) {
-             std::vector<Eigen::Vector3d> v(self.size());
-             for (std::size_t i = 0; i < v.size(); ++i) v[i] = self.centroid(i);
-             return points_to_numpy(v);
-           }, nb::rv_policy::move)
-      .def_prop_ro("plane_valid", [](const MapIndex& self) {
-             std::vector<std::uint8_t> v(self.size());
-             for (std::size_t i = 0; i < v.size(); ++i) v[i] = self.plane_valid(i);
-             return to_numpy(std::move(v), {self.size()});
            }, nb::rv_policy::move)
       .def_prop_ro("disc_radius", [](const MapIndex& self) {
              std::vector<float> v(self.size());

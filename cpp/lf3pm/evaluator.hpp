@@ -16,7 +16,7 @@ namespace lf3pm {
 struct EvalParams {
   ScanParams scan;
   int dof = 6;
-  Association association = Association::Surfel;
+  Association association = Association::Knn;  // FAST-LIO's, as everywhere (docs/metric.md)
   MetricWeights weights;
   // Each simulated ray stands for this many rays of the full pattern (thinned
   // SOLM builds): the Gram and the row count are scaled by it before the metric,

@@ -1,5 +1,5 @@
 // The LF-3PM perturbation-induced observation-loss metric and classic baselines,
-// computed from the Gram of [A | b] (never the m x m matrix Phi): see DESIGN.md.
+// computed from the Gram of [A | b] (never the m x m matrix Phi): see docs/design.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,7 +1,7 @@
 // SE(2) SOLM cells by sector Grams: one scan per yaw *sector*, reused by every
 // yaw bin whose field of view covers it.
 //
-// The Grams of disjoint ray sets add (DESIGN.md). A limited field-of-view
+// The Grams of disjoint ray sets add (docs/design.md). A limited field-of-view
 // sensor at yaw bin k sees the azimuth sectors k - F .. k + F (F = half the
 // field of view in bins); casting each sector once and summing makes a cell
 // cost K sectors instead of K whole scans, F x 2 + 1 times fewer rays. The

@@ -15,7 +15,7 @@ from rich import box
 from rich.console import Console
 from rich.table import Table
 
-from lf3pm.atomic import atomic_write
+from lf3pm.atomic import atomic_write, check_replaceable
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
 from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
@@ -25,6 +25,11 @@ from lf3pm.terrain import DEFAULT_HEIGHT
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
 console = Console()
+#: Bounds of every --seed (the core's noise streams are seeded with 64-bit integers) and
+#: --threads (OpenMP aborts the process when asked for a negative or huge team).
+MAX_SEED = 2**63 - 1
+MAX_THREADS = 1024
+MAX_CELLS = 10_000_000  # solm.grid.MAX_CELLS, without importing the SOLM code for --help
 err_console = Console(stderr=True)
 
 
@@ -43,7 +48,7 @@ def evaluate(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
     pose: Tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
     sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
-    seed: int = typer.Option(0, help="Seed of the range noise."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the range noise."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
     dof: int = typer.Option(6, help="6 for SE(3), 3 for (x, y, yaw)."),
     w1: float = typer.Option(0.5, help="Metric weight w1 (w2 = 1 - w1)."),
@@ -54,7 +59,7 @@ def evaluate(
     plane_threshold: float = typer.Option(0.1, help="Plane validity: every neighbour within this of the plane (m)."),
     max_neighbor_distance: float = typer.Option(FASTLIO_MAX_NEIGHBOR_DISTANCE,
                                                 help="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt(5))."),
-    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Worker threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     save_observations: Optional[Path] = typer.Option(None, metavar="OBS.npz",
                                                      help="Write A, b and the simulated points."),
@@ -109,9 +114,9 @@ def mde(
     sigma_t: float = typer.Option(0.1, help="Start disturbance, translation sigma per axis (m)."),
     sigma_r: float = typer.Option(2.0, help="Start disturbance, rotation sigma per axis (deg)."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    seed: int = typer.Option(0, help="Seed of the scan noise and the disturbances."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scan noise and the disturbances."),
     scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (0 = off)."),
-    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Worker threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ):
     """MDE: mean squared error of point-to-plane ICP (small_gicp) from disturbed starts."""
@@ -167,7 +172,7 @@ def scene(
     name: Optional[str] = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="MAP.pcd",
                                           help="Map file to write (format by suffix; .pcd is binary)."),
-    seed: int = typer.Option(0, help="Seed of the scene's randomness."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scene's randomness."),
     list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
 ):
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
@@ -210,7 +215,7 @@ def experiment_table1(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
     poses: int = typer.Option(8, help="Poses per scene (reference position at 4 yaws, then random)."),
     trials: int = typer.Option(10, help="MDE trials per pose."),
-    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scenes, poses, noise and disturbances."),
 ):
     """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
     with user_errors():
@@ -231,7 +236,7 @@ def experiment_correlation(
     trials: int = typer.Option(5, help="MDE trials per pose."),
     sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
     bootstrap: int = typer.Option(1000, help="Bootstrap resamples for the confidence intervals."),
-    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scenes, poses, noise and disturbances."),
 ):
     """Spearman correlation of each predictor with MDE, pooled and within maps."""
     with user_errors():
@@ -259,7 +264,7 @@ def experiment_gobi(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
     seeds: Optional[int] = typer.Option(None, help="Replay seeds per plan and method (default: the setup's)."),
-    seed: int = typer.Option(0, help="Seed of the scene, the noise and the disturbances."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scene, the noise and the disturbances."),
 ):
     """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
     with user_errors():
@@ -282,9 +287,9 @@ def experiment_gobi(
 def experiment_benefit(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
-    seeds: int = typer.Option(3, help="Replay seeds per plan and method."),
-    workers: int = typer.Option(2, help="Replay processes."),
-    pair_seed: int = typer.Option(0, help="Seed of the start/goal pairs."),
+    seeds: int = typer.Option(3, min=1, help="Replay seeds per plan and method."),
+    workers: int = typer.Option(2, min=1, max=MAX_THREADS, help="Replay processes."),
+    pair_seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the start/goal pairs."),
     guidance: Optional[list[str]] = typer.Option(
         None, metavar="NAME=CHANNEL:POWER:WEIGHT",
         help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
@@ -346,14 +351,22 @@ def plan(
                         r_safe=r_safe, vmax_norm=vmax_norm)
         solm = Solm.open(solm_path)
         result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight, power=power)
-        result.trajectory.to_csv(out)
+        # All or none: the figure first (the likelier to fail), then the CSV; a CSV that
+        # cannot be written takes the new figure with it.
         if png is not None:
             from lf3pm.map import load_map
             from lf3pm.planner.figures import plans_figure
 
+            check_replaceable(out)
             points = load_map(map_path).points if map_path is not None else None
             plans_figure(solm, {metric: result}, png, map_points=points,
                          title=f"{robot} plan guided by {metric} over the SOLM (dotted: front-end path)")
+        try:
+            result.trajectory.to_csv(out)
+        except Lf3pmError:
+            if png is not None:
+                png.unlink(missing_ok=True)
+            raise
         summary = result.summary()
         if as_json:
             print(json.dumps(summary, indent=1))
@@ -370,12 +383,12 @@ def replay_command(
     map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
     sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
     method: str = typer.Option("localization", help="localization (prior map), lio or odometry (KISS-ICP)."),
-    seeds: int = typer.Option(1, help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
-    seed: int = typer.Option(0, help="First seed (range noise, odometry and IMU noise)."),
+    seeds: int = typer.Option(1, min=1, help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="First seed (range noise, odometry and IMU noise)."),
     height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the smoothed ground (m)."),
     rate: float = typer.Option(10.0, help="Scans per second."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    threads: int = typer.Option(0, help="Scan simulation threads (0 = all cores)."),
+    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Scan simulation threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
     bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
@@ -383,7 +396,6 @@ def replay_command(
 ):
     """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
     with user_errors():
-        from lf3pm.atomic import check_replaceable
         from lf3pm.evaluation.replay import check_method, lio_modules, resolve_sensor
 
         check_method(method, {})
@@ -536,9 +548,10 @@ def solm_build(
     bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
         None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
     robot_radius: float = typer.Option(0.3, help="Robot radius for the obstacle mask (m)."),
-    seed: int = typer.Option(0, help="Seed of the range noise."),
+    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the range noise."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma (m; default the sensor's)."),
-    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Worker threads (0 = all cores)."),
+    max_cells: int = typer.Option(MAX_CELLS, min=1, help="Refuse a grid of more poses than this."),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():
@@ -548,7 +561,8 @@ def solm_build(
 
         lidar = get_sensor(sensor)
         world = load_map(map_path, threads=threads)
-        grid = make_grid(world, space, res, bounds=bounds, yaw_bins=yaw_bins, height=height)
+        grid = make_grid(world, space, res, bounds=bounds, yaw_bins=yaw_bins, height=height,
+                         max_cells=max_cells)
         with progress_bar() as step:
             def advance(cells, total):
                 step(f"SOLM {space} {grid.shape} cells", total, cells)

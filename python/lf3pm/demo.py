@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import time
 from pathlib import Path
 
@@ -42,6 +41,7 @@ def plot_scan(path: Path, world, result, title: str) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from lf3pm.solm.figures import save_figure
 
     pts = world.points
     step = max(1, len(pts) // 200_000)
@@ -62,11 +62,7 @@ def plot_scan(path: Path, world, result, title: str) -> None:
     ax.set_ylabel("y (m)")
     ax.set_title(title, fontsize=10)
     ax.legend(handles=handles, loc="upper right", fontsize=8)
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, path)
+    save_figure(fig, path)
 
 
 def main() -> None:

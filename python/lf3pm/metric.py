@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 
 from lf3pm import _core
 from lf3pm.calibration import calibration_applies, packaged_calibration, predict_mde
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, finite_number
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor
@@ -96,9 +96,8 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
         raise Lf3pmError(f"association must be 'surfel' or 'knn', got {association!r}")
     if not (w1 > 0 and w2 > 0 and abs(w1 + w2 - 1.0) < 1e-9):
         raise Lf3pmError(f"metric weights must be positive and sum to 1, got w1={w1}, w2={w2}")
-    sigma = sensor.range_noise_sigma if noise is None else float(noise)
-    if sigma < 0:
-        raise Lf3pmError(f"range noise must be >= 0, got {sigma}")
+    sigma = finite_number("range noise", sensor.range_noise_sigma if noise is None else noise, low=0.0)
+    scan_voxel = finite_number("scan voxel", scan_voxel, low=0.0)
     try:
         raw = _core.evaluate(map.index, matrix, sensor.directions, sensor.min_range,
                              sensor.max_range, noise=sigma, seed=int(seed), scan_voxel=scan_voxel,

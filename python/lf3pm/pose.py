@@ -1,6 +1,6 @@
 """Poses: sensor-to-world rigid transforms from the forms users type.
 
-Accepted forms (DESIGN.md conventions, metres and radians, yaw about +z):
+Accepted forms (docs/design.md, Conventions: metres and radians, yaw about +z):
 ``(x, y, z, yaw)``, ``(x, y, z, qw, qx, qy, qz)`` or a 4 x 4 homogeneous matrix.
 """
 

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, finite_number
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
 from lf3pm.sensors import Sensor, get_sensor
@@ -80,11 +80,13 @@ def mde(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, trials: int = 2
         sensor = get_sensor(sensor)
     if trials < 1:
         raise Lf3pmError(f"trials must be >= 1, got {trials}")
-    if sigma_t < 0 or sigma_r_deg < 0:
-        raise Lf3pmError("disturbance sigmas must be >= 0")
-    sigma = sensor.range_noise_sigma if noise is None else float(noise)
-    if sigma < 0:
-        raise Lf3pmError(f"range noise must be >= 0, got {sigma}")
+    # A start disturbed by more than the map is across (or a turn past 180 degrees) is
+    # no registration problem, and small_gicp would grind through it for minutes.
+    extent = float(np.max(map.bounds[1] - map.bounds[0]))
+    sigma_t = finite_number("the translation disturbance sigma_t (m)", sigma_t, low=0.0, high=max(extent, 1.0))
+    sigma_r_deg = finite_number("the rotation disturbance sigma_r (deg)", sigma_r_deg, low=0.0, high=180.0)
+    sigma = finite_number("range noise", sensor.range_noise_sigma if noise is None else noise, low=0.0)
+    scan_voxel = finite_number("scan voxel", scan_voxel, low=0.0)
     truth = pose_matrix(pose)
     map.check_pose(truth, clearance)
     if target is None:

@@ -81,8 +81,9 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method
            target: RegistrationTarget | None = None, threads: int = 0, progress=None, **params) -> ReplayResult:
     """Replays a trajectory with ``method`` (module docstring) and scores it.
 
-    ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion` or the
-    CSV ``lf3pm plan`` writes (the sensor ``height`` m above the smooth ground).
+    ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion`, the
+    CSV ``lf3pm plan`` writes, or a planner Trajectory or Plan (the sensor
+    ``height`` m above the smooth ground).
     ``sensor``: a preset name, YAML file or Sensor. ``seed``: the scans' range
     noise (scan k: stream k), the wheel odometry's and the IMU's noise.
     ``rate``: scans per second. ``noise``: range noise sigma (m; default the
@@ -98,12 +99,7 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method
     if not isinstance(map, Map):
         map = load_map(map)
     sensor = resolve_sensor(sensor, rate)
-    if isinstance(motion_or_csv, Motion):
-        motion = motion_or_csv
-    elif isinstance(motion_or_csv, (str, os.PathLike)):
-        motion = Motion.from_csv(motion_or_csv, map, height=height)
-    else:
-        raise Lf3pmError(f"replay takes a Motion or a trajectory CSV, got {type(motion_or_csv).__name__}")
+    motion = _motion(motion_or_csv, map, height)
     first = 0
     if method == "lio" and params["rest"] > 0:
         motion = RestFirst(motion, params["rest"])
@@ -138,6 +134,22 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method
     return ReplayResult.from_run(run, method=method, sensor=sensor.name, seed=int(seed), scans=scans, first=first,
                                  params={**common, method: method_params}, map_sha256=map.sha256,
                                  versions=versions)
+
+
+def _motion(source, map: Map, height: float) -> Motion:
+    """The Motion of a Motion, a trajectory CSV, a planner Trajectory or a Plan (its
+    trajectory sampled at 100 Hz, as `lf3pm plan` writes its CSV)."""
+    if isinstance(source, Motion):
+        return source
+    if isinstance(source, (str, os.PathLike)):
+        return Motion.from_csv(source, map, height=height)
+    trajectory = getattr(source, "trajectory", source)  # a Plan carries its Trajectory
+    if not callable(getattr(trajectory, "sample", None)):
+        raise Lf3pmError("replay takes a Motion, a trajectory CSV, a Trajectory or a Plan, got "
+                         f"{type(source).__name__}")
+    s = trajectory.sample(100.0)
+    return Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map,
+                              height=height)
 
 
 def lio_modules(needed_by: str = "method lio"):

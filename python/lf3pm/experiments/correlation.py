@@ -169,6 +169,7 @@ def plot(path: Path, records, summary) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from lf3pm.solm.figures import save_figure
     from matplotlib.ticker import NullFormatter
 
     maps = sorted({r["map"] for r in records})
@@ -191,7 +192,4 @@ def plot(path: Path, records, summary) -> None:
     fig.legend(handles, labels, loc="lower center", ncol=len(maps), fontsize=8, markerscale=1.5)
     fig.suptitle("Predictors vs MDE (Spearman rho pooled, and mean within-map rho)")
     fig.tight_layout(rect=(0, 0.05, 1, 1))
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(path)
+    save_figure(fig, path, tight=False)

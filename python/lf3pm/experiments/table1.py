@@ -100,6 +100,7 @@ def plot(path: Path, rows) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from lf3pm.solm.figures import save_figure
 
     fig, axes = plt.subplots(1, len(SENSORS), figsize=(12, 4.5), dpi=110, sharey=True)
     width = 0.2
@@ -114,8 +115,4 @@ def plot(path: Path, rows) -> None:
         ax.grid(axis="y", alpha=0.3)
     np.atleast_1d(axes)[0].legend(fontsize=8)
     fig.suptitle("Table I: the LF-3PM metric and MDE per scene (lower is better)")
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(path)
+    save_figure(fig, path)

@@ -5,7 +5,8 @@
   :mod:`~lf3pm.planner.graph_search` (A* / Dijkstra).
 - Back end: :class:`Robot` (omni, diff, car and their limits), :class:`GridField`
   (a cost map or ESDF on a regular grid), :func:`optimize_trajectory` (MINCO +
-  L-BFGS + PHR) giving a :class:`Trajectory`.
+  L-BFGS with penalties; no PHR loop: docs/planner_backend.md says why) giving a
+  :class:`Trajectory`.
 - Both: :class:`Planner` (:mod:`~lf3pm.planner.plan`), used by ``lf3pm plan``.
 """
 

@@ -17,6 +17,11 @@ KINDS = ("omni", "diff", "car")
 _LIMITS = _core.RobotLimits()
 
 
+#: The smallest speed, yaw rate or acceleration limit a Robot takes (m/s, rad/s, m/s^2,
+#: rad/s^2): slower is no robot, and its trajectories would be too long to sample.
+MIN_LIMIT = 1e-3
+
+
 @dataclass(frozen=True)
 class Robot:
     """A ground robot's kind and limits (SI units).
@@ -52,6 +57,9 @@ class Robot:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise Lf3pmError(f"robot {name} must be a positive number, got {value!r}")
+            if value < MIN_LIMIT:
+                # 1e-9 m/s would make a 10 m plan 300 years long, sampled at 100 Hz.
+                raise Lf3pmError(f"robot {name} must be at least {MIN_LIMIT:g} (SI units), got {value:g}")
         for name in ("min_turn_radius", "r_safe"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):

@@ -11,6 +11,8 @@ from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 
 CSV_COLUMNS = ("t", "x", "y", "yaw", "vx", "vy", "omega")
+#: The most samples :meth:`Trajectory.sample` returns: 10 M at 100 Hz is 28 h of motion.
+MAX_SAMPLES = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,9 @@ class Trajectory:
         t, x, y, yaw, vx, vy, omega, ax, ay (world frame)."""
         if not rate > 0:
             raise Lf3pmError(f"sample rate must be positive, got {rate}")
+        if self.duration * rate > MAX_SAMPLES:
+            raise Lf3pmError(f"a trajectory of {self.duration:.3g} s has more than {MAX_SAMPLES:,} samples at "
+                             f"{rate:g} Hz: check the robot's limits")
         t = np.arange(0.0, self.duration, 1.0 / rate)
         t = np.append(t, self.duration) if t[-1] < self.duration else t
         p, v = self.evaluate(t)

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm import __version__, _core
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, finite_number
 from lf3pm.map import Map
-from lf3pm.sensors import Sensor
+from lf3pm.sensors import Sensor, get_sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, TILE, open_or_create, tiles_shape
 from lf3pm.solm.ray_thinning import thin_rays
@@ -23,16 +23,20 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
                association: str = "knn", w1: float = 0.5, threads: int = 0,
                yaw_reuse: bool = False, ray_stride: int = 1, tile: int = TILE, max_tiles: int | None = None,
                progress=None) -> dict:
-    """Builds (or resumes) the SOLM of ``world`` for ``sensor`` on ``grid`` into
-    the Zarr store ``out``. Cell c (linear index over the channel's shape) uses
-    noise stream c, so results do not depend on tiling or resumption.
+    """Builds (or resumes) the SOLM of ``world`` for ``sensor`` (a Sensor or a preset
+    name) on ``grid`` into the Zarr store ``out``. Cell c (linear index over the
+    channel's shape) uses noise stream c, so results do not depend on tiling or resumption.
     ``yaw_reuse`` (se2 only) scans each yaw sector once and sums sector Grams
     per bin (yaw_reuse.py): about 2F+1 times faster, approximate (docs/solm.md).
     ``ray_stride`` K casts every K-th azimuth column of the pattern and scales
     the Gram up (ray_thinning.py): about K times faster, approximate.
     ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
     after that many tiles (for tests of resumption)."""
-    sigma = sensor.range_noise_sigma if noise is None else float(noise)
+    if isinstance(sensor, str):
+        sensor = get_sensor(sensor)
+    sigma = finite_number("range noise", sensor.range_noise_sigma if noise is None else noise, low=0.0)
+    robot_radius = finite_number("robot radius", robot_radius, low=0.0)
+    floor_clearance = finite_number("floor clearance", floor_clearance, low=0.0)
     if tile < 1:
         raise Lf3pmError(f"tile must be >= 1, got {tile}")
     if sigma < 0 or robot_radius < 0 or floor_clearance < 0:

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
+from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.solm.reader import Solm
 
@@ -86,7 +86,10 @@ def export_ros(solm: Solm, folder: Path, *, reduce: str = "mean") -> list[Path]:
     import matplotlib.pyplot as plt
 
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise Lf3pmError(f"{folder}: cannot create the folder ({err.strerror or err})") from None
     g = solm.grid_spec
     written = []
     for channel in ("q_min", "q_n", "q_max", "sigma1", "m"):
@@ -99,27 +102,29 @@ def export_ros(solm: Solm, folder: Path, *, reduce: str = "mean") -> list[Path]:
             scaled = np.where(ok, 1.0 - scaled, 1.0)  # sigma1 and m: larger is better
         pixels = np.round(255 * (1.0 - scaled)).astype(np.uint8)  # map_server: dark = occupied
         png = folder / f"{channel}.png"
-        tmp = png.with_name(f".{png.name}.tmp.png")
-        plt.imsave(tmp, pixels[::-1], cmap="gray", vmin=0, vmax=255)
-        os.replace(tmp, png)
+        with atomic_write(png) as fp:
+            plt.imsave(fp, pixels[::-1], cmap="gray", vmin=0, vmax=255, format="png")
         yaml = folder / f"{channel}.yaml"
         text = (f"# lf3pm SOLM channel {channel} ({'log ' if channel.startswith('q') else ''}range "
                 f"{lo:.6g} .. {hi:.6g} mapped to white .. black), sensor {solm.attrs['sensor']}\n"
                 f"image: {png.name}\nresolution: {g.res}\norigin: [{g.x0}, {g.y0}, 0.0]\n"
                 "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
-        tmp = yaml.with_name(f".{yaml.name}.tmp")
-        tmp.write_text(text)
-        os.replace(tmp, yaml)
+        with atomic_write(yaml) as fp:
+            fp.write(text.encode())
         written += [png, yaml]
     return written
 
 
-def save_figure(fig, path: Path) -> None:
-    """Writes ``fig`` to ``path`` atomically and closes it."""
+def save_figure(fig, path: Path, *, tight: bool = True) -> None:
+    """Writes ``fig`` to ``path`` atomically (its format from the suffix; an OSError
+    becomes one line) and closes it; ``tight``: apply tight_layout first."""
     import matplotlib.pyplot as plt
 
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    os.replace(tmp, path)
-    plt.close(fig)
+    path = Path(path)
+    try:
+        if tight:
+            fig.tight_layout()
+        with atomic_write(path) as fp:
+            fig.savefig(fp, format=path.suffix.lstrip(".").lower() or "png")
+    finally:
+        plt.close(fig)

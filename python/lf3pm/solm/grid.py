@@ -1,6 +1,6 @@
 """The SOLM grid: which poses a Static Observation Loss Map is evaluated at.
 
-Spaces (DESIGN.md, "State spaces"):
+Spaces (docs/design.md, "State spaces and grids"):
 - ``r2``: (y, x) cells, yaw 0: for 360-degree LiDARs;
 - ``se2``: (yaw, y, x), K yaw bins centred on k * 2 pi / K: for limited fields of view;
 - ``r3``: (z, y, x) for aerial robots, at fixed heights.
@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, finite_number
 from lf3pm.map import Map
 from lf3pm.terrain import DEFAULT_HEIGHT
 
@@ -62,17 +62,28 @@ class SolmGrid:
         return d
 
 
+#: The most poses a grid may hold unless the caller raises ``max_cells`` (`lf3pm solm
+#: build --max-cells`): 10 M poses are hours of scans on a workstation, and a typo in
+#: --res (1e-6 for 1e-1) should be refused at once, not run out of memory.
+MAX_CELLS = 10_000_000
+
+
 def make_grid(world: Map, space: str, res: float, *, bounds=None, yaw_bins: int = 36,
-              height: float = DEFAULT_HEIGHT, z_levels=None) -> SolmGrid:
-    """The grid over ``bounds`` (xmin, ymin, xmax, ymax; default the map's extent)."""
+              height: float = DEFAULT_HEIGHT, z_levels=None, max_cells: int = MAX_CELLS) -> SolmGrid:
+    """The grid over ``bounds`` (xmin, ymin, xmax, ymax; default the map's extent);
+    Lf3pmError when it would hold more than ``max_cells`` poses."""
     if space not in SPACES:
         raise Lf3pmError(f"unknown space {space!r}; use one of {', '.join(SPACES)}")
-    if not (res > 0 and math.isfinite(res)):
+    res = finite_number("resolution", res)
+    if res <= 0:
         raise Lf3pmError(f"resolution must be > 0, got {res}")
+    height = finite_number("sensor height", height)
+    if height <= 0:
+        raise Lf3pmError(f"sensor height must be > 0 m, got {height}")
     lower, upper = world.bounds
     if bounds is None:
         bounds = (lower[0], lower[1], upper[0], upper[1])
-    xmin, ymin, xmax, ymax = map(float, bounds)
+    xmin, ymin, xmax, ymax = (finite_number("bounds", b) for b in bounds)
     if not (xmin < xmax and ymin < ymax):
         raise Lf3pmError(f"bounds {bounds} are empty: need xmin < xmax and ymin < ymax")
     if xmax <= lower[0] or xmin >= upper[0] or ymax <= lower[1] or ymin >= upper[1]:
@@ -81,11 +92,18 @@ def make_grid(world: Map, space: str, res: float, *, bounds=None, yaw_bins: int 
     nx, ny = math.ceil((xmax - xmin) / res), math.ceil((ymax - ymin) / res)
     if space == "se2" and yaw_bins < 1:
         raise Lf3pmError(f"yaw bins must be >= 1, got {yaw_bins}")
+    layers = yaw_bins if space == "se2" else 1
+    if space == "r3":
+        layers = len(z_levels) if z_levels is not None else max(0, math.ceil((upper[2] - lower[2] - height) / res))
+    cells = nx * ny * max(layers, 1)
+    if cells > max_cells:
+        raise Lf3pmError(f"the grid would hold {cells:,} poses ({nx} x {ny} x {max(layers, 1)}), more than "
+                         f"{max_cells:,}: use a coarser --res or smaller --bounds, or raise --max-cells")
     levels = ()
     if space == "r3":
         if z_levels is None:
             z_levels = np.arange(lower[2] + height, upper[2], res)
-        levels = tuple(float(z) for z in z_levels)
+        levels = tuple(finite_number("z level", z) for z in z_levels)
         if not levels:
             raise Lf3pmError("an r3 grid needs at least one z level")
     return SolmGrid(space, xmin, ymin, float(res), nx, ny, yaw_bins if space == "se2" else 1,

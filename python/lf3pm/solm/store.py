@@ -29,8 +29,14 @@ def tiles_shape(ny: int, nx: int, tile: int) -> tuple[int, int]:
     return math.ceil(ny / tile), math.ceil(nx / tile)
 
 
+#: Attributes that record where the inputs came from but not what they are: a map is
+#: identified by its hash (map_sha256), so the same map by another path resumes the build.
+PROVENANCE = {"map_source"}
+
+
 def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: int):
-    """The store at ``path``: created when absent, else checked against ``attrs``."""
+    """The store at ``path``: created when absent, else checked against ``attrs``
+    (every attribute but the PROVENANCE ones must be equal)."""
     import zarr
 
     path = Path(path)
@@ -40,7 +46,7 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
         except Exception as err:  # noqa: BLE001 - any unreadable store is refused the same way
             raise Lf3pmError(f"{path} exists and is not a SOLM store ({err.__class__.__name__})") from None
         old = dict(group.attrs)
-        differ = sorted(k for k in set(old) | set(attrs) if old.get(k) != attrs.get(k))
+        differ = sorted(k for k in (set(old) | set(attrs)) - PROVENANCE if old.get(k) != attrs.get(k))
         if differ:
             raise Lf3pmError(f"{path} was built from another map or with other parameters "
                              f"(differs in: {', '.join(differ)}); remove it or choose another output")
