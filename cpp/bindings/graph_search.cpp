@@ -1,10 +1,10 @@
-// nanobind bindings of the front end's grid search (cpp/lf3pm/graph_search.hpp).
+// nanobind bindings of the front end's grid search (cpp/lf3pm/planner/graph_search.hpp).
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
 #include <vector>
 
-#include "lf3pm/graph_search.hpp"
+#include "lf3pm/planner/graph_search.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;

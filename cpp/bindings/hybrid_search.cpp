@@ -1,4 +1,4 @@
-// nanobind bindings of the car front end (cpp/lf3pm/hybrid_search.hpp, dubins.hpp).
+// nanobind bindings of the car front end (cpp/lf3pm/planner/hybrid_search.hpp, dubins.hpp).
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
@@ -6,9 +6,9 @@
 
 #include <vector>
 
-#include "lf3pm/dubins.hpp"
-#include "lf3pm/grid_field.hpp"
-#include "lf3pm/hybrid_search.hpp"
+#include "lf3pm/planner/dubins.hpp"
+#include "lf3pm/planner/grid_field.hpp"
+#include "lf3pm/planner/hybrid_search.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -101,7 +101,7 @@ void bind_hybrid_search(nb::module_& m) {
       "esdf"_a, "cost"_a.none(), "start"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
       "yaw_bins"_a = 72, "step"_a = 0.0, "sample_step"_a = 0.0, "analytic_every"_a = 5,
       "max_expansions"_a = 2000000, "heuristic"_a = true, "heuristic_weight"_a = 1.0,
-      "Hybrid-A* forward search for a car (cpp/lf3pm/hybrid_search.hpp) on GridField ESDF and cost (or None). Returns "
+      "Hybrid-A* forward search for a car (cpp/lf3pm/planner/hybrid_search.hpp) on GridField ESDF and cost (or None). Returns "
       "a dict: found, reason, segments (K x 2: signed curvature, length, from the start), length, cost, expanded, "
       "analytic_tries, relaxed_cells.");
   m.def(

@@ -10,13 +10,13 @@
 #include <string>
 #include <vector>
 
-#include "lf3pm/evaluator.hpp"
-#include "lf3pm/map_index.hpp"
-#include "lf3pm/metric.hpp"
-#include "lf3pm/parallel.hpp"
-#include "lf3pm/plane_fit.hpp"
-#include "lf3pm/scan_simulator.hpp"
-#include "lf3pm/yaw_sectors.hpp"
+#include "lf3pm/metric/evaluator.hpp"
+#include "lf3pm/map/map_index.hpp"
+#include "lf3pm/metric/metric.hpp"
+#include "lf3pm/common/parallel.hpp"
+#include "lf3pm/map/plane_fit.hpp"
+#include "lf3pm/scan/scan_simulator.hpp"
+#include "lf3pm/metric/yaw_sectors.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;

@@ -9,11 +9,11 @@
 #include <stdexcept>
 #include <vector>
 
-#include "lf3pm/grid_field.hpp"
-#include "lf3pm/lbfgs.hpp"
-#include "lf3pm/minco.hpp"
-#include "lf3pm/trajectory_cost.hpp"
-#include "lf3pm/trajectory_optimizer.hpp"
+#include "lf3pm/planner/grid_field.hpp"
+#include "lf3pm/trajectory/lbfgs.hpp"
+#include "lf3pm/trajectory/minco.hpp"
+#include "lf3pm/trajectory/trajectory_cost.hpp"
+#include "lf3pm/trajectory/trajectory_optimizer.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;

@@ -1,7 +1,7 @@
 """The planner's front end: a least-cost grid path through a SOLM.
 
 A* over the SOLM's cells (r2: one layer; se2: periodic yaw bins), in the C++
-core (cpp/lf3pm/graph_search.hpp, which states the moves and the heuristic).
+core (cpp/lf3pm/planner/graph_search.hpp, which states the moves and the heuristic).
 Edge cost between neighbouring states a, b:
 
     (l + rho * |dk|) * (1 + weight * (c_a + c_b) / 2)

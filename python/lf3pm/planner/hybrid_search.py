@@ -2,7 +2,7 @@
 
 A grid path ignores heading and curvature, so a car whose start or goal yaw
 points away from it would need a loop the back end's local optimiser cannot
-find. This search (C++ core, cpp/lf3pm/hybrid_search.hpp, which states the
+find. This search (C++ core, cpp/lf3pm/planner/hybrid_search.hpp, which states the
 moves, the analytic Dubins expansion and the heuristic) keeps continuous poses
 and moves forwards only along arcs of the car's turning radius R and straights,
 so its path leaves the start and reaches the goal exactly along their yaws.

@@ -124,7 +124,7 @@ def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float, corners: b
         knots = np.linspace(0.0, u[-1], max(1, math.ceil(u[-1] / piece_length)) + 1)
     if robot.nonholonomic:
         # Diff and car splines join straight ends and place their own first and last interior
-        # waypoints (cpp/lf3pm/trajectory_optimizer.hpp): a knot halfway along the first and
+        # waypoints (cpp/lf3pm/trajectory/trajectory_optimizer.hpp): a knot halfway along the first and
         # the last piece gives them those, and leaves the path's own knots as parameters.
         knots = np.unique(np.concatenate([knots, [0.5 * knots[1], 0.5 * (knots[-2] + knots[-1])]]))
     points = np.column_stack([np.interp(knots, u, wp[:, d]) for d in range(3)])

@@ -1,0 +1,121 @@
+#include "lf3pm/map/map_index.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "lf3pm/common/parallel.hpp"
+#include "lf3pm/common/random.hpp"
+
+namespace lf3pm {
+
+namespace {
+
+constexpr int kMaxKnn = 32;
+// Cells holding about this many points on a surface balance the cost of the
+// 27-cell k-NN search against the cost of walking empty cells along a ray.
+constexpr double kPointsPerCell = 12.0;
+
+// Median distance from a point to its nearest other point, estimated on a
+// seeded sample with a coarse provisional grid.
+double estimate_spacing(const std::vector<Eigen::Vector3d>& pts, int threads) {
+  Eigen::Vector3d lo = pts.front(), hi = pts.front();
+  for (const auto& p : pts) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Eigen::Vector3d ext = (hi - lo).cwiseMax(1.0);
+  // Surface-like data: N points over roughly the largest face of the box.
+  const double area = std::max({ext.x() * ext.y(), ext.x() * ext.z(), ext.y() * ext.z()});
+  double cell = std::max(0.02, 4.0 * std::sqrt(area / pts.size()));
+  const double volume_cap = std::cbrt(ext.prod() / (1 << 26)) * 8.0;  // keep the provisional grid small
+  cell = std::max(cell, volume_cap);
+  PointGrid coarse(pts, cell);
+  const std::size_t samples = std::min<std::size_t>(pts.size(), 4000);
+  std::vector<double> nn(samples);
+  parallel_for(samples, 256, threads, [&](std::size_t b, std::size_t e) {
+    std::uint32_t idx[2];
+    double d2[2];
+    for (std::size_t s = b; s < e; ++s) {
+      const std::size_t i = splitmix64(s) % pts.size();
+      const int found = coarse.nearest(pts[i], 2, 4.0 * cell, idx, d2);
+      nn[s] = found == 2 ? std::sqrt(d2[1]) : 4.0 * cell;
+    }
+  });
+  std::nth_element(nn.begin(), nn.begin() + samples / 2, nn.end());
+  return std::max(nn[samples / 2], 1e-4);
+}
+
+}  // namespace
+
+MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params) : params_(params) {
+  if (params.knn < 3 || params.knn > kMaxKnn)
+    throw std::invalid_argument("knn must be between 3 and 32");
+  if (!(params.plane_threshold > 0) || !(params.max_neighbor_distance > 0))
+    throw std::invalid_argument("plane_threshold and max_neighbor_distance must be positive");
+  if (count < static_cast<std::size_t>(params.knn))
+    throw std::invalid_argument("the map has fewer points than knn");
+  if (count >= std::size_t(0xFFFFFFFEu)) throw std::invalid_argument("the map has too many points");
+  std::vector<Eigen::Vector3d> input(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    input[i] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    if (!input[i].allFinite()) throw std::invalid_argument("the map has non-finite coordinates");
+  }
+  const int threads = params.threads;
+  median_spacing_ = estimate_spacing(input, threads);
+  cell_size_ = params.cell_size > 0 ? params.cell_size
+                                    : std::clamp(median_spacing_ * std::sqrt(kPointsPerCell), 0.05, 4.0);
+  grid_ = PointGrid(input, cell_size_);
+  input.clear();
+  input.shrink_to_fit();
+
+  const auto& pts = grid_.points();
+  const std::size_t n = pts.size();
+  normals_.resize(n);
+  centroids_.resize(n);
+  valid_.resize(n);
+  radii_.resize(n);
+  const int k = params.knn;
+  const double max_radius = std::min(3.0 * cell_size_, params.max_neighbor_distance);
+  parallel_for(n, 4096, threads, [&](std::size_t b, std::size_t e) {
+    std::uint32_t idx[kMaxKnn];
+    double d2[kMaxKnn];
+    Eigen::Vector3d nb[kMaxKnn];
+    for (std::size_t i = b; i < e; ++i) {
+      const int found = grid_.nearest(pts[i], k, params.max_neighbor_distance, idx, d2);
+      for (int j = 0; j < found; ++j) nb[j] = pts[idx[j]];
+      const Plane plane = fit_plane(nb, found);
+      normals_[i] = plane.normal;
+      centroids_[i] = plane.centroid;
+      valid_[i] = (found == k && plane.max_distance <= params.plane_threshold) ? 1 : 0;
+      // The disc reaches the farthest of the k neighbours, so neighbouring discs
+      // overlap and a sampled surface has no holes; never smaller than the
+      // typical spacing (isolated points), never larger than three cells: a
+      // disc is listed in every cell it touches, and sparse clutter with
+      // metre-wide discs would otherwise multiply the caster's memory.
+      const double reach = found > 1 ? std::sqrt(d2[found - 1]) : median_spacing_;
+      radii_[i] = static_cast<float>(std::clamp(reach, 0.75 * median_spacing_, max_radius));
+    }
+  });
+  caster_ = SurfelCaster(pts, normals_, radii_, cell_size_);
+}
+
+bool MapIndex::associate(const Eigen::Vector3d& w, Plane* plane) const {
+  std::uint32_t idx[kMaxKnn];
+  double d2[kMaxKnn];
+  Eigen::Vector3d nb[kMaxKnn];
+  const int k = params_.knn;
+  const int found = grid_.nearest(w, k, params_.max_neighbor_distance, idx, d2);
+  if (found < k) return false;
+  for (int j = 0; j < k; ++j) nb[j] = grid_.points()[idx[j]];
+  *plane = fit_plane(nb, k);
+  return plane->max_distance <= params_.plane_threshold;
+}
+
+std::size_t MapIndex::memory_bytes() const {
+  const std::size_t n = size();
+  return n * (3 * sizeof(Eigen::Vector3d) + sizeof(std::uint32_t) + 1 + sizeof(float)) +
+         grid_.grid().memory_bytes() + caster_.memory_bytes();
+}
+
+}  // namespace lf3pm

@@ -1,0 +1,101 @@
+// The sampled terms of the trajectory objective (LF-3PM back end): at K + 1
+// samples per piece, trapezoid-weighted in time,
+//   w_q * q(x, y, yaw)                                 localisability cost (SOLM)
+//   W * P(v_lon^2 / vmax_lon^2 - 1), W * P(v_lat^2 / vmax_lat^2 - 1)  (lateral: omni only)
+//   W * P(|v|^2 / vmax_norm^2 - 1)                     omni with a speed limit on |v|
+//   W * P(omega^2 / wmax^2 - 1)
+//   W * P(a_lon^2 / amax_lon^2 - 1), W * P(a_lat^2 / amax_lat^2 - 1)  body-frame acceleration
+//   W * P(alpha^2 / alpha_max^2 - 1)                   yaw acceleration alpha = yaw''
+//   W * P((R^2 omega^2 - v_lon^2) / vmax_lon^2)        car: turning radius >= R
+//   W * P((r_safe + margin - esdf(x, y)) / 0.1 m)      clearance
+// with the cubic penalty P(z) = max(z, 0)^3 (C^2); v_lon = xdot cos(yaw) + ydot sin(yaw),
+// v_lat = -xdot sin(yaw) + ydot cos(yaw), and a_lon, a_lat the world acceleration in
+// the body frame likewise. A cubic's acceleration (and an omni robot's yaw'') is linear
+// on each piece, so its largest magnitude is at a piece's end, where a sample lies.
+//
+// Diff and car robots use the flat output instead: only (x, y) matter, the yaw is
+// the direction of travel, yaw = atan2(ydot, xdot), so the nonholonomic equality
+// h = xdot sin(yaw) - ydot cos(yaw) = 0 holds exactly (the MINCO's yaw column is
+// ignored). With s = |v|^2 and cr = xdot yddot - ydot xddot (omega = cr / s), the
+// limits are rational, regular where the robot stands still (eps = (0.01 vmax_lon)^2):
+//   W * P(s / vmax_lon^2 - 1)
+//   W * P((cr^2 - wmax^2 s^2) / (wmax^2 (s + eps)^2))    |omega| <= wmax
+//   W * P((R^2 cr^2 - s^3) / (s + eps)^3)                car: curvature <= 1 / R
+//   W * P((|a|^2 - cr^2 / (s + eps)) / amax_lon^2 - 1)    tangential a_lon^2 = |a|^2 - cr^2 / s
+//   W * P(cr^2 / ((s + eps) amax_lat^2) - 1)              centripetal a_lat^2 = cr^2 / s
+//   W * P(N^2 / ((s + eps)^4 alpha_max^2) - 1)            alpha = N / s^2, N = (v x j) s - 2 cr (v . a)
+// The tangential form is exact at rest (where the robot starts and stops: all of a is
+// tangential there) and never below the true a_lon^2 elsewhere.
+// (Diff robots turn on the spot before and after: optimizer.py adds those pieces.)
+//
+// Diff and car robots start and end at rest on straight end pieces (straight_end.hpp)
+// that the optimiser puts first and last (a cubic leaving rest off a straight line
+// turns at (a x j) / (2 |a|^2) at once: a yaw-rate jump); between them they keep
+// moving, W * P(1 - s / v_min^2) with v_min = 0.1 vmax_lon: near rest the
+// regularised limits lose their grip, and a flat output that stops can reverse
+// through a cusp, its heading flipping by pi between two samples.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "lf3pm/planner/grid_field.hpp"
+
+namespace lf3pm {
+
+enum class RobotKind { Omni, Diff, Car };
+
+/// A ground robot's kinematic limits (SI units). These defaults are the project's
+/// only ones: python/lf3pm/planner/robots.py and the CLI read them from here.
+struct RobotLimits {
+  RobotKind kind = RobotKind::Omni;
+  double vmax_lon = 1.0, vmax_lat = 1.0;  ///< body-frame speed limits, m/s (lateral: omni only)
+  double wmax = 1.0;                      ///< yaw rate, rad/s
+  double amax_lon = 2.0, amax_lat = 2.0;  ///< body-frame acceleration limits, m/s^2
+  double alpha_max = 3.0;                 ///< yaw acceleration, rad/s^2
+  double min_turn_radius = 0.0;  ///< car only
+  double vmax_norm = 0.0;        ///< omni: limit on the speed |v| (0: none)
+  double r_safe = 0.3;           ///< clearance kept from obstacles beyond the SOLM's robot radius, m
+  bool nonholonomic() const { return kind != RobotKind::Omni; }
+  /// Diff and car robots leave and reach rest on straight pieces (straight_end.hpp): a car
+  /// along its given yaws, a diff robot along the direction it turned to on the spot.
+  bool straight_ends() const { return nonholonomic(); }
+  /// A diff robot turns on the spot before and after its trajectory (optimizer.py adds those
+  /// pieces), so the heading of its straight ends is free.
+  bool turns_on_the_spot() const { return kind == RobotKind::Diff; }
+};
+
+struct CostWeights {
+  double w_q = 1.0;          ///< weight of the cost field's integral over time
+  double penalty = 1e5;      ///< W: weight of the cubic feasibility penalties
+  double esdf_margin = 0.05; ///< the clearance penalty starts at r_safe + margin
+  int samples = 16;          ///< K: samples per piece (K + 1 with both ends)
+};
+
+/// The objective's terms (unweighted by nothing: each as it enters the objective).
+struct CostTerms {
+  double q = 0.0, velocity = 0.0, omega = 0.0, acceleration = 0.0, turn = 0.0, esdf = 0.0;
+  double time = 0.0, energy = 0.0;
+  double total() const { return q + velocity + omega + acceleration + turn + esdf + time + energy; }
+};
+
+class TrajectoryCost {
+ public:
+  /// `cost` and `esdf` are copied in; an empty field switches its term off.
+  TrajectoryCost(GridField cost, GridField esdf, const RobotLimits& robot, const CostWeights& weights);
+
+  const RobotLimits& robot() const { return robot_; }
+  const CostWeights& weights() const { return weights_; }
+
+  /// Add every sampled term of the piecewise cubic (4N x 3 coefficients, N durations)
+  /// to `terms`, their partial gradients to grad_c (4N x 3) and grad_t (N).
+  void add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations, Eigen::MatrixX3d& grad_c,
+           Eigen::VectorXd& grad_t, CostTerms& terms) const;
+
+
+ private:
+  GridField cost_, esdf_;
+  RobotLimits robot_;
+  CostWeights weights_;
+};
+
+}  // namespace lf3pm
