@@ -30,12 +30,6 @@ struct PoseEvaluation {
   std::int64_t hits = 0;  // rays with a return (after scan downsampling)
 };
 
-/// Explicit observations of a simulated scan (for export and tests).
-struct Observations {
-  Eigen::MatrixXd a;             // m x dof
-  Eigen::VectorXd b;             // m
-  std::vector<std::uint32_t> hit;  // row -> index into the scan's hits
-};
 
 PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
                              std::size_t count, const EvalParams& params);

@@ -10,6 +10,13 @@
 
 namespace lf3pm {
 
+/// Explicit observations of a simulated scan (for export and tests).
+struct Observations {
+  Eigen::MatrixXd a;             // m x dof
+  Eigen::VectorXd b;             // m
+  std::vector<std::uint32_t> hit;  // row -> index into the scan's hits
+};
+
 enum class Association {
   Surfel,  // the precomputed plane of the map point the ray hit (no k-NN query)
   Knn,     // FAST-LIO exactly: k-NN of the hit in the map, plane fitted on the fly

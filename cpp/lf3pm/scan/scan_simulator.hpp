@@ -7,14 +7,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "lf3pm/common/pose.hpp"
 #include "lf3pm/map/map_index.hpp"
 
 namespace lf3pm {
-
-struct Pose {
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // sensor -> world
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-};
 
 struct ScanParams {
   double min_range = 0.0;    // nearer first hits give no return (they still block the ray)

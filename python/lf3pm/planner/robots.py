@@ -1,6 +1,6 @@
 """Robot kinds and their kinematic limits for trajectory optimisation.
 
-The defaults are the C++ core's (``RobotLimits`` in cpp/lf3pm/trajectory/trajectory_cost.hpp),
+The defaults are the C++ core's (``RobotLimits`` in cpp/lf3pm/trajectory/robot_limits.hpp),
 read from it here, so that the library, the CLI and the experiments share them.
 """
 
