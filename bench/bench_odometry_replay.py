@@ -25,9 +25,9 @@ import numpy as np
 
 import lf3pm
 from lf3pm import _core
-from lf3pm.evaluation.moving_scan import simulate_moving_scan
-from lf3pm.evaluation.odometry import replay_odometry
-from lf3pm.evaluation.trajectory import LinearMotion, interpolate_poses
+from lf3pm.validation.moving_scan import simulate_moving_scan
+from lf3pm.validation.odometry import replay_odometry
+from lf3pm.validation.trajectory import LinearMotion, interpolate_poses
 from lf3pm.experiments.free_poses import GroundGrid
 from lf3pm.pose import pose_matrix
 from lf3pm.scenes import build_scene

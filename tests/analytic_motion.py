@@ -1,5 +1,5 @@
 """Closed-form C2 motions for the IMU and LIO tests, with the methods of
-lf3pm.evaluation's Motion (docs/lio.md): a level sensor whose position
+lf3pm.validation's Motion (docs/lio.md): a level sensor whose position
 p(t) = C(u(t)) follows a curve C at a path parameter u(t) that stands still,
 speeds up smoothly, cruises and slows down to rest again, and whose yaw is a
 closed-form function of u. Derivatives by the chain rule, exact.

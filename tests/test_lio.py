@@ -1,4 +1,4 @@
-"""The LIO (GenZ-LIO through lf3pm.evaluation.lio): conventions checked by a
+"""The LIO (GenZ-LIO through lf3pm.validation.lio): conventions checked by a
 noise-free run in the boxes room while the sensor moves and yaws fast (and by
 runs with deliberately wrong IMU timing and firing order, which must be far
 worse), anchoring, determinism, statuses and errors."""
@@ -12,15 +12,15 @@ import pytest
 from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.imu import simulate_imu
-from lf3pm.evaluation.moving_scan import simulate_moving_scan
-from lf3pm.evaluation.trajectory import LinearMotion
-from lf3pm.evaluation.trajectory_metrics import ape_translation
+from lf3pm.validation.imu import simulate_imu
+from lf3pm.validation.moving_scan import simulate_moving_scan
+from lf3pm.validation.trajectory import LinearMotion
+from lf3pm.validation.trajectory_metrics import ape_translation
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import get_sensor
 
 pytest.importorskip("genz_lio", reason="genz-lio has wheels for Python 3.8-3.12 only")
-from lf3pm.evaluation.lio import run_lio  # noqa: E402
+from lf3pm.validation.lio import run_lio  # noqa: E402
 
 PERIOD = 0.1
 
@@ -159,7 +159,7 @@ def test_unknown_settings_and_bad_input_raise_one_line(run):
 def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
     """The worker dying (here by SIGSEGV, as a segfault in the odometry would)
     becomes an Lf3pmError naming where, not a dead caller."""
-    import lf3pm.evaluation.lio as lio
+    import lf3pm.validation.lio as lio
 
     worker = tmp_path / "crash.py"
     worker.write_text("import os, signal\nprint('about to crash', flush=True)\nos.kill(os.getpid(), signal.SIGSEGV)\n")
@@ -170,8 +170,8 @@ def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
 
 
 def test_the_filter_is_told_the_imu_preset_noise(run):
-    from lf3pm.evaluation.imu import ImuPreset
-    from lf3pm.evaluation.lio import NOISE_INFLATION, imu_noise_model
+    from lf3pm.validation.imu import ImuPreset
+    from lf3pm.validation.lio import NOISE_INFLATION, imu_noise_model
 
     imu = run[3]
     sigma = imu.preset.sigmas(200.0)

@@ -5,7 +5,7 @@ import pytest
 
 import lf3pm
 from lf3pm.errors import Lf3pmError, PoseError
-from lf3pm.evaluation import RegistrationTarget, mde
+from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.pose import se3_exp, se3_log
 from lf3pm.scenes import build_scene
 

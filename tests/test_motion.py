@@ -10,8 +10,8 @@ from scipy.interpolate import CubicSpline
 import lf3pm
 from analytic_scenes import grid_plane
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.ground import smooth_ground
-from lf3pm.evaluation.motion import Motion
+from lf3pm.validation.ground import smooth_ground
+from lf3pm.validation.motion import Motion
 from lf3pm.planner.trajectory import Trajectory, read_csv
 from lf3pm.terrain import DEFAULT_HEIGHT, body_blocked
 

@@ -9,7 +9,7 @@ import pytest
 
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner import Planner, Robot
-from lf3pm.planner.grid import GridField
+from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.shortcut import shortcut_path
 from lf3pm.solm.grid import SolmGrid
 

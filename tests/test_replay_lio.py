@@ -1,5 +1,5 @@
 """The replay's LIO dispatch and the CLI's --bag, against stand-in imu and lio
-modules (the real ones are lf3pm.evaluation.imu / lio): what they are given,
+modules (the real ones are lf3pm.validation.imu / lio): what they are given,
 what the result keeps, and the bag they feed."""
 
 import json
@@ -14,8 +14,8 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.evaluation.motion import Motion
-from lf3pm.evaluation.replay import LIO_REST, replay
+from lf3pm.validation.motion import Motion
+from lf3pm.validation.replay import LIO_REST, replay
 from lf3pm.scenes import build_scene
 
 
@@ -57,12 +57,12 @@ def run_lio(scans, imu, sensor, *, initial_pose, **params):
 
 @pytest.fixture
 def fake_lio(monkeypatch):
-    imu = types.ModuleType("lf3pm.evaluation.imu")
+    imu = types.ModuleType("lf3pm.validation.imu")
     imu.simulate_imu = simulate_imu
-    lio = types.ModuleType("lf3pm.evaluation.lio")
+    lio = types.ModuleType("lf3pm.validation.lio")
     lio.run_lio = run_lio
-    monkeypatch.setitem(sys.modules, "lf3pm.evaluation.imu", imu)
-    monkeypatch.setitem(sys.modules, "lf3pm.evaluation.lio", lio)
+    monkeypatch.setitem(sys.modules, "lf3pm.validation.imu", imu)
+    monkeypatch.setitem(sys.modules, "lf3pm.validation.lio", lio)
     calls.clear()
 
 

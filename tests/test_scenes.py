@@ -14,7 +14,7 @@ import pytest
 import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.io import load_points
-from lf3pm.evaluation import RegistrationTarget, mde
+from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.scenes import (SCENES, Scene, Zone, build_scene, describe_scenes, scene_defaults, scene_names,
                           scene_zones)
 from lf3pm.scenes.scene import FREE_BAND_HIGH, FREE_BAND_LOW

@@ -10,8 +10,8 @@ import pytest
 
 import lf3pm
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation import RegistrationTarget, mde
-from lf3pm.evaluation.trajectory_mde import mde_along, pose_seed
+from lf3pm.validation import RegistrationTarget, mde
+from lf3pm.validation.trajectory_mde import mde_along, pose_seed
 from lf3pm.scenes import build_scene
 
 

@@ -33,8 +33,8 @@ _LAZY = {
     "Planner": "lf3pm.planner.plan",
     "Plan": "lf3pm.planner.plan",
     "Robot": "lf3pm.planner.robots",
-    "replay": "lf3pm.evaluation.replay",
-    "ReplayResult": "lf3pm.evaluation.replay_result",
+    "replay": "lf3pm.validation.replay",
+    "ReplayResult": "lf3pm.validation.replay_result",
     "build_scene": "lf3pm.scenes",
     "Lf3pmError": "lf3pm.errors",
 }

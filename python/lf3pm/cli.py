@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -25,12 +26,15 @@ from lf3pm.terrain import DEFAULT_HEIGHT
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
 console = Console()
-#: Bounds of every --seed (the core's noise streams are seeded with 64-bit integers) and
-#: --threads (OpenMP aborts the process when asked for a negative or huge team).
+err_console = Console(stderr=True)
+MAX_CELLS = 10_000_000  # solm.grid.MAX_CELLS, without importing the SOLM code for --help
+#: Bounds of the integer options, checked before a command runs (checked_counts): the
+#: core's noise streams take 64-bit seeds, and OpenMP aborts the process when asked for a
+#: negative or huge team of threads.
 MAX_SEED = 2**63 - 1
 MAX_THREADS = 1024
-MAX_CELLS = 10_000_000  # solm.grid.MAX_CELLS, without importing the SOLM code for --help
-err_console = Console(stderr=True)
+COUNT_BOUNDS = {"seed": (0, MAX_SEED), "pair_seed": (0, MAX_SEED), "threads": (0, MAX_THREADS),
+                "workers": (1, MAX_THREADS), "seeds": (1, 10_000), "max_cells": (1, None)}
 
 
 @contextmanager
@@ -43,12 +47,29 @@ def user_errors():
         raise typer.Exit(2) from None
 
 
+def checked_counts(command):
+    """Wraps a command so that its integer options named in COUNT_BOUNDS are checked
+    first: one line and exit 2 when one is out of bounds (click's own range errors are a
+    multi-line box)."""
+    @functools.wraps(command)
+    def run(**options):
+        with user_errors():
+            for name, (low, high) in COUNT_BOUNDS.items():
+                value = options.get(name)
+                if value is not None and (value < low or (high is not None and value > high)):
+                    span = f">= {low}" if high is None else f"in [{low}, {high}]"
+                    raise Lf3pmError(f"--{name.replace('_', '-')} must be {span}, got {value}")
+        return command(**options)
+    return run
+
+
 @app.command()
+@checked_counts
 def evaluate(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
     pose: Tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
     sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the range noise."),
+    seed: int = typer.Option(0, help="Seed of the range noise."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
     dof: int = typer.Option(6, help="6 for SE(3), 3 for (x, y, yaw)."),
     w1: float = typer.Option(0.5, help="Metric weight w1 (w2 = 1 - w1)."),
@@ -59,7 +80,7 @@ def evaluate(
     plane_threshold: float = typer.Option(0.1, help="Plane validity: every neighbour within this of the plane (m)."),
     max_neighbor_distance: float = typer.Option(FASTLIO_MAX_NEIGHBOR_DISTANCE,
                                                 help="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt(5))."),
-    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Worker threads (0 = all cores)."),
+    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     save_observations: Optional[Path] = typer.Option(None, metavar="OBS.npz",
                                                      help="Write A, b and the simulated points."),
@@ -106,6 +127,7 @@ def print_evaluation(out: dict) -> None:
 
 
 @app.command()
+@checked_counts
 def mde(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     pose: Tuple[float, float, float, float] = typer.Option(..., help="True sensor pose X Y Z YAW (m, rad)."),
@@ -114,14 +136,14 @@ def mde(
     sigma_t: float = typer.Option(0.1, help="Start disturbance, translation sigma per axis (m)."),
     sigma_r: float = typer.Option(2.0, help="Start disturbance, rotation sigma per axis (deg)."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scan noise and the disturbances."),
+    seed: int = typer.Option(0, help="Seed of the scan noise and the disturbances."),
     scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (0 = off)."),
-    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Worker threads (0 = all cores)."),
+    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ):
     """MDE: mean squared error of point-to-plane ICP (small_gicp) from disturbed starts."""
     with user_errors():
-        from lf3pm.evaluation import mde as run_mde
+        from lf3pm.validation import mde as run_mde
         from lf3pm.map import load_map
 
         world = load_map(map_path, threads=threads)
@@ -168,11 +190,12 @@ def info(map_path: Path = typer.Argument(..., metavar="MAP"),
 
 
 @app.command()
+@checked_counts
 def scene(
     name: Optional[str] = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="MAP.pcd",
                                           help="Map file to write (format by suffix; .pcd is binary)."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scene's randomness."),
+    seed: int = typer.Option(0, help="Seed of the scene's randomness."),
     list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
 ):
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
@@ -211,11 +234,12 @@ app.add_typer(experiment_app, name="experiment")
 
 
 @experiment_app.command("table1")
+@checked_counts
 def experiment_table1(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
     poses: int = typer.Option(8, help="Poses per scene (reference position at 4 yaws, then random)."),
     trials: int = typer.Option(10, help="MDE trials per pose."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scenes, poses, noise and disturbances."),
+    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
 ):
     """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
     with user_errors():
@@ -230,13 +254,14 @@ def experiment_table1(
 
 
 @experiment_app.command("correlation")
+@checked_counts
 def experiment_correlation(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
     poses_per_map: int = typer.Option(40, help="Random free poses per map (6 scenes + 2 real maps)."),
     trials: int = typer.Option(5, help="MDE trials per pose."),
     sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
     bootstrap: int = typer.Option(1000, help="Bootstrap resamples for the confidence intervals."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scenes, poses, noise and disturbances."),
+    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
 ):
     """Spearman correlation of each predictor with MDE, pooled and within maps."""
     with user_errors():
@@ -260,11 +285,12 @@ def experiment_correlation(
 
 
 @experiment_app.command("gobi")
+@checked_counts
 def experiment_gobi(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
     seeds: Optional[int] = typer.Option(None, help="Replay seeds per plan and method (default: the setup's)."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the scene, the noise and the disturbances."),
+    seed: int = typer.Option(0, help="Seed of the scene, the noise and the disturbances."),
 ):
     """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
     with user_errors():
@@ -274,8 +300,6 @@ def experiment_gobi(
 
         setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=seed)
         if seeds is not None:
-            if seeds < 1:
-                raise Lf3pmError(f"--seeds must be >= 1, got {seeds}")
             setup = replace(setup, replay_seeds=seeds)
         with progress_bar() as step:
             gobi.run(out, setup, progress=step)
@@ -284,12 +308,13 @@ def experiment_gobi(
 
 
 @experiment_app.command("benefit")
+@checked_counts
 def experiment_benefit(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
-    seeds: int = typer.Option(3, min=1, help="Replay seeds per plan and method."),
-    workers: int = typer.Option(2, min=1, max=MAX_THREADS, help="Replay processes."),
-    pair_seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the start/goal pairs."),
+    seeds: int = typer.Option(3, help="Replay seeds per plan and method."),
+    workers: int = typer.Option(2, help="Replay processes."),
+    pair_seed: int = typer.Option(0, help="Seed of the start/goal pairs."),
     guidance: Optional[list[str]] = typer.Option(
         None, metavar="NAME=CHANNEL:POWER:WEIGHT",
         help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
@@ -378,17 +403,18 @@ def plan(
 
 
 @app.command("replay")
+@checked_counts
 def replay_command(
     trajectory: Path = typer.Argument(..., metavar="TRAJ.csv", help="Trajectory CSV as `lf3pm plan` writes it."),
     map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
     sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
     method: str = typer.Option("localization", help="localization (prior map), lio or odometry (KISS-ICP)."),
-    seeds: int = typer.Option(1, min=1, help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="First seed (range noise, odometry and IMU noise)."),
+    seeds: int = typer.Option(1, help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seed: int = typer.Option(0, help="First seed (range noise, odometry and IMU noise)."),
     height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the smoothed ground (m)."),
     rate: float = typer.Option(10.0, help="Scans per second."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Scan simulation threads (0 = all cores)."),
+    threads: int = typer.Option(0, help="Scan simulation threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
     bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
@@ -396,15 +422,13 @@ def replay_command(
 ):
     """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
     with user_errors():
-        from lf3pm.evaluation.replay import check_method, lio_modules, resolve_sensor
+        from lf3pm.validation.replay import check_method, lio_modules, resolve_sensor
 
         check_method(method, {})
         if not (math.isfinite(rate) and rate > 0):
             raise Lf3pmError(f"--rate must be a number > 0 Hz, got {rate}")
         if not (math.isfinite(height) and height > 0):
             raise Lf3pmError(f"--height must be a number > 0 m, got {height}")
-        if seeds < 1:
-            raise Lf3pmError(f"--seeds must be >= 1, got {seeds}")
         if noise is not None and not (math.isfinite(noise) and noise >= 0):
             raise Lf3pmError(f"--noise must be a number >= 0 m, got {noise}")
         lidar = resolve_sensor(sensor, rate)
@@ -416,8 +440,8 @@ def replay_command(
             lio_modules("--bag (it carries the simulated IMU)")
         if method == "lio":
             lio_modules()
-        from lf3pm.evaluation.motion import Motion
-        from lf3pm.evaluation.replay import METHOD_PARAMS, replay, simulated_imu
+        from lf3pm.validation.motion import Motion
+        from lf3pm.validation.replay import METHOD_PARAMS, replay, simulated_imu
         from lf3pm.map import load_map
         from lf3pm.planner.trajectory import read_csv
 
@@ -427,7 +451,7 @@ def replay_command(
                                     samples["vy"], samples["omega"], map=world, height=height)
         target = None
         if method == "localization":
-            from lf3pm.evaluation.mde import RegistrationTarget
+            from lf3pm.validation.mde import RegistrationTarget
 
             target = RegistrationTarget(world, threads=threads)
         results = []
@@ -439,15 +463,15 @@ def replay_command(
                                       threads=threads, progress=lambda done, total: step(label, total)))
             bag_info = None
             if bag is not None:
-                from lf3pm.evaluation.bag import write_bag
-                from lf3pm.evaluation.scans import ScanStream
+                from lf3pm.validation.bag import write_bag
+                from lf3pm.validation.scans import ScanStream
 
                 scans = ScanStream(world, motion, lidar, rate=rate, seed=seed, noise=noise, threads=threads)
                 imu = simulated_imu(motion, seed, METHOD_PARAMS["lio"])
                 step(f"writing {bag}", len(scans), 0, restart=True)
                 bag_info = write_bag(bag, scans, imu, progress=lambda done, total: step(f"writing {bag}", total))
         if png is not None:
-            from lf3pm.evaluation.replay_figures import replay_figure
+            from lf3pm.validation.replay_figures import replay_figure
 
             replay_figure(results, png, map_points=world.points,
                           title=f"lf3pm replay {trajectory.name}: {method}, {lidar.name}, {rate:g} Hz")
@@ -533,6 +557,7 @@ app.add_typer(solm_app, name="solm")
 
 
 @solm_app.command("build")
+@checked_counts
 def solm_build(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     out: Path = typer.Option(..., "-o", "--out", help="Output Zarr store (resumed if it exists)."),
@@ -548,10 +573,10 @@ def solm_build(
     bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
         None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
     robot_radius: float = typer.Option(0.3, help="Robot radius for the obstacle mask (m)."),
-    seed: int = typer.Option(0, min=0, max=MAX_SEED, help="Seed of the range noise."),
+    seed: int = typer.Option(0, help="Seed of the range noise."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma (m; default the sensor's)."),
-    threads: int = typer.Option(0, min=0, max=MAX_THREADS, help="Worker threads (0 = all cores)."),
-    max_cells: int = typer.Option(MAX_CELLS, min=1, help="Refuse a grid of more poses than this."),
+    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    max_cells: int = typer.Option(MAX_CELLS, help="Refuse a grid of more poses than this."),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():

@@ -20,7 +20,7 @@ struct RobotLimits {
   /// Diff and car robots leave and reach rest on straight pieces (straight_end.hpp): a car
   /// along its given yaws, a diff robot along the direction it turned to on the spot.
   bool straight_ends() const { return nonholonomic(); }
-  /// A diff robot turns on the spot before and after its trajectory (optimizer.py adds those
+  /// A diff robot turns on the spot before and after its trajectory (trajectory_optimizer.py adds those
   /// pieces), so the heading of its straight ends is free.
   bool turns_on_the_spot() const { return kind == RobotKind::Diff; }
 };

@@ -26,7 +26,7 @@
 //   W * P(N^2 / ((s + eps)^4 alpha_max^2) - 1)            alpha = N / s^2, N = (v x j) s - 2 cr (v . a)
 // The tangential form is exact at rest (where the robot starts and stops: all of a is
 // tangential there) and never below the true a_lon^2 elsewhere.
-// (Diff robots turn on the spot before and after: optimizer.py adds those pieces.)
+// (Diff robots turn on the spot before and after: trajectory_optimizer.py adds those pieces.)
 //
 // Diff and car robots start and end at rest on straight end pieces (straight_end.hpp)
 // that the optimiser puts first and last (a cubic leaving rest off a straight line

@@ -171,7 +171,7 @@ CHANNELS = ("q_n", "q_min", "step_norm")
 def _solm_means(planner, plan) -> dict:
     """Each channel's time mean along the trajectory (at 10 Hz, interpolated, at the
     trajectory's yaw), in the channel's own units (degenerate cells at its cap)."""
-    from lf3pm.planner.grid import GridField
+    from lf3pm.planner.grid_field import GridField
 
     s = plan.trajectory.sample(10.0)
     out = {}

@@ -4,7 +4,7 @@
 
 Random free poses on every procedural scene and on the real maps in
 ../shared/data; at each, the LF-3PM metric and the baselines (lf3pm.evaluate)
-and MDE (lf3pm.evaluation.mde). Spearman rank correlation of each predictor
+and MDE (lf3pm.validation.mde). Spearman rank correlation of each predictor
 with MDE, pooled over maps and within each map (a planner compares places
 within one map), with bootstrap confidence intervals. Writes DIR/summary.json,
 DIR/poses.csv, DIR/scatter.png and DIR/calibration.json (the best within-map
@@ -25,7 +25,7 @@ from lf3pm import __version__
 from lf3pm.atomic import atomic_write
 from lf3pm.calibration import fit_calibration
 from lf3pm.experiments.data import shared_data_dir
-from lf3pm.evaluation import RegistrationTarget, mde
+from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate

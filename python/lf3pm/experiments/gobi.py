@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
-from lf3pm.evaluation import RegistrationTarget
-from lf3pm.evaluation.trajectory import sample_trajectory
-from lf3pm.evaluation.trajectory_mde import mde_along
+from lf3pm.validation import RegistrationTarget
+from lf3pm.validation.trajectory import sample_trajectory
+from lf3pm.validation.trajectory_mde import mde_along
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.replay_tasks import load_replay, run_replays

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
-from lf3pm.evaluation import RegistrationTarget, mde
+from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.experiments.poses import poses_around_reference
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate

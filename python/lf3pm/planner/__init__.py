@@ -10,8 +10,8 @@
 - Both: :class:`Planner` (:mod:`~lf3pm.planner.plan`), used by ``lf3pm plan``.
 """
 
-from lf3pm.planner.grid import GridField
-from lf3pm.planner.optimizer import OptimizeResult, make_problem, optimize_trajectory
+from lf3pm.planner.grid_field import GridField
+from lf3pm.planner.trajectory_optimizer import OptimizeResult, make_problem, optimize_trajectory
 from lf3pm.planner.plan import Plan, Planner
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.trajectory import Trajectory

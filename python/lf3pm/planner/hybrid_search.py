@@ -22,7 +22,7 @@ from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
-from lf3pm.planner.grid import GridField
+from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.poses import as_pose, format_pose
 
 

@@ -22,9 +22,9 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT, CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
-from lf3pm.planner.grid import GridField
+from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
-from lf3pm.planner.optimizer import OptimizeResult, optimize_trajectory
+from lf3pm.planner.trajectory_optimizer import OptimizeResult, optimize_trajectory
 from lf3pm.planner.poses import as_pose
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path

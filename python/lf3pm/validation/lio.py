@@ -66,7 +66,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.imu import ImuPreset
+from lf3pm.validation.imu import ImuPreset
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor
 

@@ -20,13 +20,13 @@ import os
 import time
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
+from lf3pm.validation.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
                                            MIN_POINTS, SCAN_VOXEL, WheelOdometry, localization_params, localize)
-from lf3pm.evaluation.mde import RegistrationTarget
-from lf3pm.evaluation.motion import Motion, RestFirst
-from lf3pm.evaluation.odometry import kiss_icp_params, run_kiss_icp
-from lf3pm.evaluation.replay_result import Estimate, ReplayResult, library_versions
-from lf3pm.evaluation.scans import ScanStream
+from lf3pm.validation.mde import RegistrationTarget
+from lf3pm.validation.motion import Motion, RestFirst
+from lf3pm.validation.odometry import kiss_icp_params, run_kiss_icp
+from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.validation.scans import ScanStream
 from lf3pm.map import Map, load_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
 from lf3pm.terrain import DEFAULT_HEIGHT
@@ -156,8 +156,8 @@ def lio_modules(needed_by: str = "method lio"):
     """(simulate_imu, run_lio), or Lf3pmError (naming what ``needed_by`` them)
     when the IMU simulation or the LIO is not available."""
     try:
-        from lf3pm.evaluation.imu import simulate_imu
-        from lf3pm.evaluation.lio import run_lio
+        from lf3pm.validation.imu import simulate_imu
+        from lf3pm.validation.lio import run_lio
     except ImportError as err:
         raise Lf3pmError(f"{needed_by} is not available: {err}") from None
     return simulate_imu, run_lio

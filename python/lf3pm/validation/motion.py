@@ -26,8 +26,8 @@ from __future__ import annotations
 import numpy as np
 
 from lf3pm.errors import Lf3pmError, PoseError
-from lf3pm.evaluation.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
-from lf3pm.evaluation.trajectory import check_trajectory
+from lf3pm.validation.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
+from lf3pm.validation.trajectory import check_trajectory
 from lf3pm.map import Map
 from lf3pm.pose import pose_matrices
 from lf3pm.terrain import DEFAULT_HEIGHT

@@ -73,7 +73,7 @@ def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: floa
     """The scan whose rays (``directions`` (K, 3), emission order) fire over
     (end - period, end] while the sensor follows ``motion`` (anything with
     ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:
-    lf3pm.evaluation.motion.Motion, lf3pm.evaluation.trajectory.LinearMotion).
+    lf3pm.validation.motion.Motion, lf3pm.validation.trajectory.LinearMotion).
     Noise as ``_core.simulate_scan``'s: ray k gets the same range noise under
     the same seed and stream whatever the motion.
     """

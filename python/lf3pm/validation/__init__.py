@@ -11,13 +11,13 @@
   interpolated linearly), as the Gobi experiment uses it.
 """
 
-from lf3pm.evaluation.mde import MdeResult, RegistrationTarget, mde
-from lf3pm.evaluation.motion import Motion
-from lf3pm.evaluation.odometry import replay_odometry
-from lf3pm.evaluation.replay import replay
-from lf3pm.evaluation.replay_result import ReplayResult
-from lf3pm.evaluation.trajectory import interpolate_poses, sample_trajectory
-from lf3pm.evaluation.trajectory_mde import TrajectoryMde, mde_along, pose_seed
+from lf3pm.validation.mde import MdeResult, RegistrationTarget, mde
+from lf3pm.validation.motion import Motion
+from lf3pm.validation.odometry import replay_odometry
+from lf3pm.validation.replay import replay
+from lf3pm.validation.replay_result import ReplayResult
+from lf3pm.validation.trajectory import interpolate_poses, sample_trajectory
+from lf3pm.validation.trajectory_mde import TrajectoryMde, mde_along, pose_seed
 
 __all__ = ["MdeResult", "Motion", "RegistrationTarget", "ReplayResult", "replay", "TrajectoryMde", "interpolate_poses",
            "mde", "mde_along", "pose_seed", "replay_odometry", "sample_trajectory"]

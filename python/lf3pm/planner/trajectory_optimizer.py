@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.grid import GridField
+from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.trajectory import Trajectory
 

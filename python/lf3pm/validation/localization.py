@@ -17,7 +17,7 @@ Per scan k (scans.py; scan k ends at t_k, its rays fire over the period before):
    the period (what KISS-ICP and most LiDAR odometries assume), then the scan
    is voxel-downsampled (``scan_voxel``, one centroid per voxel, small_gicp).
 3. **Registration.** small_gicp ``PLANE_ICP`` against the map prepared once
-   (:class:`lf3pm.evaluation.mde.RegistrationTarget`: points, normals, k-d
+   (:class:`lf3pm.validation.mde.RegistrationTarget`: points, normals, k-d
    tree; pass ``target`` to reuse it across replays), from the prior.
 4. **Degeneracy and solution remapping** (Zhang, Kaess & Singh, ICRA 2016).
    small_gicp returns the final Gauss-Newton Hessian H = sum J^T J in its
@@ -51,8 +51,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.mde import RegistrationTarget
-from lf3pm.evaluation.replay_result import Estimate
+from lf3pm.validation.mde import RegistrationTarget
+from lf3pm.validation.replay_result import Estimate
 from lf3pm.pose import se3_exp, se3_log
 from lf3pm.sensors import Sensor
 

@@ -21,9 +21,9 @@ import time
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.replay_result import Estimate, ReplayResult, library_versions
-from lf3pm.evaluation.scans import ScanStream
-from lf3pm.evaluation.trajectory import LinearMotion
+from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.validation.scans import ScanStream
+from lf3pm.validation.trajectory import LinearMotion
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor

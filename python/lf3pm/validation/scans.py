@@ -20,7 +20,7 @@ import numpy as np
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
+from lf3pm.validation.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
 from lf3pm.map import Map
 from lf3pm.sensors import Sensor
 

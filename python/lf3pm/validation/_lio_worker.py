@@ -1,4 +1,4 @@
-"""Child process of lf3pm.evaluation.lio: runs GenZ-LIO on the scans the parent
+"""Child process of lf3pm.validation.lio: runs GenZ-LIO on the scans the parent
 streams to it, so that the odometry's OpenMP runtime, its console output and a
 crash stay out of the caller's process.
 

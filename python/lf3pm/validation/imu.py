@@ -150,7 +150,7 @@ def simulate_imu(motion, *, rate: float = 200.0, preset: str | ImuPreset = DEFAU
                  noise: bool = True) -> ImuSamples:
     """IMU samples every 1/``rate`` s over [motion.t0, motion.t1] (module
     docstring for the model). ``motion`` needs t0, t1, acceleration(t),
-    yaw_rate(t) and pose(t) (lf3pm.evaluation's Motion). ``noise`` False:
+    yaw_rate(t) and pose(t) (lf3pm.validation's Motion). ``noise`` False:
     the exact specific force and angular rate. Raises Lf3pmError for a bad
     rate, preset or seed, a motion shorter than one sample interval or one
     that returns malformed or non-finite values.

@@ -1,6 +1,6 @@
 """MDE along a trajectory and its sum S, the paper's figure of merit for a
 planned path: S = sum_i MDE(pose_i) over poses sampled at a constant time
-interval (see :func:`lf3pm.evaluation.trajectory.sample_trajectory`).
+interval (see :func:`lf3pm.validation.trajectory.sample_trajectory`).
 
 Pose i uses the seed :func:`pose_seed` (seed, i) for both its scan noise and its
 disturbances, so each per-pose MDE equals ``mde(map, pose_i, seed=pose_seed(seed, i))``
@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.evaluation.mde import RegistrationTarget, mde
+from lf3pm.validation.mde import RegistrationTarget, mde
 from lf3pm.map import Map, load_map
 from lf3pm.sensors import Sensor, get_sensor
 
@@ -68,7 +68,7 @@ def mde_along(map: Map | str, poses, sensor: Sensor | str = "vlp16", *, trials: 
               max_correspondence_distance: float = 1.0, max_iterations: int = 50,
               clearance: float = 0.1, target: RegistrationTarget | None = None, threads: int = 0,
               progress=None) -> TrajectoryMde:
-    """MDE (see :func:`lf3pm.evaluation.mde`) at each of ``poses`` ((N, 4) x y z
+    """MDE (see :func:`lf3pm.validation.mde`) at each of ``poses`` ((N, 4) x y z
     yaw, sampled by the caller at a constant time interval) and S, their sum.
 
     The map is prepared for registration once (or ``target`` is reused). Pose i
