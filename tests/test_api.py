@@ -43,3 +43,12 @@ def test_map_to_replay_from_the_top_level(tmp_path):
     np.testing.assert_allclose(again.truth[:, :3, 3], result.truth[:, :3, 3], atol=1e-6)
     with pytest.raises(lf3pm.Lf3pmError, match="replay takes"):
         lf3pm.replay(world, 42, "vlp16", "localization")
+
+
+def test_the_core_refuses_bad_input_with_an_lf3pm_error():
+    from lf3pm import _core
+    from lf3pm.errors import CoreInputError
+
+    with pytest.raises(CoreInputError, match="nx \\* ny \\* layers") as refused:
+        _core.grid_search(np.zeros(3), np.zeros(3, np.uint8), 2, 2, 1, 1.0, 0, 1)
+    assert isinstance(refused.value, lf3pm.Lf3pmError) and isinstance(refused.value, ValueError)

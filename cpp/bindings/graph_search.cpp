@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "bindings/numpy.hpp"
 #include "lf3pm/planner/graph_search.hpp"
 
 namespace nb = nanobind;
@@ -26,12 +27,10 @@ void bind_graph_search(nb::module_& m) {
           nb::gil_scoped_release release;
           r = lf3pm::grid_search(cost.data(), traversable.data(), grid, start, goal, params);
         }
-        auto* owned = new std::vector<std::uint32_t>(std::move(r.path));
-        nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<std::uint32_t>*>(p); });
         nb::dict out;
         out["found"] = r.found;
         out["cost"] = r.cost;
-        out["path"] = nb::ndarray<nb::numpy, std::uint32_t>(owned->data(), {owned->size()}, free_when_done);
+        out["path"] = lf3pm::bindings::to_numpy(std::move(r.path));
         out["expanded"] = r.expanded;
         out["pushed"] = r.pushed;
         out["heap_peak"] = r.heap_peak;
@@ -53,14 +52,12 @@ void bind_graph_search(nb::module_& m) {
           throw std::invalid_argument("cost and traversable need nx * ny * layers values");
         lf3pm::SearchGrid grid{nx, ny, layers, res};
         lf3pm::SearchParams params{weight, turn_length};
-        std::vector<double>* owned;
+        std::vector<double> h;
         {
           nb::gil_scoped_release release;
-          owned = new std::vector<double>(
-              lf3pm::search_heuristic(cost.data(), traversable.data(), grid, goal, params));
+          h = lf3pm::search_heuristic(cost.data(), traversable.data(), grid, goal, params);
         }
-        nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
-        return nb::ndarray<nb::numpy, double>(owned->data(), {owned->size()}, free_when_done);
+        return lf3pm::bindings::to_numpy(std::move(h));
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "goal"_a,
       "weight"_a = 1.0, "turn_length"_a = 0.0,

@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "bindings/numpy.hpp"
 #include "lf3pm/planner/dubins.hpp"
 #include "lf3pm/planner/grid_field.hpp"
 #include "lf3pm/planner/hybrid_search.hpp"
@@ -23,12 +24,7 @@ lf3pm::Pose2 pose(nb::handle h) {
   return {t[0], t[1], t[2]};
 }
 
-nb::ndarray<nb::numpy, double> to_numpy(std::vector<double>&& v, std::size_t rows, std::size_t cols) {
-  auto* owned = new std::vector<double>(std::move(v));
-  nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
-  const std::size_t shape[2] = {rows, cols};
-  return nb::ndarray<nb::numpy, double>(owned->data(), cols ? 2 : 1, shape, free_when_done);
-}
+using lf3pm::bindings::to_numpy;
 
 std::vector<lf3pm::PathSegment> segments_from(nb::ndarray<const double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu> a) {
   std::vector<lf3pm::PathSegment> s(a.shape(0));
@@ -52,7 +48,7 @@ void bind_hybrid_search(nb::module_& m) {
         nb::dict out;
         out["length"] = best.length;
         out["word"] = lf3pm::dubins_word_names()[best.word];
-        out["segments"] = to_numpy(std::move(seg), 3, 2);
+        out["segments"] = to_numpy(std::move(seg), {3, 2});
         out["words"] = lengths;
         return out;
       },
@@ -66,7 +62,7 @@ void bind_hybrid_search(nb::module_& m) {
         const auto poses = lf3pm::sample_segments(pose(start), segments_from(segments), spacing);
         std::vector<double> flat;
         for (const auto& p : poses) flat.insert(flat.end(), {p.x, p.y, p.yaw});
-        return to_numpy(std::move(flat), poses.size(), 3);
+        return to_numpy(std::move(flat), {poses.size(), 3});
       },
       "start"_a, "segments"_a, "spacing"_a,
       "Poses (N x 3, yaw unwrapped) every `spacing` metres and at each segment's end along segments (K x 2: signed "
@@ -90,7 +86,7 @@ void bind_hybrid_search(nb::module_& m) {
         nb::dict out;
         out["found"] = r.found;
         out["reason"] = r.reason;
-        out["segments"] = to_numpy(std::move(seg), k, 2);
+        out["segments"] = to_numpy(std::move(seg), {k, 2});
         out["length"] = r.length;
         out["cost"] = r.cost;
         out["expanded"] = r.expanded;
@@ -113,7 +109,7 @@ void bind_hybrid_search(nb::module_& m) {
         lf3pm::HybridParams p;
         p.radius = radius, p.weight = weight, p.clearance = clearance, p.yaw_bins = yaw_bins;
         auto h = lf3pm::hybrid_heuristic(esdf, cost, q, pose(goal), p);
-        return to_numpy(std::move(h), q.size(), 0);
+        return to_numpy(std::move(h));
       },
       "esdf"_a, "cost"_a.none(), "poses"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
       "yaw_bins"_a = 72, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bindings/numpy.hpp"
 #include "lf3pm/metric/evaluator.hpp"
 #include "lf3pm/map/map_index.hpp"
 #include "lf3pm/metric/metric.hpp"
@@ -21,26 +22,14 @@
 namespace nb = nanobind;
 using namespace nb::literals;
 using namespace lf3pm;
+using lf3pm::bindings::points_to_numpy;
+using lf3pm::bindings::to_numpy;
 
 namespace {
 
 using PointsIn = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 using MatIn = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using PosesIn = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
-
-// A new numpy array owning a heap copy of `values` (shape given).
-template <typename T>
-nb::ndarray<nb::numpy, T> to_numpy(std::vector<T>&& values, std::initializer_list<std::size_t> shape) {
-  auto* owned = new std::vector<T>(std::move(values));
-  nb::capsule free_when_done(owned, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-  return nb::ndarray<nb::numpy, T>(owned->data(), shape.size(), shape.begin(), free_when_done);
-}
-
-nb::ndarray<nb::numpy, double> points_to_numpy(const std::vector<Eigen::Vector3d>& pts) {
-  std::vector<double> flat(pts.size() * 3);
-  for (std::size_t i = 0; i < pts.size(); ++i) std::memcpy(&flat[3 * i], pts[i].data(), 3 * sizeof(double));
-  return to_numpy(std::move(flat), {pts.size(), 3});
-}
 
 Pose pose_from_matrix(const double* m) {
   Pose p;
@@ -117,6 +106,18 @@ void bind_planner(nb::module_& m);
 
 NB_MODULE(_core, m) {
   m.doc() = "lf3pm C++ core: map index, surfel ray casting, FAST-LIO observations, LF-3PM metric, planner";
+  // The one exception translator: the core's std::invalid_argument (bad input) becomes
+  // lf3pm.errors.CoreInputError, an Lf3pmError (one line in the CLI) and a ValueError.
+  static nb::object input_error = nb::module_::import_("lf3pm.errors").attr("CoreInputError");
+  nb::register_exception_translator(
+      [](const std::exception_ptr& error, void* type) {
+        try {
+          std::rethrow_exception(error);
+        } catch (const std::invalid_argument& e) {
+          PyErr_SetString(static_cast<PyObject*>(type), e.what());
+        }
+      },
+      input_error.ptr());
   bind_planner(m);
 
   nb::class_<MapIndex>(m, "MapIndex", "Per-map precomputation: voxel k-NN grid, point planes, surfel caster.")

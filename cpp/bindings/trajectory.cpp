@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "bindings/numpy.hpp"
 #include "lf3pm/planner/grid_field.hpp"
 #include "lf3pm/trajectory/lbfgs.hpp"
 #include "lf3pm/trajectory/minco.hpp"
@@ -42,11 +43,10 @@ Eigen::Matrix3Xd to_points(Mat3 m) {
 // 4N x 3 coefficients -> (N, 4, 3) numpy array.
 nb::ndarray<nb::numpy, double> coefficients_array(const Eigen::MatrixX3d& c) {
   const std::size_t n = static_cast<std::size_t>(c.rows() / 4);
-  auto* flat = new std::vector<double>(c.rows() * 3);
+  std::vector<double> flat(c.rows() * 3);
   for (Eigen::Index r = 0; r < c.rows(); ++r)
-    for (int d = 0; d < 3; ++d) (*flat)[3 * r + d] = c(r, d);
-  nb::capsule owner(flat, [](void* p) noexcept { delete static_cast<std::vector<double>*>(p); });
-  return nb::ndarray<nb::numpy, double>(flat->data(), {n, 4, 3}, owner);
+    for (int d = 0; d < 3; ++d) flat[3 * r + d] = c(r, d);
+  return lf3pm::bindings::to_numpy(std::move(flat), {n, 4, 3});
 }
 
 nb::dict terms_dict(const CostTerms& t) {

@@ -29,6 +29,11 @@ def finite_number(name: str, value, *, low: float | None = None, high: float | N
     return number
 
 
+class CoreInputError(Lf3pmError, ValueError):
+    """Input the C++ core refused (its std::invalid_argument, translated by the bindings);
+    a ValueError too, so that callers of lf3pm._core may catch either."""
+
+
 class MapError(Lf3pmError):
     """A map file cannot be read or holds no usable points."""
 
