@@ -137,3 +137,21 @@ def test_rigid_motion_of_map_and_pose_leaves_the_metric_unchanged():
         assert got["m"] == pytest.approx(base["m"], rel=2e-3)
         for key in ("sigma1", "q_min", "q_n", "q_max"):
             assert got[key] == pytest.approx(base[key], rel=2e-3), key
+
+
+def test_the_python_wrapper_returns_the_core_scan():
+    import lf3pm
+    from lf3pm.pose import pose_matrix
+    from lf3pm.scan_simulator import simulate_scan
+    from lf3pm.scenes import build_scene
+
+    world = lf3pm.load_map(build_scene("boxes").points)
+    vlp16 = lf3pm.get_sensor("vlp16")
+    pose = pose_matrix((0.0, 0.0, 0.5, 0.3))
+    scan = simulate_scan(world, pose, vlp16.directions, vlp16.min_range, vlp16.max_range, noise=0.01, seed=4,
+                         stream=2)
+    raw = _core.simulate_scan(world.index, pose, vlp16.directions, vlp16.min_range, vlp16.max_range, noise=0.01,
+                              seed=4, stream=2)
+    assert len(scan) == len(raw["ray"]) > 10000
+    for name in ("sensor_points", "world_points", "surfel", "ray"):
+        np.testing.assert_array_equal(getattr(scan, name), raw[name])

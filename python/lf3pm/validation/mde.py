@@ -15,10 +15,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lf3pm import _core
 from lf3pm.errors import Lf3pmError, finite_number
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
+from lf3pm.scan_simulator import simulate_scan
 from lf3pm.sensors import Sensor, get_sensor
 
 
@@ -94,10 +94,9 @@ def mde(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, trials: int = 2
     elif target.map_sha256 != map.sha256:
         raise Lf3pmError("the registration target was prepared from another map")
 
-    scan = _core.simulate_scan(map.index, truth, sensor.directions, sensor.min_range,
-                               sensor.max_range, noise=sigma, seed=int(seed),
-                               scan_voxel=scan_voxel, threads=threads)
-    points = scan["sensor_points"]
+    scan = simulate_scan(map, truth, sensor.directions, sensor.min_range, sensor.max_range, noise=sigma,
+                         seed=seed, scan_voxel=scan_voxel, threads=threads)
+    points = scan.sensor_points
     if len(points) < 10:
         raise Lf3pmError(f"the scan at this pose has only {len(points)} hits: nothing to register")
     source = small_gicp.PointCloud(np.ascontiguousarray(points))

@@ -74,7 +74,7 @@ def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: floa
     (end - period, end] while the sensor follows ``motion`` (anything with
     ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:
     lf3pm.validation.motion.Motion, lf3pm.validation.trajectory.LinearMotion).
-    Noise as ``_core.simulate_scan``'s: ray k gets the same range noise under
+    Noise as :func:`lf3pm.scan_simulator.simulate_scan`'s: ray k gets the same range noise under
     the same seed and stream whatever the motion.
     """
     if not (np.isfinite(period) and period > 0):

@@ -18,10 +18,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
 from lf3pm.map import Map
+from lf3pm.scan_simulator import simulate_scan
 from lf3pm.sensors import Sensor
 
 #: Most scans one replay simulates: beyond this a typo in a rate or a time
@@ -76,13 +76,12 @@ class ScanStream(Sequence):
                                         s.min_range, s.max_range, noise=self.noise, seed=self.seed, stream=k,
                                         threads=self.threads)
         else:
-            raw = _core.simulate_scan(self.map.index, np.ascontiguousarray(self.truth[k]), directions,
-                                      s.min_range, s.max_range, noise=self.noise, seed=self.seed, stream=k,
-                                      threads=self.threads)
-            scan = MovingScan(end=float(self.times[k]), period=self.period, points=raw["sensor_points"],
-                              timestamps=firing_fractions(len(directions))[raw["ray"]],
-                              reference=self.truth[k], reference_points=raw["sensor_points"],
-                              world_points=raw["world_points"], ray=raw["ray"])
+            raw = simulate_scan(self.map, self.truth[k], directions, s.min_range, s.max_range, noise=self.noise,
+                                seed=self.seed, stream=k, threads=self.threads)
+            scan = MovingScan(end=float(self.times[k]), period=self.period, points=raw.sensor_points,
+                              timestamps=firing_fractions(len(directions))[raw.ray],
+                              reference=self.truth[k], reference_points=raw.sensor_points,
+                              world_points=raw.world_points, ray=raw.ray)
         self.seconds += time.perf_counter() - start
         self.hits[k] = len(scan.points)
         return scan

@@ -1,0 +1,39 @@
+"""The scan simulator (cpp/lf3pm/scan/scan_simulator.hpp): a sensor's rays cast from one
+pose on a map's surfels, with seeded range noise. (A moving sensor, one pose per ray:
+lf3pm.validation.moving_scan.)"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lf3pm import _core
+from lf3pm.map import Map
+
+
+@dataclass(frozen=True)
+class SimulatedScan:
+    """The returns of one scan, in emission order (rays without a return dropped):
+    ``sensor_points`` and ``world_points`` (H, 3), the ``surfel`` (map point index) each
+    hit and the ``ray`` (index into the directions) it came from."""
+
+    sensor_points: np.ndarray
+    world_points: np.ndarray
+    surfel: np.ndarray
+    ray: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.ray)
+
+
+def simulate_scan(map: Map, pose: np.ndarray, directions: np.ndarray, min_range: float, max_range: float, *,
+                  noise: float = 0.0, seed: int = 0, stream: int = 0, scan_voxel: float = 0.0,
+                  threads: int = 0) -> SimulatedScan:
+    """The scan of rays ``directions`` (N, 3, sensor frame) from the 4 x 4 sensor-to-world
+    ``pose``; range noise sigma ``noise`` from noise stream (``seed``, ``stream``, ray)."""
+    raw = _core.simulate_scan(map.index, np.ascontiguousarray(pose, dtype=np.float64),
+                              np.ascontiguousarray(directions, dtype=np.float64), float(min_range),
+                              float(max_range), noise=float(noise), seed=int(seed), stream=int(stream),
+                              scan_voxel=float(scan_voxel), threads=int(threads))
+    return SimulatedScan(**{k: raw[k] for k in ("sensor_points", "world_points", "surfel", "ray")})
