@@ -24,7 +24,7 @@ from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
 from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
-from lf3pm.planner.trajectory_optimizer import OptimizeResult, optimize_trajectory
+from lf3pm.planner.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, optimize_trajectory
 from lf3pm.planner.poses import as_pose
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
@@ -33,8 +33,6 @@ from lf3pm.solm.reader import Solm
 
 METRICS = ("q_n", "q_min", "step_norm", "none")
 
-# The optimiser penalises clearance below r_safe + this margin (optimize_trajectory's default).
-_ESDF_MARGIN = 0.05
 
 
 @dataclass
@@ -97,7 +95,7 @@ class Planner:
         piece_length, corners = 2.0, False
         if robot.kind == "car" and robot.min_turn_radius > 0:
             path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
-                                   clearance=robot.r_safe + _ESDF_MARGIN, heuristic=heuristic,
+                                   clearance=robot.r_safe + ESDF_MARGIN, heuristic=heuristic,
                                    esdf_field=self._esdf_field)
             waypoints = path.poses
             # Pieces of a quarter turn at most, so the spline can follow the path's loops.
@@ -115,10 +113,10 @@ class Planner:
             # an SE(2) SOLM keeps the front end's yaws (the sensor's heading is the plan there);
             # otherwise the yaw is the direction of travel.
             oriented = robot.kind == "omni" and cost is not None and cost.yaw_bins > 1
-            keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + _ESDF_MARGIN, cost, weight,
+            keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + ESDF_MARGIN, cost, weight,
                                  yaw="interpolate" if oriented else "travel", turn_radius=TURN_RADIUS)
             waypoints, corners = waypoints[keep], True
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
-                                     rho_T=rho_T, esdf_margin=_ESDF_MARGIN, piece_length=piece_length,
+                                     rho_T=rho_T, esdf_margin=ESDF_MARGIN, piece_length=piece_length,
                                      corners=corners)
         return Plan(metric, robot, path, result)

@@ -25,10 +25,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.trajectory import Trajectory
+
+#: The objective's weights as the C++ core defines them (trajectory_cost.hpp CostWeights):
+#: the penalty weight W, K samples per piece and the clearance margin, read once from there.
+DEFAULT_WEIGHTS = _core.CostWeights()
+ESDF_MARGIN = DEFAULT_WEIGHTS.esdf_margin
 
 
 @dataclass(frozen=True)
@@ -55,8 +61,8 @@ class OptimizeResult:
 
 
 def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
-                 w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
-                 esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
+                 w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
+                 esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
                  corners: bool = False):
     """The C++ objective (``lf3pm._core.TrajectoryProblem``) and its initial guess from
     front-end waypoints (K, 3: x, y, yaw), K >= 2. Arguments as in :func:`optimize_trajectory`."""
@@ -89,8 +95,6 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
         # The yaw column only unwraps the direction of travel (Trajectory.flat): start it
         # on the first and end it on the last direction of travel, near the given yaws.
         head[2, 0], tail[2, 0] = points[1, 2], points[-2, 2]
-    from lf3pm import _core
-
     weights = _core.CostWeights()
     weights.w_q, weights.penalty, weights.esdf_margin, weights.samples = w_q, penalty, esdf_margin, samples
     return _core.TrajectoryProblem(cost._core if cost is not None else None, esdf._core if esdf is not None else None,
@@ -178,8 +182,8 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
 
 
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
-                        w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = 1e5,
-                        esdf_margin: float = 0.05, samples: int = 16, piece_length: float = 2.0,
+                        w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
+                        esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
                         corners: bool = False,
                         g_epsilon: float = 1e-6, rel_cost_tol: float = 1e-4,
                         max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
