@@ -493,3 +493,15 @@ def test_real_outdoor_scan_with_mixed_fields():
     records = np.frombuffer(raw[start:], dtype=layout)
     assert len(records) == 80_787
     np.testing.assert_array_equal(points, xyz_of(records))
+
+
+@pytest.mark.parametrize("encoding", ["binary", "ascii", "binary_compressed"])
+def test_a_header_declaring_more_than_the_file_holds_is_refused_before_reading(tmp_path, encoding):
+    # 15,000 points whose z has a COUNT of 10^9: 60 TB declared in a file of under 200 KB.
+    header = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1000000000\nWIDTH 15000\n"
+              f"HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 15000\nDATA {encoding}\n").encode()
+    body = b"0 0 0\n" * 15000 if encoding == "ascii" else np.zeros(45000, np.float32).tobytes()
+    path = tmp_path / f"claims_too_much_{encoding}.pcd"
+    path.write_bytes(header + body)
+    message = expect_map_error(path)
+    assert "truncated or corrupt PCD file" in message and "15,000 points" in message

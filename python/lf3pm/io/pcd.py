@@ -18,6 +18,7 @@ def read_pcd(path: str) -> np.ndarray:
     skipped: the records are decoded by the header's field layout, never by
     assuming 3 or 4 floats per point.
     """
+    _check_declared_size(path)
     with reading(path, "PCD"):
         cloud = PointCloud.from_path(path)
     # A one-point ascii PCD parses (np.loadtxt) to a 0-d array.
@@ -32,6 +33,57 @@ def read_pcd(path: str) -> np.ndarray:
         raise MapError(f"{path}: truncated or corrupt PCD file: the header declares "
                        f"{cloud.metadata.points} points, the data section holds {len(records)}")
     return stack_xyz(records["x"], records["y"], records["z"])
+
+
+#: How many times its compressed size an LZF block can grow (a 3-byte back-reference
+#: copies at most 264 bytes: 88; with margin), so a binary_compressed header cannot make
+#: the reader allocate gigabytes from a small file.
+_LZF_MAX_RATIO = 100
+
+
+def _check_declared_size(path: str) -> None:
+    """Refuses a PCD whose header declares more data than the file can hold, before any
+    of it is allocated (a 180 KB file claiming `COUNT 1 1 1000000000` used to grow past
+    5 GB). Headers it cannot parse are left to pypcd4's own errors."""
+    try:
+        with open(path, "rb") as fp:
+            head = fp.read(65536)
+            size = fp.seek(0, 2)
+    except OSError:
+        return  # reading() reports it
+    fields, offset = {}, 0
+    for raw in head.split(b"\n"):
+        offset += len(raw) + 1
+        words = raw.decode("ascii", "replace").split()
+        if not words or words[0].startswith("#"):
+            continue
+        fields[words[0].upper()] = words[1:]
+        if words[0].upper() == "DATA":
+            break
+    else:
+        return
+    try:
+        sizes = [int(v) for v in fields["SIZE"]]
+        counts = [int(v) for v in fields.get("COUNT", ["1"] * len(sizes))]
+        points = int(fields["POINTS"][0]) if "POINTS" in fields else \
+            int(fields["WIDTH"][0]) * int(fields["HEIGHT"][0])
+        encoding = fields["DATA"][0].lower()
+    except (KeyError, IndexError, ValueError):
+        return
+    if len(sizes) != len(counts) or min(sizes + counts + [points]) < 0:
+        return
+    record, values, left = sum(a * b for a, b in zip(sizes, counts)), sum(counts), size - offset
+    if encoding == "binary":
+        need, what = points * record, f"{points * record:,} bytes of data"
+    elif encoding == "ascii":
+        need, what = points * values * 2, f"{points * values:,} values"  # a digit and a separator each
+    elif encoding == "binary_compressed":
+        need, what = points * record // _LZF_MAX_RATIO, f"{points * record:,} bytes once decompressed"
+    else:
+        return
+    if need > left:
+        raise MapError(f"{path}: truncated or corrupt PCD file: its header declares {points:,} points "
+                       f"({what}), more than the {left:,} bytes after the header can hold")
 
 
 def write_pcd(fp: BinaryIO, points: np.ndarray, encoding: str = "binary") -> None:
