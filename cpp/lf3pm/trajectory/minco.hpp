@@ -99,12 +99,4 @@ double acceleration_energy(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& 
 void add_acceleration_energy_gradient(double weight, const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations,
                                       Eigen::MatrixX3d& grad_c, Eigen::VectorXd& grad_t);
 
-/// GCOPTER's C^2 diffeomorphism from the real line to durations T > 0:
-/// T = (tau^2 / 2 + tau + 1) for tau > 0, 1 / (tau^2 / 2 - tau + 1) otherwise.
-double duration_from_tau(double tau);
-/// Its inverse.
-double tau_from_duration(double duration);
-/// dT / dtau.
-double duration_derivative(double tau);
-
 }  // namespace lf3pm

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "lf3pm/trajectory/minco.hpp"
+#include "lf3pm/trajectory/time_map.hpp"
 
 namespace lf3pm {
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "lf3pm/trajectory/time_map.hpp"
+
 namespace lf3pm {
 
 TrajectoryProblem::TrajectoryProblem(TrajectoryCost cost, double rho_t, double w_energy,
