@@ -3,10 +3,10 @@
 // Why our own: no C++ L-BFGS is packaged on PyPI or Debian that we could link
 // cleanly (LBFGS-Lite and LBFGSpp are header-only files to vendor), and scipy's
 // L-BFGS-B must call back into Python for every evaluation, so it cannot run
-// inside the C++ planner. It is not faster per se: bench/bench_planner_backend.py
-// (206 m, 409 variables, one thread) measured 12.3 ms (omni) and 13.5 ms (diff)
-// against 13.5 ms and 13.9 ms for scipy L-BFGS-B with Python callbacks, 1.0-1.1x.
-// The objective dominates the time.
+// inside the C++ planner. bench/bench_planner_backend.py (206 m, 101 pieces, one
+// thread, acceleration limits) measured 32.9 ms (omni) against 56.2 ms for scipy
+// L-BFGS-B with Python callbacks on the same objective (1.7x), and on par for diff
+// and car (19.8 vs 18.5 ms, 19.3 vs 19.1 ms; BENCHMARK.md). The objective dominates.
 //
 // The Lewis-Overton search (bisection on a bracket, doubling until one exists)
 // asks only for the weak Wolfe conditions, which keeps it robust on objectives
