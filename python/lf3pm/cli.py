@@ -27,7 +27,6 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
 console = Console()
 err_console = Console(stderr=True)
-MAX_CELLS = 10_000_000  # solm.grid.MAX_CELLS, without importing the SOLM code for --help
 #: Bounds of the integer options, checked before a command runs (checked_counts): the
 #: core's noise streams take 64-bit seeds, and OpenMP aborts the process when asked for a
 #: negative or huge team of threads.
@@ -576,7 +575,8 @@ def solm_build(
     seed: int = typer.Option(0, help="Seed of the range noise."),
     noise: Optional[float] = typer.Option(None, help="Range noise sigma (m; default the sensor's)."),
     threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
-    max_cells: int = typer.Option(MAX_CELLS, help="Refuse a grid of more poses than this."),
+    max_cells: Optional[int] = typer.Option(None, help="Refuse a grid of more poses than this "
+                                                       "(default: solm.grid.MAX_CELLS, 10 million)."),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():
@@ -586,8 +586,8 @@ def solm_build(
 
         lidar = get_sensor(sensor)
         world = load_map(map_path, threads=threads)
-        grid = make_grid(world, space, res, bounds=bounds, yaw_bins=yaw_bins, height=height,
-                         max_cells=max_cells)
+        limit = {} if max_cells is None else {"max_cells": max_cells}
+        grid = make_grid(world, space, res, bounds=bounds, yaw_bins=yaw_bins, height=height, **limit)
         with progress_bar() as step:
             def advance(cells, total):
                 step(f"SOLM {space} {grid.shape} cells", total, cells)

@@ -37,7 +37,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.guidance import GUIDANCE, LIO_GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, compare
-from lf3pm.experiments.replay_tasks import load_replay, run_replays
+from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays
 
 #: The reduced Gobi scene of the demo (experiments/gobi.py): town and open desert.
 _GOBI = {"length": 115.0, "width": 90.0, "west": 25.0, "town_radius": 25.0, "warehouse_distance": 60.0,
@@ -218,10 +218,7 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
                         if p.exists()]
                 replay_seconds += sum(r["seconds"] for r in runs)
                 if runs:
-                    plan[method] = {"ape": float(np.median([r["ape_rmse"] for r in runs])),
-                                    "ape_per_seed": [r["ape_rmse"] for r in runs],
-                                    "degenerate_share": float(np.median([r["degenerate_share"] for r in runs])),
-                                    "scans": runs[0]["scans"]}
+                    plan[method] = {**replay_summary(runs), "scans": runs[0]["scans"]}
     comparisons = {}
     names = [g.name for g in guidance]
     for method, compared in (("localization", names), ("lio", [n for n in LIO_GUIDANCE if n in names])):

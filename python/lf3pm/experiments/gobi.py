@@ -28,7 +28,7 @@ from lf3pm.validation.trajectory import sample_trajectory
 from lf3pm.validation.trajectory_mde import mde_along
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
-from lf3pm.experiments.replay_tasks import load_replay, run_replays
+from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays
 from lf3pm.planner.plan import Planner
 from lf3pm.planner.robots import Robot
 from lf3pm.sensors import get_sensor
@@ -114,10 +114,8 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
     for name, result in results.items():
         for method in METHODS:
             runs = [load_replay(out / "replays" / f"{name}_{method}_{s}.json") for s in range(setup.replay_seeds)]
-            result[method] = {"ape": float(np.median([r["ape_rmse"] for r in runs])),
-                              "ape_per_seed": [r["ape_rmse"] for r in runs],
-                              "degenerate_share": float(np.median([r["degenerate_share"] for r in runs])),
-                              "times": runs[0]["times_every_second"], "errors": runs[0]["errors_every_second"]}
+            result[method] = {**replay_summary(runs), "times": runs[0]["times_every_second"],
+                              "errors": runs[0]["errors_every_second"]}
     summary = {"experiment": "gobi", "setup": asdict(setup), "start": start, "goal": goal, "sensor": "mid70",
                "robot": asdict(robot), "map_points": world.size, "map_sha256": world.sha256, "paper": PAPER,
                "results": results, "finding": _finding(results)}

@@ -43,6 +43,14 @@ def load_replay(path) -> dict:
     return json.loads(open(path, encoding="utf-8").read())
 
 
+def replay_summary(runs: list) -> dict:
+    """One plan's replays (load_replay records, one per seed): the median APE rmse over
+    seeds, each seed's, and the median share of degenerate scans."""
+    apes = [r["ape_rmse"] for r in runs]
+    return {"ape": float(np.median(apes)), "ape_per_seed": apes,
+            "degenerate_share": float(np.median([r["degenerate_share"] for r in runs]))}
+
+
 _MAPS: dict = {}  # per process: case name -> (Map, registration target)
 
 

@@ -11,6 +11,9 @@ from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 
 CSV_COLUMNS = ("t", "x", "y", "yaw", "vx", "vy", "omega")
+#: Samples per second of a trajectory CSV (and of a Trajectory replayed directly, so that
+#: both replay the same motion).
+CSV_RATE = 100.0
 #: The most samples :meth:`Trajectory.sample` returns: 10 M at 100 Hz is 28 h of motion.
 MAX_SAMPLES = 10_000_000
 
@@ -58,7 +61,7 @@ class Trajectory:
         piece, tau = self._locate(t)
         return _powers(self.coefficients[piece], tau, 2)[:, :2]
 
-    def sample(self, rate: float = 100.0) -> dict:
+    def sample(self, rate: float = CSV_RATE) -> dict:
         """Samples at ``rate`` Hz from 0 to the end (the end included): dict of arrays
         t, x, y, yaw, vx, vy, omega, ax, ay (world frame)."""
         if not rate > 0:
@@ -79,7 +82,7 @@ class Trajectory:
         piece = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, self.pieces - 1)
         return piece, t - starts[piece]
 
-    def to_csv(self, path, rate: float = 100.0) -> None:
+    def to_csv(self, path, rate: float = CSV_RATE) -> None:
         """Write :meth:`sample` as CSV with header ``t,x,y,yaw,vx,vy,omega`` (atomically)."""
         s = self.sample(rate)
         buf = io.StringIO()

@@ -147,7 +147,7 @@ def _motion(source, map: Map, height: float) -> Motion:
     if not callable(getattr(trajectory, "sample", None)):
         raise Lf3pmError("replay takes a Motion, a trajectory CSV, a Trajectory or a Plan, got "
                          f"{type(source).__name__}")
-    s = trajectory.sample(100.0)
+    s = trajectory.sample()  # at the CSV's rate (planner.trajectory.CSV_RATE)
     return Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map,
                               height=height)
 
