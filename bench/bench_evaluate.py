@@ -20,6 +20,8 @@ from baseline_pipeline import association_and_metric
 
 import lf3pm
 from lf3pm import _core
+from lf3pm.metric import eval_params
+from lf3pm.scan_simulator import scan_params
 
 
 def town_map(seed: int = 0) -> np.ndarray:
@@ -57,13 +59,14 @@ def main() -> None:
     sensor = lf3pm.get_sensor("vlp16")
     pose = np.eye(4)
     pose[:3, 3] = (0.0, 0.0, 1.8)
-    args_core = (world.index, pose, sensor.directions, sensor.min_range, sensor.max_range)
+    args_core = (world.index, pose, sensor.directions)
 
     def timed(**kwargs):
+        params = eval_params(sensor.min_range, sensor.max_range, **kwargs)
         times = []
         for _ in range(args.repeat):
             t = time.perf_counter()
-            out = _core.evaluate(*args_core, noise=0.0, **kwargs)
+            out = _core.evaluate(*args_core, params)
             times.append(time.perf_counter() - t)
         return float(np.median(times)), out
 
@@ -74,11 +77,12 @@ def main() -> None:
         "k-NN, scan voxel 0.5 m (FAST-LIO filter_size_surf), 1 thread":
             timed(threads=1, scan_voxel=0.5)[0],
     }
-    scan = _core.simulate_scan(*args_core, threads=1)
+    one_thread = scan_params(sensor.min_range, sensor.max_range, threads=1)
+    scan = _core.simulate_scan(*args_core, one_thread)
     cast = []
     for _ in range(args.repeat):
         t = time.perf_counter()
-        _core.simulate_scan(*args_core, threads=1)
+        _core.simulate_scan(*args_core, one_thread)
         cast.append(time.perf_counter() - t)
     tree = cKDTree(world.points)
     base = []
@@ -91,14 +95,14 @@ def main() -> None:
     rays = sensor.num_rays
     print(f"map: {world.size:,} points, index built in {build_s:.2f} s "
           f"({world.index.memory_bytes / 2**20:.0f} MiB), cell {world.index.cell_size:.3f} m")
-    print(f"scan: {rays:,} rays, {res['hits']:,} hits, {res['m']:,} observation rows")
+    print(f"scan: {rays:,} rays, {res.hits:,} hits, {res.metric.m:,} observation rows")
     print(f"ours, one core: {ours_s * 1e3:.2f} ms per scan ({rays / ours_s / 1e6:.2f} M rays/s); "
           f"casting alone {cast_s * 1e3:.2f} ms")
     for name, seconds in variants.items():
         print(f"  {name}: {seconds * 1e3:.2f} ms per scan")
     print(f"baseline association + metric (cKDTree + NumPy), after our cast: {base_s * 1e3:.1f} ms")
     print(f"ratio, baseline association+metric / ours end to end: {base_s / ours_s:.1f}x")
-    print(f"q_n ours {res['q_n']:.6g} vs baseline (k-NN association) {q_base:.6g}")
+    print(f"q_n ours {res.metric.q_n:.6g} vs baseline (k-NN association) {q_base:.6g}")
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ import numpy as np
 
 import lf3pm
 from lf3pm import _core
+from lf3pm.scan_simulator import scan_params
 from lf3pm.validation.moving_scan import simulate_moving_scan
 from lf3pm.validation.odometry import replay_odometry
 from lf3pm.validation.trajectory import LinearMotion, interpolate_poses
@@ -68,8 +69,8 @@ def simulation_cost(world, sensor_name: str, t, poses, rate: float = 10.0, scans
     for k in range(len(times)):
         dirs = sensor.scan_directions(k)
         start = time.perf_counter()
-        _core.simulate_scan(world.index, pose_matrix(truth[k]), dirs, sensor.min_range, sensor.max_range,
-                            noise=sensor.range_noise_sigma, stream=k)
+        _core.simulate_scan(world.index, pose_matrix(truth[k]), dirs,
+                            scan_params(sensor.min_range, sensor.max_range, noise=sensor.range_noise_sigma, stream=k))
         still.append(time.perf_counter() - start)
         start = time.perf_counter()
         simulate_moving_scan(world.index, motion, times[k], 1.0 / rate, dirs, sensor.min_range,

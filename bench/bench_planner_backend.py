@@ -26,6 +26,7 @@ import numpy as np  # noqa: E402
 from scipy import ndimage  # noqa: E402
 from scipy.optimize import minimize  # noqa: E402
 
+from lf3pm import _core  # noqa: E402
 from lf3pm.planner import GridField, Robot, make_problem  # noqa: E402
 
 
@@ -50,7 +51,9 @@ def scenario(seed: int = 0):
 
 
 def ours(problem, tol):
-    out = problem.optimize(delta=tol)
+    params = _core.trajectory_lbfgs()
+    params.delta = tol
+    out = problem.optimize(params)
     return out["terms"]["total"], out["iterations"]
 
 

@@ -22,6 +22,8 @@ import numpy as np
 
 import lf3pm
 from lf3pm import _core
+from lf3pm.metric import eval_params
+from lf3pm.scan_simulator import scan_params
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.scenes import build_scene
 from lf3pm.solm.build import _pose_matrices
@@ -56,9 +58,9 @@ def main() -> None:
 
     def ours(directions, sensor, noise, weight=1.0, at=poses):
         t = time.perf_counter()
-        res = _core.evaluate_many(world.index, at, streams[: len(at)], directions, sensor.min_range,
-                                  sensor.max_range, noise=noise, seed=args.seed,
-                                  threads=args.threads, ray_weight=weight)
+        res = _core.evaluate_many(world.index, at, streams[: len(at)], directions,
+                                  eval_params(sensor.min_range, sensor.max_range, noise=noise, seed=args.seed,
+                                              threads=args.threads, ray_weight=weight))
         return res, (time.perf_counter() - t) / len(at)
 
     # 1. Exact cells against the baseline.
@@ -77,8 +79,8 @@ def main() -> None:
     # The same association and metric on our hits: agreement of the numerics alone.
     q_same_hits = []
     for p in base_cells:
-        scan = _core.simulate_scan(world.index, p, vlp16.directions, vlp16.min_range, vlp16.max_range,
-                                   threads=args.threads)
+        scan = _core.simulate_scan(world.index, p, vlp16.directions,
+                                   scan_params(vlp16.min_range, vlp16.max_range, threads=args.threads))
         q_same_hits.append(association_and_metric(baseline.tree, world.index.points,
                                                   scan["world_points"], p[:3, 3], args.threads))
     same_med, same_worst = relative_error(q_same_hits, exact["q_n"][: len(base_cells)])
@@ -103,8 +105,8 @@ def main() -> None:
               f"({noisy_s / s:4.1f}x), ratio to baseline {base_s / s:6.1f}x, "
               f"q_n rel. error median {med:.3f} p95 {p95:.3f}")
     other_noise = _core.evaluate_many(world.index, poses, streams + len(poses), vlp16.directions,
-                                      vlp16.min_range, vlp16.max_range, noise=vlp16.range_noise_sigma,
-                                      seed=args.seed, threads=args.threads)
+                                      eval_params(vlp16.min_range, vlp16.max_range, noise=vlp16.range_noise_sigma,
+                                                  seed=args.seed, threads=args.threads))
     med, p95 = relative_error(other_noise["q_n"], noisy["q_n"])
     print(f"   noise floor (exact cells, other noise streams): median {med:.3f} p95 {p95:.3f}")
 
@@ -115,14 +117,14 @@ def main() -> None:
     yaw_poses = np.concatenate([_pose_matrices(positions[:, 0], positions[:, 1], positions[:, 2],
                                                np.full(len(few), 2 * np.pi * k / bins)) for k in range(bins)])
     _core.evaluate_many(world.index, yaw_poses, np.arange(len(yaw_poses), dtype=np.uint64),
-                        mid70.directions, mid70.min_range, mid70.max_range,
-                        noise=mid70.range_noise_sigma, threads=args.threads)
+                        mid70.directions, eval_params(mid70.min_range, mid70.max_range,
+                                                      noise=mid70.range_noise_sigma, threads=args.threads))
     se2_exact_s = (time.perf_counter() - t) / len(few)
     rays, half = sector_layout(mid70, bins)
     t = time.perf_counter()
     _core.evaluate_yaw_sectors(world.index, positions, np.arange(len(few), dtype=np.uint64), rays, bins,
-                               half, mid70.min_range, mid70.max_range, noise=mid70.range_noise_sigma,
-                               threads=args.threads)
+                               half, eval_params(mid70.min_range, mid70.max_range, noise=mid70.range_noise_sigma,
+                                                 threads=args.threads))
     se2_reuse_s = (time.perf_counter() - t) / len(few)
     print(f"\n3. SE(2), Mid-70, {bins} yaw bins, per (x, y) cell")
     print(f"   exact per bin: {se2_exact_s * 1e3:.0f} ms ({se2_exact_s / noisy_s:.1f}x the R² VLP-16 cell)")

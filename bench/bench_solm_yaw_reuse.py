@@ -16,6 +16,7 @@ from scipy.stats import spearmanr
 
 import lf3pm
 from lf3pm import _core
+from lf3pm.metric import eval_params
 from lf3pm.pose import pose_matrix
 from lf3pm.scenes import build_scene
 from lf3pm.solm.yaw_reuse import sector_layout
@@ -37,14 +38,14 @@ def main() -> None:
         streams = np.arange(len(positions), dtype=np.uint64)
         t = time.perf_counter()
         fast = _core.evaluate_yaw_sectors(world.index, positions, streams, rays, args.bins, half,
-                                          sensor.min_range, sensor.max_range, noise=0.02, threads=2)
+                                          eval_params(sensor.min_range, sensor.max_range, noise=0.02, threads=2))
         fast_s = time.perf_counter() - t
         poses = np.ascontiguousarray(np.array([pose_matrix((x, y, z, 2 * np.pi * k / args.bins))
                                                for x, y, z in positions for k in range(args.bins)]))
         t = time.perf_counter()
         exact = _core.evaluate_many(world.index, poses, np.arange(len(poses), dtype=np.uint64),
-                                    sensor.directions, sensor.min_range, sensor.max_range,
-                                    noise=0.02, threads=2)
+                                    sensor.directions,
+                                    eval_params(sensor.min_range, sensor.max_range, noise=0.02, threads=2))
         exact_s = time.perf_counter() - t
         print(f"{name}: {len(poses)} cells x bins; exact {exact_s:.2f} s, sector Grams {fast_s:.2f} s, "
               f"ratio {exact_s / fast_s:.1f}x ({len(rays)} rays per sector, {2 * half + 1} sectors per bin)")

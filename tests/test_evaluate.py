@@ -19,7 +19,7 @@ from reference_metric import reference_metric
 def metric_of_rows(A, b):
     """The metric of explicit rows: NumPy Gram, then the core's Gram path."""
     M = np.hstack([A, b[:, None]])
-    return _core.metric_from_gram(M.T @ M, len(b))
+    return _core.metric_from_gram(M.T @ M, len(b)).as_dict()
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 REQUIRED = ("sigma1", "xi", "q_min", "q_n", "q_max", "m")

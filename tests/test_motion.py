@@ -1,8 +1,6 @@
 """The replay's motion (motion.py) and the smooth ground under it (ground.py):
 exact on a planner's cubic, C2, above the true ground within a stated bound."""
 
-import math
-
 import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
@@ -13,7 +11,8 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.validation.ground import smooth_ground
 from lf3pm.validation.motion import Motion
 from lf3pm.planner.trajectory import Trajectory, read_csv
-from lf3pm.terrain import DEFAULT_HEIGHT, body_blocked
+from lf3pm.config import DEFAULT_HEIGHT
+from lf3pm.terrain import body_blocked
 
 
 @pytest.fixture(scope="module")

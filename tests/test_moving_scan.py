@@ -2,7 +2,6 @@
 its own firing time, checked against straight-line motion past a known plane and
 against KISS-ICP's own deskewing."""
 
-import math
 
 import numpy as np
 import pytest
@@ -10,6 +9,7 @@ from kiss_icp.preprocess import Preprocessor
 
 from analytic_scenes import grid_plane
 from lf3pm import _core
+from lf3pm.scan_simulator import scan_params
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.moving_scan import firing_fractions, simulate_moving_scan
 from lf3pm.validation.trajectory import LinearMotion
@@ -55,8 +55,8 @@ def test_pose_matrices_match_pose_matrix():
 def test_at_rest_the_moving_scan_is_the_static_scan(wall, mid70):
     pose = [0.0, 1.0, 0.5, 0.2]
     moving = scan_along(wall, mid70, pose, pose, noise=0.02)
-    static = _core.simulate_scan(wall, pose_matrix(pose), mid70.directions, mid70.min_range, mid70.max_range,
-                                 noise=0.02, seed=3, stream=2)
+    static = _core.simulate_scan(wall, pose_matrix(pose), mid70.directions,
+                                 scan_params(mid70.min_range, mid70.max_range, noise=0.02, seed=3, stream=2))
     assert len(moving.ray) > 1000
     np.testing.assert_array_equal(moving.ray, static["ray"])            # same rays, same noise
     np.testing.assert_array_equal(moving.points, static["sensor_points"])
@@ -126,4 +126,4 @@ def test_bad_period(wall, mid70):
                              0.1, 100.0)
     with pytest.raises(ValueError, match="one pose per ray"):
         _core.simulate_moving_scan(wall, np.broadcast_to(np.eye(4), (3, 4, 4)).copy(), mid70.directions[:2],
-                                   0.1, 100.0)
+                                   scan_params(0.1, 100.0))

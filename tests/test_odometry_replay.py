@@ -9,7 +9,6 @@ import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.odometry import replay_odometry
 from lf3pm.validation.trajectory import interpolate_poses, sample_trajectory
-from lf3pm.pose import pose_matrix
 from lf3pm.scenes import build_scene
 
 

@@ -140,7 +140,9 @@ def test_lbfgs_rosenbrock():
         g[1:] += 200 * (x[1:] - x[:-1] ** 2)
         return f, g
 
-    r = _core.lbfgs_minimize(rosen, np.array([-1.2, 1.0, -0.5, 0.8]), g_epsilon=1e-10)
+    params = _core.LbfgsParams()
+    params.g_epsilon = 1e-10
+    r = _core.lbfgs_minimize(rosen, np.array([-1.2, 1.0, -0.5, 0.8]), params)
     assert r["status"] == "converged"
     np.testing.assert_allclose(r["x"], 1.0, atol=1e-6)
 
@@ -150,8 +152,9 @@ def test_lbfgs_convex_quadratic():
     m = rng.normal(size=(30, 30))
     a = m @ m.T + 0.5 * np.eye(30)  # condition number in the hundreds
     b = rng.normal(size=30)
-    r = _core.lbfgs_minimize(lambda x: (0.5 * x @ a @ x - b @ x, a @ x - b), np.zeros(30), g_epsilon=1e-7,
-                             delta=0.0)
+    params = _core.LbfgsParams()
+    params.g_epsilon, params.delta = 1e-7, 0.0
+    r = _core.lbfgs_minimize(lambda x: (0.5 * x @ a @ x - b @ x, a @ x - b), np.zeros(30), params)
     assert r["status"] == "converged"
     np.testing.assert_allclose(r["x"], np.linalg.solve(a, b), rtol=1e-6, atol=1e-7)
 

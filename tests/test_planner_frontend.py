@@ -157,8 +157,9 @@ def core_heuristic(cost, trav, res, goal, weight, turn_length):
     flat_cost = np.ascontiguousarray(np.moveaxis(cost, 0, -1)).ravel()
     flat_trav = np.ascontiguousarray(np.moveaxis(trav, 0, -1), dtype=np.uint8).ravel()
     gx, gy, gk = goal
-    h = _core.search_heuristic(flat_cost, flat_trav, nx, ny, layers, res, (gy * nx + gx) * layers + gk,
-                               weight=weight, turn_length=turn_length)
+    params = _core.SearchParams()
+    params.weight, params.turn_length = weight, turn_length
+    h = _core.search_heuristic(flat_cost, flat_trav, nx, ny, layers, res, (gy * nx + gx) * layers + gk, params)
     return np.moveaxis(h.reshape(ny, nx, layers), -1, 0)
 
 

@@ -72,7 +72,7 @@ def test_bad_trajectories(files, tmp_path, kind, match):
 
 
 @pytest.mark.parametrize("args, match", [
-    (["--method", "slam"], "unknown method"),
+    (["--method", "slam"], "--method must be 'localization', 'lio' or 'odometry'"),
     (["--sensor", "hdl-64"], "unknown sensor"),
     (["--rate", "0"], "--rate"),
     (["--rate", "nan"], "--rate"),

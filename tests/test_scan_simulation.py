@@ -6,6 +6,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from lf3pm import _core
+from lf3pm.metric import eval_params
+from lf3pm.scan_simulator import scan_params
 from analytic_scenes import (box_room, grid_plane, random_directions, ray_box_distance,
                              rigid_transform, spinning_directions)
 
@@ -27,7 +29,7 @@ def test_every_ray_in_a_closed_room_hits_a_wall_at_the_right_range(room):
     rng = np.random.default_rng(0)
     dirs = random_directions(rng, 20000)
     origin = np.array([0.7, -0.4, 0.2])
-    scan = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0)
+    scan = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0))
     assert len(scan["ray"]) == len(dirs)  # nothing escapes: no see-through
     expected = ray_box_distance(origin, dirs, HALF)
     got = np.linalg.norm(scan["sensor_points"], axis=1)
@@ -46,7 +48,7 @@ def test_hits_on_a_wall_lie_on_its_plane_and_counts_match_geometry():
     wall = grid_plane((5.0, -10.0, -2.0), (0, 1, 0), (0, 0, 1), 20.0, 5.0, 0.05)
     index = _core.MapIndex(np.ascontiguousarray(wall))
     dirs = spinning_directions(np.arange(-15, 16, 2), 1800)
-    scan = _core.simulate_scan(index, pose_at(0, 0, 0), dirs, 0.5, 100.0)
+    scan = _core.simulate_scan(index, pose_at(0, 0, 0), dirs, scan_params(0.5, 100.0))
     w = scan["world_points"]
     assert np.max(np.abs(w[:, 0] - 5.0)) < 0.01
     # Analytic: ray meets the plane x = 5 inside the rectangle. Discs of rim points
@@ -70,7 +72,7 @@ def test_nothing_is_seen_through_a_wall():
     index = _core.MapIndex(np.ascontiguousarray(np.vstack([near, far])))
     dirs = random_directions(np.random.default_rng(1), 20000)
     dirs = np.ascontiguousarray(dirs[dirs[:, 0] > 0])
-    scan = _core.simulate_scan(index, pose_at(0, 0, 0), dirs, 0.1, 100.0)
+    scan = _core.simulate_scan(index, pose_at(0, 0, 0), dirs, scan_params(0.1, 100.0))
     w = scan["world_points"]
     t = 3.0 / dirs[scan["ray"], 0]
     p = dirs[scan["ray"]] * t[:, None]
@@ -82,11 +84,11 @@ def test_min_and_max_range(room):
     dirs = random_directions(np.random.default_rng(2), 2000)
     origin = np.zeros(3)
     # Walls are 1.5 to ~5.2 m away.
-    none = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 1.4)
+    none = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 1.4))
     assert len(none["ray"]) == 0
-    blocked = _core.simulate_scan(room, pose_at(*origin), dirs, 6.0, 100.0)
+    blocked = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(6.0, 100.0))
     assert len(blocked["ray"]) == 0  # walls nearer than min_range block, never reveal
-    some = _core.simulate_scan(room, pose_at(*origin), dirs, 2.5, 3.5)
+    some = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(2.5, 3.5))
     r = np.linalg.norm(some["sensor_points"], axis=1)
     assert len(r) > 0 and r.min() >= 2.5 and r.max() <= 3.5
     expected = ray_box_distance(origin, dirs, HALF)
@@ -98,10 +100,10 @@ def test_min_and_max_range(room):
 def test_range_noise_is_gaussian_and_seeded(room):
     dirs = random_directions(np.random.default_rng(3), 30000)
     origin = np.array([0.1, 0.2, 0.3])
-    clean = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0)
-    a = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0, noise=0.02, seed=7)
-    b = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0, noise=0.02, seed=7, threads=1)
-    c = _core.simulate_scan(room, pose_at(*origin), dirs, 0.1, 100.0, noise=0.02, seed=8)
+    clean = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0))
+    a = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.02, seed=7))
+    b = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.02, seed=7, threads=1))
+    c = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.02, seed=8))
     np.testing.assert_array_equal(a["sensor_points"], b["sensor_points"])  # any thread count
     assert not np.array_equal(a["sensor_points"], c["sensor_points"])
     err = np.linalg.norm(a["sensor_points"], axis=1) - np.linalg.norm(clean["sensor_points"], axis=1)
@@ -127,16 +129,16 @@ def test_rigid_motion_of_map_and_pose_leaves_the_metric_unchanged():
     pts = np.vstack([box_room(HALF, 0.05), rng.uniform(-3.5, 3.5, size=(2000, 3))])
     dirs = spinning_directions(np.arange(-15, 16, 2), 900)
     pose = pose_at(0.5, -0.3, 0.1)
-    base = _core.evaluate(_core.MapIndex(np.ascontiguousarray(pts)), pose, dirs, 0.1, 100.0,
-                          noise=0.01, seed=3)
+    params = eval_params(0.1, 100.0, noise=0.01, seed=3)
+    base = _core.evaluate(_core.MapIndex(np.ascontiguousarray(pts)), pose, dirs, params).metric
     for _ in range(3):
         T = rigid_transform(rng)
         moved = (pts @ T[:3, :3].T) + T[:3, 3]
         got = _core.evaluate(_core.MapIndex(np.ascontiguousarray(moved)), np.ascontiguousarray(T @ pose),
-                             dirs, 0.1, 100.0, noise=0.01, seed=3)
-        assert got["m"] == pytest.approx(base["m"], rel=2e-3)
+                             dirs, params).metric
+        assert got.m == pytest.approx(base.m, rel=2e-3)
         for key in ("sigma1", "q_min", "q_n", "q_max"):
-            assert got[key] == pytest.approx(base[key], rel=2e-3), key
+            assert getattr(got, key) == pytest.approx(getattr(base, key), rel=2e-3), key
 
 
 def test_the_python_wrapper_returns_the_core_scan():
@@ -150,8 +152,8 @@ def test_the_python_wrapper_returns_the_core_scan():
     pose = pose_matrix((0.0, 0.0, 0.5, 0.3))
     scan = simulate_scan(world, pose, vlp16.directions, vlp16.min_range, vlp16.max_range, noise=0.01, seed=4,
                          stream=2)
-    raw = _core.simulate_scan(world.index, pose, vlp16.directions, vlp16.min_range, vlp16.max_range, noise=0.01,
-                              seed=4, stream=2)
+    raw = _core.simulate_scan(world.index, pose, vlp16.directions,
+                              scan_params(vlp16.min_range, vlp16.max_range, noise=0.01, seed=4, stream=2))
     assert len(scan) == len(raw["ray"]) > 10000
     for name in ("sensor_points", "world_points", "surfel", "ray"):
         np.testing.assert_array_equal(getattr(scan, name), raw[name])

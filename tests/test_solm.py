@@ -10,6 +10,7 @@ import pytest
 
 import lf3pm
 from lf3pm import _core
+from lf3pm.metric import eval_params
 from lf3pm.errors import Lf3pmError
 from lf3pm.io import write_points
 from lf3pm.pose import pose_matrix
@@ -53,9 +54,10 @@ def test_a_cell_equals_evaluate_at_its_centre(boxes, built):
     k, iy, ix = np.argwhere(np.isfinite(q))[5]
     cell = np.ravel_multi_index((k, iy, ix), q.shape)
     pose = pose_matrix((x[k, iy, ix], y[k, iy, ix], ground[iy, ix] + 1.0, yaw[k, iy, ix]))
-    ref = _core.evaluate(world.index, pose, sensor.directions, sensor.min_range, sensor.max_range,
-                         noise=sensor.range_noise_sigma, seed=0, stream=int(cell))
-    assert q[k, iy, ix] == pytest.approx(ref["q_n"], rel=1e-6)  # stored as float32
+    ref = _core.evaluate(world.index, pose, sensor.directions,
+                         eval_params(sensor.min_range, sensor.max_range, noise=sensor.range_noise_sigma, seed=0,
+                                     stream=int(cell)))
+    assert q[k, iy, ix] == pytest.approx(ref.metric.q_n, rel=1e-6)  # stored as float32
 
 
 def test_resume_after_interruption_is_bitwise_identical(boxes, built, tmp_path):
@@ -122,8 +124,8 @@ def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path)
 
 @pytest.mark.parametrize("kwargs,needle", [
     ({"bounds": (100, 100, 110, 110)}, "outside"),
-    ({"res": 0.0}, "resolution"),
-    ({"space": "se3"}, "space"),
+    ({"res": 0.0}, "solm.res must be greater than 0"),
+    ({"space": "se3"}, "solm.space must be"),
 ])
 def test_bad_grids_are_refused(boxes, kwargs, needle):
     _, world, _ = boxes
@@ -142,7 +144,7 @@ def test_cli_unwritable_output_and_unknown_sensor_leave_no_store(boxes, tmp_path
     blocker.write_text("")
     for extra, needle in ((["-o", str(blocker / "s.zarr")], "cannot write"),
                           (["-o", str(tmp_path / "s.zarr"), "--sensor", "nosuch"], "unknown sensor"),
-                          (["-o", str(tmp_path / "s.zarr"), "--res", "0"], "resolution")):
+                          (["-o", str(tmp_path / "s.zarr"), "--res", "0"], "--res must be greater than 0")):
         out = subprocess.run([sys.executable, "-m", "lf3pm.cli", "solm", "build", str(map_path),
                               "--res", "2", *extra], capture_output=True, text=True, timeout=300)
         assert out.returncode == 2 and needle in out.stderr and "Traceback" not in out.stderr, out.stderr
@@ -186,8 +188,8 @@ def test_ray_weight_equals_casting_each_ray_that_many_times(boxes):
     dirs = np.ascontiguousarray(sensor.directions[::7])
     args = (world.index, pose, np.zeros(1, np.uint64))
     tripled = _core.evaluate_many(*args, np.ascontiguousarray(np.repeat(dirs, 3, axis=0)),
-                                  sensor.min_range, sensor.max_range)
-    weighted = _core.evaluate_many(*args, dirs, sensor.min_range, sensor.max_range, ray_weight=3.0)
+                                  eval_params(sensor.min_range, sensor.max_range))
+    weighted = _core.evaluate_many(*args, dirs, eval_params(sensor.min_range, sensor.max_range, ray_weight=3.0))
     for name in ("q_min", "q_n", "q_max", "sigma1", "m"):
         assert weighted[name][0] == pytest.approx(tripled[name][0], rel=1e-9)
 

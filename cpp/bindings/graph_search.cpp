@@ -11,17 +11,24 @@ namespace nb = nanobind;
 using namespace nb::literals;
 
 void bind_graph_search(nb::module_& m) {
+  nb::class_<lf3pm::SearchParams>(m, "SearchParams", "Grid search parameters (the defaults).")
+      .def(nb::init<>())
+      .def_rw("weight", &lf3pm::SearchParams::weight, "lambda: perception cost against length.")
+      .def_rw("turn_length", &lf3pm::SearchParams::turn_length, "rho: metres of travel charged per yaw step.")
+      .def_rw("turn_while_moving", &lf3pm::SearchParams::turn_while_moving,
+              "Also x-y steps combined with one yaw step.")
+      .def_rw("heuristic", &lf3pm::SearchParams::heuristic, "False: Dijkstra (A* with h = 0).");
+
   using Flat = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
   using Mask = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
   m.def(
       "grid_search",
       [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t start,
-         std::uint32_t goal, double weight, double turn_length, bool turn_while_moving, bool heuristic) {
+         std::uint32_t goal, const lf3pm::SearchParams& params) {
         const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(layers);
         if (cost.shape(0) != n || traversable.shape(0) != n)
           throw std::invalid_argument("cost and traversable need nx * ny * layers values");
         lf3pm::SearchGrid grid{nx, ny, layers, res};
-        lf3pm::SearchParams params{weight, turn_length, turn_while_moving, heuristic};
         lf3pm::SearchResult r;
         {
           nb::gil_scoped_release release;
@@ -38,20 +45,19 @@ void bind_graph_search(nb::module_& m) {
         return out;
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "start"_a, "goal"_a,
-      "weight"_a = 1.0, "turn_length"_a = 0.0, "turn_while_moving"_a = true, "heuristic"_a = true,
+      "params"_a = lf3pm::SearchParams(),
       "A* (heuristic=True) or Dijkstra over nx x ny x layers states (flat float64 cost, uint8 traversable, "
       "index (y * nx + x) * layers + k: yaw innermost; layers > 1 are periodic yaw bins). Returns a dict: found, cost, path "
       "(uint32 state indices), expanded, pushed, heap_peak, relaxed_expanded (cells the SE(2) heuristic's backward "
       "pass closed).");
   m.def(
       "search_heuristic",
-      [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t goal, double weight,
-         double turn_length) {
+      [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t goal,
+         const lf3pm::SearchParams& params) {
         const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(layers);
         if (cost.shape(0) != n || traversable.shape(0) != n)
           throw std::invalid_argument("cost and traversable need nx * ny * layers values");
         lf3pm::SearchGrid grid{nx, ny, layers, res};
-        lf3pm::SearchParams params{weight, turn_length};
         std::vector<double> h;
         {
           nb::gil_scoped_release release;
@@ -60,7 +66,7 @@ void bind_graph_search(nb::module_& m) {
         return lf3pm::bindings::to_numpy(std::move(h));
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "goal"_a,
-      "weight"_a = 1.0, "turn_length"_a = 0.0,
+      "params"_a = lf3pm::SearchParams(),
       "grid_search's A* heuristic at every state (same layout and arguments; +inf where the goal is unreachable "
       "even in the x-y relaxation). For tests and inspection.");
 }

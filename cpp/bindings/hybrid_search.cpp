@@ -35,6 +35,20 @@ std::vector<lf3pm::PathSegment> segments_from(nb::ndarray<const double, nb::shap
 }  // namespace
 
 void bind_hybrid_search(nb::module_& m) {
+  using lf3pm::HybridParams;
+  nb::class_<HybridParams>(m, "HybridParams", "Hybrid-A* car search parameters (the defaults).")
+      .def(nb::init<>())
+      .def_rw("radius", &HybridParams::radius, "R: the car's least turning radius (m), > 0.")
+      .def_rw("weight", &HybridParams::weight, "lambda: perception cost against length.")
+      .def_rw("clearance", &HybridParams::clearance, "Least ESDF value at every sample (m).")
+      .def_rw("yaw_bins", &HybridParams::yaw_bins, "Closed set: yaw bins per x-y cell.")
+      .def_rw("step", &HybridParams::step, "Primitive length (m); 0: sqrt 2 res.")
+      .def_rw("sample_step", &HybridParams::sample_step, "Collision and cost sample spacing (m); 0: res / 4.")
+      .def_rw("analytic_every", &HybridParams::analytic_every, "Try a Dubins path to the goal every this many expansions.")
+      .def_rw("max_expansions", &HybridParams::max_expansions)
+      .def_rw("heuristic", &HybridParams::heuristic, "False: h = 0 (uniform-cost search).")
+      .def_rw("heuristic_weight", &HybridParams::heuristic_weight, "epsilon >= 1 of f = g + epsilon h.");
+
   m.def(
       "dubins_path",
       [](nb::handle from, nb::handle to, double radius) {
@@ -69,11 +83,8 @@ void bind_hybrid_search(nb::module_& m) {
       "curvature, length) from `start`, integrated exactly.");
   m.def(
       "hybrid_search",
-      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, nb::handle start, nb::handle goal, double radius,
-         double weight, double clearance, int yaw_bins, double step, double sample_step, int analytic_every,
-         std::uint64_t max_expansions, bool heuristic, double heuristic_weight) {
-        const lf3pm::HybridParams p{radius, weight, clearance, yaw_bins, step, sample_step, analytic_every,
-                                    max_expansions, heuristic, heuristic_weight};
+      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, nb::handle start, nb::handle goal,
+         const HybridParams& p) {
         const lf3pm::Pose2 a = pose(start), b = pose(goal);
         lf3pm::HybridResult r;
         {
@@ -94,23 +105,18 @@ void bind_hybrid_search(nb::module_& m) {
         out["relaxed_cells"] = r.relaxed_cells;
         return out;
       },
-      "esdf"_a, "cost"_a.none(), "start"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
-      "yaw_bins"_a = 72, "step"_a = 0.0, "sample_step"_a = 0.0, "analytic_every"_a = 5,
-      "max_expansions"_a = 2000000, "heuristic"_a = true, "heuristic_weight"_a = 1.0,
+      "esdf"_a, "cost"_a.none(), "start"_a, "goal"_a, "params"_a,
       "Hybrid-A* forward search for a car (cpp/lf3pm/planner/hybrid_search.hpp) on GridField ESDF and cost (or None). Returns "
       "a dict: found, reason, segments (K x 2: signed curvature, length, from the start), length, cost, expanded, "
       "analytic_tries, relaxed_cells.");
   m.def(
       "hybrid_heuristic",
-      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, Poses poses, nb::handle goal, double radius,
-         double weight, double clearance, int yaw_bins) {
+      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, Poses poses, nb::handle goal,
+         const HybridParams& p) {
         std::vector<lf3pm::Pose2> q(poses.shape(0));
         for (std::size_t i = 0; i < q.size(); ++i) q[i] = {poses(i, 0), poses(i, 1), poses(i, 2)};
-        lf3pm::HybridParams p;
-        p.radius = radius, p.weight = weight, p.clearance = clearance, p.yaw_bins = yaw_bins;
         auto h = lf3pm::hybrid_heuristic(esdf, cost, q, pose(goal), p);
         return to_numpy(std::move(h));
       },
-      "esdf"_a, "cost"_a.none(), "poses"_a, "goal"_a, "radius"_a, "weight"_a = 1.0, "clearance"_a = 0.0,
-      "yaw_bins"_a = 72, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
+      "esdf"_a, "cost"_a.none(), "poses"_a, "goal"_a, "params"_a, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
 }

@@ -1,4 +1,5 @@
-// Conversions the binding files share: C++ containers into numpy arrays that own them.
+// Conversions the binding files share: C++ containers into numpy arrays that own them,
+// row-major pose matrices into Pose.
 #pragma once
 
 #include <nanobind/nanobind.h>
@@ -8,6 +9,8 @@
 #include <cstring>
 #include <initializer_list>
 #include <vector>
+
+#include "lf3pm/common/pose.hpp"
 
 namespace lf3pm::bindings {
 
@@ -33,6 +36,16 @@ inline nb::ndarray<nb::numpy, double> points_to_numpy(const std::vector<Eigen::V
   std::vector<double> flat(pts.size() * 3);
   for (std::size_t i = 0; i < pts.size(); ++i) std::memcpy(&flat[3 * i], pts[i].data(), 3 * sizeof(double));
   return to_numpy(std::move(flat), {pts.size(), 3});
+}
+
+/// A Pose from a row-major 4 x 4 sensor-to-world matrix.
+inline Pose pose_from_matrix(const double* m) {
+  Pose p;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) p.rotation(r, c) = m[4 * r + c];
+    p.position[r] = m[4 * r + 3];
+  }
+  return p;
 }
 
 }  // namespace lf3pm::bindings

@@ -63,16 +63,6 @@ nb::dict terms_dict(const CostTerms& t) {
   return d;
 }
 
-LbfgsParams lbfgs_params(int memory, double g_epsilon, int past, double delta, int max_iterations) {
-  LbfgsParams p;
-  p.memory = memory;
-  p.g_epsilon = g_epsilon;
-  p.past = past;
-  p.delta = delta;
-  p.max_iterations = max_iterations;
-  return p;
-}
-
 }  // namespace
 
 void bind_trajectory(nb::module_& m) {
@@ -129,9 +119,18 @@ void bind_trajectory(nb::module_& m) {
         "3 x 3: and acceleration, which frees the neighbouring junction's waypoint), the free intermediate "
         "waypoints (K, 3) and durations (N,).");
 
+  nb::class_<LbfgsParams>(m, "LbfgsParams", "L-BFGS parameters (the defaults; see lbfgs.hpp).")
+      .def(nb::init<>())
+      .def_rw("memory", &LbfgsParams::memory, "Stored correction pairs.")
+      .def_rw("g_epsilon", &LbfgsParams::g_epsilon, "Stop when |g| <= g_epsilon max(1, |x|).")
+      .def_rw("past", &LbfgsParams::past, "Stop when f fell by less than delta max(1, |f|) over `past` iterations.")
+      .def_rw("delta", &LbfgsParams::delta)
+      .def_rw("max_iterations", &LbfgsParams::max_iterations, "0: no limit.")
+      .def_rw("max_linesearch", &LbfgsParams::max_linesearch);
+  m.def("trajectory_lbfgs", &trajectory_lbfgs, "The L-BFGS parameters the trajectory optimiser uses by default.");
+
   m.def("lbfgs_minimize",
-        [](const std::function<nb::tuple(const Eigen::VectorXd&)>& fun, Vec x0, int memory, double g_epsilon,
-           int past, double delta, int max_iterations) {
+        [](const std::function<nb::tuple(const Eigen::VectorXd&)>& fun, Vec x0, const LbfgsParams& params) {
           Eigen::VectorXd x = to_vector(x0);
           const Objective f = [&fun](const Eigen::VectorXd& xv, Eigen::VectorXd& g) {
             const nb::tuple r = fun(xv);
@@ -139,7 +138,7 @@ void bind_trajectory(nb::module_& m) {
             if (g.size() != xv.size()) throw std::invalid_argument("gradient has the wrong size");
             return nb::cast<double>(r[0]);
           };
-          const LbfgsResult r = lbfgs_minimize(f, x, lbfgs_params(memory, g_epsilon, past, delta, max_iterations));
+          const LbfgsResult r = lbfgs_minimize(f, x, params);
           nb::dict out;
           out["x"] = x;
           out["f"] = r.f;
@@ -149,8 +148,7 @@ void bind_trajectory(nb::module_& m) {
           out["status"] = std::string(to_string(r.status));
           return out;
         },
-        "fun"_a, "x0"_a, "memory"_a = 8, "g_epsilon"_a = 1e-6, "past"_a = 3, "delta"_a = 1e-9,
-        "max_iterations"_a = 0, "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
+        "fun"_a, "x0"_a, "params"_a = LbfgsParams(), "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
 
   nb::enum_<RobotKind>(m, "RobotKind")
       .value("omni", RobotKind::Omni)
@@ -221,8 +219,7 @@ void bind_trajectory(nb::module_& m) {
            },
            "x"_a, "(coefficients (N, 4, 3), durations (N,)) at x.")
       .def("optimize",
-           [](TrajectoryProblem& p, int memory, double g_epsilon, int past, double delta, int max_iterations) {
-             const LbfgsParams lb = lbfgs_params(memory, g_epsilon, past, delta, max_iterations);
+           [](TrajectoryProblem& p, const LbfgsParams& lb) {
              OptimizeOutcome o;
              {
                nb::gil_scoped_release release;
@@ -236,6 +233,6 @@ void bind_trajectory(nb::module_& m) {
              out["terms"] = terms_dict(o.terms);
              return out;
            },
-           "memory"_a = 8, "g_epsilon"_a = 1e-6, "past"_a = 3, "delta"_a = 1e-4, "max_iterations"_a = 0,
+           "params"_a = trajectory_lbfgs(),
            "L-BFGS from the initial guess; dict of x, iterations, evaluations, status, terms.");
 }

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 import os
@@ -17,23 +16,13 @@ from rich.console import Console
 from rich.table import Table
 
 from lf3pm.atomic import atomic_write, check_replaceable
+from lf3pm.config import Config, StudyConfig, help_with_default, load_config, validated
 from lf3pm.errors import Lf3pmError
-from lf3pm.map import FASTLIO_MAX_NEIGHBOR_DISTANCE
-from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
-from lf3pm.planner.robots import DEFAULTS as ROBOT
-from lf3pm.terrain import DEFAULT_HEIGHT
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
 console = Console()
 err_console = Console(stderr=True)
-#: Bounds of the integer options, checked before a command runs (checked_counts): the
-#: core's noise streams take 64-bit seeds, and OpenMP aborts the process when asked for a
-#: negative or huge team of threads.
-MAX_SEED = 2**63 - 1
-MAX_THREADS = 1024
-COUNT_BOUNDS = {"seed": (0, MAX_SEED), "pair_seed": (0, MAX_SEED), "threads": (0, MAX_THREADS),
-                "workers": (1, MAX_THREADS), "seeds": (1, 10_000), "max_cells": (1, None)}
 
 
 @contextmanager
@@ -46,54 +35,82 @@ def user_errors():
         raise typer.Exit(2) from None
 
 
-def checked_counts(command):
-    """Wraps a command so that its integer options named in COUNT_BOUNDS are checked
-    first: one line and exit 2 when one is out of bounds (click's own range errors are a
-    multi-line box)."""
-    @functools.wraps(command)
-    def run(**options):
-        with user_errors():
-            for name, (low, high) in COUNT_BOUNDS.items():
-                value = options.get(name)
-                if value is not None and (value < low or (high is not None and value > high)):
-                    span = f">= {low}" if high is None else f"in [{low}, {high}]"
-                    raise Lf3pmError(f"--{name.replace('_', '-')} must be {span}, got {value}")
-        return command(**options)
-    return run
+def option(path: str, *names: str, help: str | None = None, **kwargs):
+    """The option for config parameter ``path`` (lf3pm.config): None unless given, so that
+    ``--config FILE.yaml`` and then the default apply; its help names the default."""
+    return typer.Option(None, *names, help=help_with_default(path, help), **kwargs)
+
+
+CONFIG_OPTION = typer.Option(None, "--config", metavar="FILE.yaml", exists=False,
+                             help="Parameters from a YAML file (config/*.yaml; flags given override it).")
+
+
+def configure(config_file: Path | None, given: dict, paths: dict) -> Config:
+    """The command's configuration: ``config_file``, then the options ``given`` (by
+    parameter name; None: not given), each at its config path ``paths[name]``."""
+    overrides = {paths[name]: value for name, value in given.items() if name in paths}
+    flags = {paths[name]: "--" + name.replace("_", "-") for name in paths}
+    return load_config(config_file, overrides, flags)
+
+
+def study_counts(**given) -> StudyConfig:
+    """The experiment's counts validated (one line naming the flag when one is out of range)."""
+    return validated(StudyConfig, flags={name: "--" + name.replace("_", "-") for name in given}, **given)
+
+
+#: Where each option of evaluate and mde lives in the config.
+SCAN_PATHS = {"sensor": "sensor", "seed": "scan.seed", "noise": "scan.noise", "scan_voxel": "scan.scan_voxel",
+              "threads": "scan.threads"}
+MAP_PATHS = {"map_voxel": "map.voxel", "knn": "map.knn", "plane_threshold": "map.plane_threshold",
+             "max_neighbor_distance": "map.max_neighbor_distance"}
+
+
+def map_options(config: Config) -> dict:
+    """load_map's keywords from the config."""
+    m = config.map
+    return {"voxel": m.voxel, "cell_size": m.cell_size, "knn": m.knn, "plane_threshold": m.plane_threshold,
+            "max_neighbor_distance": m.max_neighbor_distance, "threads": config.scan.threads}
+
+
+def scan_options(config: Config) -> dict:
+    """The scan keywords of evaluate, mde and build_solm from the config."""
+    s = config.scan
+    return {"seed": s.seed, "noise": s.noise, "scan_voxel": s.scan_voxel, "threads": s.threads}
 
 
 @app.command()
-@checked_counts
 def evaluate(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
     pose: Tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
-    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
-    seed: int = typer.Option(0, help="Seed of the range noise."),
-    noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    dof: int = typer.Option(6, help="6 for SE(3), 3 for (x, y, yaw)."),
-    w1: float = typer.Option(0.5, help="Metric weight w1 (w2 = 1 - w1)."),
-    scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (FAST-LIO filter_size_surf; 0 = off)."),
-    association: str = typer.Option("knn", help="'knn' (FAST-LIO k-NN plane at each hit) or 'surfel' (the hit map point's precomputed plane; faster)."),
-    map_voxel: Optional[float] = typer.Option(None, help="Voxel-downsample the map first (m)."),
-    knn: int = typer.Option(5, help="Neighbours per association plane (FAST-LIO NUM_MATCH_POINTS)."),
-    plane_threshold: float = typer.Option(0.1, help="Plane validity: every neighbour within this of the plane (m)."),
-    max_neighbor_distance: float = typer.Option(FASTLIO_MAX_NEIGHBOR_DISTANCE,
-                                                help="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt(5))."),
-    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    config: Optional[Path] = CONFIG_OPTION,
+    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
+    seed: Optional[int] = option("scan.seed"),
+    noise: Optional[float] = option("scan.noise"),
+    dof: Optional[int] = option("metric.dof"),
+    w1: Optional[float] = option("metric.w1"),
+    scan_voxel: Optional[float] = option("scan.scan_voxel"),
+    association: Optional[str] = option("metric.association"),
+    map_voxel: Optional[float] = option("map.voxel"),
+    knn: Optional[int] = option("map.knn"),
+    plane_threshold: Optional[float] = option("map.plane_threshold"),
+    max_neighbor_distance: Optional[float] = option("map.max_neighbor_distance"),
+    threads: Optional[int] = option("scan.threads"),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     save_observations: Optional[Path] = typer.Option(None, metavar="OBS.npz",
                                                      help="Write A, b and the simulated points."),
 ):
     """Simulate the scan at one pose and print the LF-3PM metric and baselines."""
     with user_errors():
+        cfg = configure(config, locals(), {**SCAN_PATHS, **MAP_PATHS, "dof": "metric.dof", "w1": "metric.w1",
+                                           "association": "metric.association"})
         from lf3pm.metric import evaluate as run_evaluate
         from lf3pm.map import load_map
 
-        world = load_map(map_path, voxel=map_voxel, knn=knn, plane_threshold=plane_threshold,
-                         max_neighbor_distance=max_neighbor_distance, threads=threads)
-        result = run_evaluate(world, pose, sensor, seed=seed, noise=noise, dof=dof, w1=w1, w2=1.0 - w1,
-                              scan_voxel=scan_voxel, association=association, threads=threads,
-                              observations=save_observations is not None)
+        if save_observations is not None:
+            check_replaceable(save_observations)
+        world = load_map(map_path, **map_options(cfg))
+        result = run_evaluate(world, pose, cfg.sensor, **scan_options(cfg), dof=cfg.metric.dof, w1=cfg.metric.w1,
+                              association=cfg.metric.association, observations=save_observations is not None)
         if save_observations is not None:
             obs = result.observations
             with atomic_write(save_observations) as fp:
@@ -126,28 +143,30 @@ def print_evaluation(out: dict) -> None:
 
 
 @app.command()
-@checked_counts
 def mde(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     pose: Tuple[float, float, float, float] = typer.Option(..., help="True sensor pose X Y Z YAW (m, rad)."),
-    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
-    trials: int = typer.Option(20, help="Disturbed registration starts."),
-    sigma_t: float = typer.Option(0.1, help="Start disturbance, translation sigma per axis (m)."),
-    sigma_r: float = typer.Option(2.0, help="Start disturbance, rotation sigma per axis (deg)."),
-    noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    seed: int = typer.Option(0, help="Seed of the scan noise and the disturbances."),
-    scan_voxel: float = typer.Option(0.0, help="Scan downsampling voxel in m (0 = off)."),
-    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
+    config: Optional[Path] = CONFIG_OPTION,
+    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
+    trials: Optional[int] = option("mde.trials"),
+    sigma_t: Optional[float] = option("mde.sigma_t"),
+    sigma_r: Optional[float] = option("mde.sigma_r"),
+    noise: Optional[float] = option("scan.noise"),
+    seed: Optional[int] = option("scan.seed", help="Seed of the scan noise and the disturbances."),
+    scan_voxel: Optional[float] = option("scan.scan_voxel"),
+    threads: Optional[int] = option("scan.threads"),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ):
     """MDE: mean squared error of point-to-plane ICP (small_gicp) from disturbed starts."""
     with user_errors():
+        cfg = configure(config, locals(), {**SCAN_PATHS, "trials": "mde.trials", "sigma_t": "mde.sigma_t",
+                                           "sigma_r": "mde.sigma_r"})
         from lf3pm.validation import mde as run_mde
         from lf3pm.map import load_map
 
-        world = load_map(map_path, threads=threads)
-        result = run_mde(world, pose, sensor, trials=trials, sigma_t=sigma_t, sigma_r_deg=sigma_r,
-                         noise=noise, seed=seed, scan_voxel=scan_voxel, threads=threads)
+        world = load_map(map_path, **map_options(cfg))
+        result = run_mde(world, pose, cfg.sensor, trials=cfg.mde.trials, sigma_t=cfg.mde.sigma_t,
+                         sigma_r_deg=cfg.mde.sigma_r, **scan_options(cfg))
         out = result.to_dict()
         if as_json:
             print(json.dumps(out))
@@ -161,6 +180,16 @@ def mde(
         table.add_row("converged", f"{result.converged} / {result.trials}")
         table.add_row("scan points", str(result.hits))
         console.print(table)
+
+
+@app.command("config")
+def show_config(config: Optional[Path] = typer.Option(None, "--config", metavar="FILE.yaml",
+                                                      help="Show this file's parameters merged with the defaults.")):
+    """Print every parameter and its value (the defaults, or FILE.yaml's) as YAML for --config."""
+    with user_errors():
+        from lf3pm.config import to_yaml
+
+        print(to_yaml(load_config(config)), end="")
 
 
 @app.command()
@@ -189,16 +218,16 @@ def info(map_path: Path = typer.Argument(..., metavar="MAP"),
 
 
 @app.command()
-@checked_counts
 def scene(
     name: Optional[str] = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="MAP.pcd",
                                           help="Map file to write (format by suffix; .pcd is binary)."),
-    seed: int = typer.Option(0, help="Seed of the scene's randomness."),
+    seed: int = typer.Option(0, help="Seed of the scene's randomness (0 to 2^63 - 1)."),
     list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
 ):
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
     with user_errors():
+        study_counts(seed=seed)
         from lf3pm.scenes import build_scene, describe_scenes, scene_defaults, scene_names
 
         if list_scenes:
@@ -233,7 +262,6 @@ app.add_typer(experiment_app, name="experiment")
 
 
 @experiment_app.command("table1")
-@checked_counts
 def experiment_table1(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
     poses: int = typer.Option(8, help="Poses per scene (reference position at 4 yaws, then random)."),
@@ -244,8 +272,7 @@ def experiment_table1(
     with user_errors():
         from lf3pm.experiments import table1
 
-        if poses < 1 or trials < 1:
-            raise Lf3pmError("poses and trials must be >= 1")
+        study_counts(poses=poses, trials=trials, seed=seed)
         with progress_bar() as step:
             table1.run(out, poses=poses, trials=trials, seed=seed, progress=step)
         console.print((out / "table1.md").read_text())
@@ -253,7 +280,6 @@ def experiment_table1(
 
 
 @experiment_app.command("correlation")
-@checked_counts
 def experiment_correlation(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
     poses_per_map: int = typer.Option(40, help="Random free poses per map (6 scenes + 2 real maps)."),
@@ -266,8 +292,7 @@ def experiment_correlation(
     with user_errors():
         from lf3pm.experiments import correlation
 
-        if poses_per_map < 3 or trials < 1 or bootstrap < 1:
-            raise Lf3pmError("poses-per-map must be >= 3, trials and bootstrap >= 1")
+        study_counts(poses_per_map=poses_per_map, trials=trials, bootstrap=bootstrap, seed=seed)
         with progress_bar() as step:
             summary = correlation.run(out, poses_per_map=poses_per_map, trials=trials, sensor=sensor,
                                       seed=seed, bootstrap=bootstrap, progress=step)
@@ -284,7 +309,6 @@ def experiment_correlation(
 
 
 @experiment_app.command("gobi")
-@checked_counts
 def experiment_gobi(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
@@ -295,6 +319,7 @@ def experiment_gobi(
     with user_errors():
         from dataclasses import replace
 
+        study_counts(seed=seed, **({} if seeds is None else {"seeds": seeds}))
         from lf3pm.experiments import gobi
 
         setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=seed)
@@ -307,7 +332,6 @@ def experiment_gobi(
 
 
 @experiment_app.command("benefit")
-@checked_counts
 def experiment_benefit(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
@@ -322,11 +346,7 @@ def experiment_benefit(
     with user_errors():
         from lf3pm.experiments import benefit
 
-        for name, value in (("seeds", seeds), ("workers", workers)):
-            if value < 1:
-                raise Lf3pmError(f"--{name} must be >= 1, got {value}")
-        if pair_seed < 0:
-            raise Lf3pmError(f"--pair-seed must be >= 0, got {pair_seed}")
+        study_counts(seeds=seeds, workers=workers, pair_seed=pair_seed)
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
@@ -337,6 +357,13 @@ def experiment_benefit(
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
 
 
+#: Where each option of plan lives in the config.
+PLAN_PATHS = {"robot": "robot.kind", "metric": "guidance.metric", "weight": "guidance.weight",
+              "power": "guidance.power", **{name: f"robot.{name}" for name in (
+                  "vmax_lon", "vmax_lat", "vmax_norm", "wmax", "amax_lon", "amax_lat", "alpha_max",
+                  "min_turn_radius", "r_safe")}}
+
+
 @app.command()
 def plan(
     solm_path: Path = typer.Option(..., "--solm", metavar="S.zarr", help="A built r2 or se2 SOLM."),
@@ -344,37 +371,40 @@ def plan(
     goal: Tuple[float, float, float] = typer.Option(..., help="Goal X Y YAW (m, rad)."),
     out: Path = typer.Option(..., "-o", "--out", metavar="TRAJ.csv",
                              help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."),
-    robot: str = typer.Option(ROBOT["kind"], help="omni, diff (differential drive) or car."),
-    metric: str = typer.Option(DEFAULT_CHANNEL, help="SOLM channel guiding the plan: q_n, q_min, step_norm or none."),
-    weight: float = typer.Option(DEFAULT_WEIGHT, help="lambda: an edge through cells of cost c costs length (1 + "
-                                                      "lambda c); a median cell has c = 1 (docs/benefit.md)."),
-    power: float = typer.Option(DEFAULT_POWER, help="Exponent applied to the channel (over its median) before the "
-                                                    "weight (docs/benefit.md)."),
-    vmax_lon: float = typer.Option(ROBOT["vmax_lon"], help="Longitudinal speed limit (m/s)."),
-    vmax_lat: float = typer.Option(ROBOT["vmax_lat"], help="Lateral speed limit (m/s; omni)."),
+    config: Optional[Path] = CONFIG_OPTION,
+    robot: Optional[str] = option("robot.kind", help="omni, diff (differential drive) or car."),
+    metric: Optional[str] = option("guidance.metric", help="SOLM channel guiding the plan: q_n, q_min, "
+                                                           "step_norm or none."),
+    weight: Optional[float] = option("guidance.weight", help="lambda: an edge through cells of cost c costs "
+                                                             "length (1 + lambda c); a median cell has c = 1 "
+                                                             "(docs/benefit.md)."),
+    power: Optional[float] = option("guidance.power", help="Exponent applied to the channel (over its median) "
+                                                           "before the weight (docs/benefit.md)."),
+    vmax_lon: Optional[float] = option("robot.vmax_lon", help="Longitudinal speed limit (m/s)."),
+    vmax_lat: Optional[float] = option("robot.vmax_lat", help="Lateral speed limit (m/s; omni)."),
     vmax_norm: Optional[float] = typer.Option(
         None, help="Limit on the speed |v| (m/s; omni; default max(vmax-lon, vmax-lat), inf: none)."),
-    wmax: float = typer.Option(ROBOT["wmax"], help="Yaw rate limit (rad/s)."),
-    amax_lon: float = typer.Option(ROBOT["amax_lon"], help="Longitudinal (tangential) acceleration limit (m/s^2)."),
-    amax_lat: float = typer.Option(ROBOT["amax_lat"], help="Lateral (centripetal) acceleration limit (m/s^2)."),
-    alpha_max: float = typer.Option(ROBOT["alpha_max"], help="Yaw acceleration limit (rad/s^2)."),
-    min_turn_radius: float = typer.Option(ROBOT["min_turn_radius"], help="Minimum turning radius (m; car)."),
-    r_safe: float = typer.Option(ROBOT["r_safe"], help="Clearance beyond the SOLM's robot radius (m)."),
+    wmax: Optional[float] = option("robot.wmax", help="Yaw rate limit (rad/s)."),
+    amax_lon: Optional[float] = option("robot.amax_lon", help="Longitudinal (tangential) acceleration limit (m/s^2)."),
+    amax_lat: Optional[float] = option("robot.amax_lat", help="Lateral (centripetal) acceleration limit (m/s^2)."),
+    alpha_max: Optional[float] = option("robot.alpha_max", help="Yaw acceleration limit (rad/s^2)."),
+    min_turn_radius: Optional[float] = option("robot.min_turn_radius", help="Minimum turning radius (m; car)."),
+    r_safe: Optional[float] = option("robot.r_safe", help="Clearance beyond the SOLM's robot radius (m)."),
     png: Optional[Path] = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
     map_path: Optional[Path] = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan's summary as JSON."),
 ):
     """Plan a perception-aware trajectory on a SOLM (graph search, then MINCO + L-BFGS)."""
     with user_errors():
+        cfg = configure(config, locals(), PLAN_PATHS)
         from lf3pm.planner.plan import Planner
-        from lf3pm.planner.robots import Robot
         from lf3pm.solm import Solm
 
-        vehicle = Robot(robot, vmax_lon=vmax_lon, vmax_lat=vmax_lat, wmax=wmax, amax_lon=amax_lon,
-                        amax_lat=amax_lat, alpha_max=alpha_max, min_turn_radius=min_turn_radius,
-                        r_safe=r_safe, vmax_norm=vmax_norm)
+        vehicle, guidance = cfg.robot, cfg.guidance
+        metric = guidance.metric
         solm = Solm.open(solm_path)
-        result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=weight, power=power)
+        result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=guidance.weight,
+                                    power=guidance.power)
         # All or none: the figure first (the likelier to fail), then the CSV; a CSV that
         # cannot be written takes the new figure with it.
         if png is not None:
@@ -384,7 +414,7 @@ def plan(
             check_replaceable(out)
             points = load_map(map_path).points if map_path is not None else None
             plans_figure(solm, {metric: result}, png, map_points=points,
-                         title=f"{robot} plan guided by {metric} over the SOLM (dotted: front-end path)")
+                         title=f"{vehicle.kind} plan guided by {metric} over the SOLM (dotted: front-end path)")
         try:
             result.trajectory.to_csv(out)
         except Lf3pmError:
@@ -402,18 +432,18 @@ def plan(
 
 
 @app.command("replay")
-@checked_counts
 def replay_command(
     trajectory: Path = typer.Argument(..., metavar="TRAJ.csv", help="Trajectory CSV as `lf3pm plan` writes it."),
     map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
-    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
-    method: str = typer.Option("localization", help="localization (prior map), lio or odometry (KISS-ICP)."),
-    seeds: int = typer.Option(1, help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
-    seed: int = typer.Option(0, help="First seed (range noise, odometry and IMU noise)."),
-    height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the smoothed ground (m)."),
-    rate: float = typer.Option(10.0, help="Scans per second."),
-    noise: Optional[float] = typer.Option(None, help="Range noise sigma in m (default: the sensor's)."),
-    threads: int = typer.Option(0, help="Scan simulation threads (0 = all cores)."),
+    config: Optional[Path] = CONFIG_OPTION,
+    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
+    method: Optional[str] = option("replay.method"),
+    seeds: Optional[int] = option("replay.seeds", help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seed: Optional[int] = option("scan.seed", help="First seed (range noise, odometry and IMU noise)."),
+    height: Optional[float] = option("replay.height"),
+    rate: Optional[float] = option("replay.rate"),
+    noise: Optional[float] = option("scan.noise"),
+    threads: Optional[int] = option("scan.threads", help="Scan simulation threads (0 = all cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
     bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
@@ -421,15 +451,14 @@ def replay_command(
 ):
     """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
     with user_errors():
-        from lf3pm.validation.replay import check_method, lio_modules, resolve_sensor
+        cfg = configure(config, locals(), {"sensor": "sensor", "method": "replay.method", "seeds": "replay.seeds",
+                                           "seed": "scan.seed", "height": "replay.height", "rate": "replay.rate",
+                                           "noise": "scan.noise", "threads": "scan.threads"})
+        from lf3pm.validation.replay import lio_modules, resolve_sensor
 
-        check_method(method, {})
-        if not (math.isfinite(rate) and rate > 0):
-            raise Lf3pmError(f"--rate must be a number > 0 Hz, got {rate}")
-        if not (math.isfinite(height) and height > 0):
-            raise Lf3pmError(f"--height must be a number > 0 m, got {height}")
-        if noise is not None and not (math.isfinite(noise) and noise >= 0):
-            raise Lf3pmError(f"--noise must be a number >= 0 m, got {noise}")
+        method, seeds, height, rate = cfg.replay.method, cfg.replay.seeds, cfg.replay.height, cfg.replay.rate
+        seed, noise, threads = cfg.scan.seed, cfg.scan.noise, cfg.scan.threads
+        sensor = cfg.sensor
         lidar = resolve_sensor(sensor, rate)
         if png is not None:
             check_replaceable(png)
@@ -556,47 +585,48 @@ app.add_typer(solm_app, name="solm")
 
 
 @solm_app.command("build")
-@checked_counts
 def solm_build(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     out: Path = typer.Option(..., "-o", "--out", help="Output Zarr store (resumed if it exists)."),
-    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
-    space: str = typer.Option("r2", help="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z)."),
-    res: float = typer.Option(0.5, help="Cell size (m)."),
-    yaw_bins: int = typer.Option(36, help="Yaw bins (se2)."),
-    yaw_reuse: bool = typer.Option(False, help="se2: one scan per yaw sector, summed per bin "
-                                               "(faster, approximate; docs/solm.md)."),
-    ray_stride: int = typer.Option(1, help="Cast every K-th azimuth column of the pattern and scale "
-                                           "the Gram (about K times faster, approximate; docs/solm.md)."),
-    height: float = typer.Option(DEFAULT_HEIGHT, help="Sensor height above the local ground (r2, se2), m."),
-    bounds: Optional[Tuple[float, float, float, float]] = typer.Option(
-        None, help="XMIN YMIN XMAX YMAX (default: the map's extent)."),
-    robot_radius: float = typer.Option(0.3, help="Robot radius for the obstacle mask (m)."),
-    seed: int = typer.Option(0, help="Seed of the range noise."),
-    noise: Optional[float] = typer.Option(None, help="Range noise sigma (m; default the sensor's)."),
-    threads: int = typer.Option(0, help="Worker threads (0 = all cores)."),
-    max_cells: Optional[int] = typer.Option(None, help="Refuse a grid of more poses than this "
-                                                       "(default: solm.grid.MAX_CELLS, 10 million)."),
+    config: Optional[Path] = CONFIG_OPTION,
+    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
+    space: Optional[str] = option("solm.space"),
+    res: Optional[float] = option("solm.res"),
+    yaw_bins: Optional[int] = option("solm.yaw_bins"),
+    yaw_reuse: Optional[bool] = option("solm.yaw_reuse", "--yaw-reuse/--no-yaw-reuse"),
+    ray_stride: Optional[int] = option("solm.ray_stride"),
+    height: Optional[float] = option("solm.height"),
+    bounds: Optional[Tuple[float, float, float, float]] = option("solm.bounds"),
+    robot_radius: Optional[float] = option("solm.robot_radius"),
+    seed: Optional[int] = option("scan.seed"),
+    noise: Optional[float] = option("scan.noise"),
+    threads: Optional[int] = option("scan.threads"),
+    max_cells: Optional[int] = option("solm.max_cells"),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():
+        paths = {"sensor": "sensor", "seed": "scan.seed", "noise": "scan.noise", "threads": "scan.threads",
+                 **{name: f"solm.{name}" for name in ("space", "res", "yaw_bins", "yaw_reuse", "ray_stride",
+                                                      "height", "bounds", "robot_radius", "max_cells")}}
+        cfg = configure(config, locals(), paths)
         from lf3pm.map import load_map
         from lf3pm.sensors import get_sensor
         from lf3pm.solm import build_solm, make_grid
 
-        lidar = get_sensor(sensor)
-        world = load_map(map_path, threads=threads)
-        limit = {} if max_cells is None else {"max_cells": max_cells}
-        grid = make_grid(world, space, res, bounds=bounds, yaw_bins=yaw_bins, height=height, **limit)
+        grid_config = cfg.solm
+        lidar = get_sensor(cfg.sensor)
+        world = load_map(map_path, **map_options(cfg))
+        grid = make_grid(world, grid_config.space, grid_config.res, bounds=grid_config.bounds,
+                         yaw_bins=grid_config.yaw_bins, height=grid_config.height, max_cells=grid_config.max_cells)
         with progress_bar() as step:
             def advance(cells, total):
-                step(f"SOLM {space} {grid.shape} cells", total, cells)
+                step(f"SOLM {grid.space} {grid.shape} cells", total, cells)
 
-            result = build_solm(world, lidar, grid, out, seed=seed, noise=noise,
-                                robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride,
-                                threads=threads,
-                                progress=advance)
-        console.print(f"{out}: {grid.space} grid {grid.shape} at {res} m; tiles built now "
+            result = build_solm(world, lidar, grid, out, seed=cfg.scan.seed, noise=cfg.scan.noise,
+                                robot_radius=grid_config.robot_radius, yaw_reuse=grid_config.yaw_reuse,
+                                ray_stride=grid_config.ray_stride, threads=cfg.scan.threads,
+                                association=cfg.metric.association, w1=cfg.metric.w1, progress=advance)
+        console.print(f"{out}: {grid.space} grid {grid.shape} at {grid.res} m; tiles built now "
                       f"{result['built_now']} of {result['tiles']}; complete: {result['complete']}")
 
 

@@ -10,7 +10,6 @@ valid when all lie within ``plane_threshold`` of it and the farthest within
 from __future__ import annotations
 
 import hashlib
-import math
 import os
 import warnings
 from dataclasses import dataclass
@@ -19,11 +18,12 @@ from functools import cached_property
 import numpy as np
 
 from lf3pm import _core
+from lf3pm.config import MapConfig, check_threads, validated
 from lf3pm.errors import MapError, PoseError
 from lf3pm.io import load_points, voxel_downsample
 
-#: FAST-LIO's neighbour gate: the 5th neighbour within sqrt(5) m (5 m^2).
-FASTLIO_MAX_NEIGHBOR_DISTANCE = math.sqrt(5.0)
+#: The index's defaults (C++ MapParams, through lf3pm.config).
+_DEFAULT = MapConfig()
 
 
 @dataclass(frozen=True)
@@ -77,15 +77,18 @@ class Map:
         }
 
 
-def load_map(source, *, voxel: float | None = None, cell_size: float = 0.0, knn: int = 5,
-             plane_threshold: float = 0.1,
-             max_neighbor_distance: float = FASTLIO_MAX_NEIGHBOR_DISTANCE,
-             threads: int = 0) -> Map:
+def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
+             knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
+             max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> Map:
     """Reads a map file (or takes an N x 3 array) and indexes it.
 
     ``voxel`` downsamples the map first (one centroid per voxel); ``cell_size``
-    0 lets the index choose its voxel edge from the point spacing.
+    0 lets the index choose its voxel edge from the point spacing; the association
+    parameters are FAST-LIO's (:class:`lf3pm.config.MapConfig`, which validates them).
     """
+    config = validated(MapConfig, "map", voxel=voxel, cell_size=cell_size, knn=knn,
+                       plane_threshold=plane_threshold, max_neighbor_distance=max_neighbor_distance)
+    threads = check_threads(threads)
     if isinstance(source, (str, os.PathLike)):
         points = load_points(source, voxel=voxel)
         name = os.fspath(source)
@@ -103,13 +106,11 @@ def load_map(source, *, voxel: float | None = None, cell_size: float = 0.0, knn:
         raise MapError(f"{name}: the map has {len(points)} points, fewer than knn = {knn}")
     digest = hashlib.sha256(points.tobytes()).hexdigest()
     try:
-        index = _core.MapIndex(points, cell_size=cell_size, knn=knn, plane_threshold=plane_threshold,
-                               max_neighbor_distance=max_neighbor_distance, threads=threads)
+        index = _core.MapIndex(points, config.core(threads))
     except ValueError as err:
         raise MapError(f"{name}: {err}") from None
     if index.duplicates_removed:
         warnings.warn(f"{name}: {index.duplicates_removed} duplicate points dropped", UserWarning,
                       stacklevel=2)
     return Map(index=index, source=name, sha256=digest,
-               association_params={"knn": knn, "plane_threshold": plane_threshold,
-                                   "max_neighbor_distance": max_neighbor_distance})
+               association_params=config.association_params())

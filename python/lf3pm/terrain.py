@@ -8,10 +8,6 @@ import numpy as np
 
 from lf3pm.map import Map
 
-#: Sensor height above the local ground (m) of a ground robot: a LiDAR on a small
-#: wheeled base. SOLM grids and the replay's motion take it by default.
-DEFAULT_HEIGHT = 1.0
-
 
 def column_minimum(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: int) -> np.ndarray:
     """Lowest z of the points in each (ny, nx) column of edge ``cell`` from (x0, y0);

@@ -84,6 +84,14 @@ PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double
   return out;
 }
 
+PoseObservations pose_observations(const MapIndex& map, const Pose& pose, const double* directions,
+                                   std::size_t count, const EvalParams& params) {
+  PoseObservations out;
+  out.scan = simulate_scan(map, pose, directions, count, params.scan);
+  out.observations = scan_observations(map, pose, out.scan, params);
+  return out;
+}
+
 std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,
                                            const std::vector<std::uint64_t>& streams,
                                            const double* directions, std::size_t count,

@@ -34,6 +34,15 @@ struct PoseEvaluation {
 PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
                              std::size_t count, const EvalParams& params);
 
+/// One pose's explicit observations with the scan they came from (for export and tests).
+struct PoseObservations {
+  SimulatedScan scan;
+  Observations observations;
+};
+
+PoseObservations pose_observations(const MapIndex& map, const Pose& pose, const double* directions,
+                                   std::size_t count, const EvalParams& params);
+
 /// The Gram of [A | b] of a scan and its row count; deterministic for any thread count.
 /// The metric of an accumulated Gram, scaled by params.ray_weight.
 Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params);

@@ -18,8 +18,7 @@ Metric metric_from_gram(const Eigen::MatrixXd& gram, std::int64_t m, const Metri
   if (gram.rows() != gram.cols() || (n != 3 && n != 6))
     throw std::invalid_argument("the Gram of [A|b] must be 4x4 or 7x7");
   if (!gram.allFinite()) throw std::invalid_argument("non-finite observations (NaN or Inf in A or b)");
-  if (!(weights.w1 > 0) || !(weights.w2 > 0) || std::abs(weights.w1 + weights.w2 - 1.0) > 1e-9)
-    throw std::invalid_argument("metric weights must be positive and sum to 1");
+  if (!(weights.w1 > 0 && weights.w1 < 1)) throw std::invalid_argument("the metric weight w1 must lie in (0, 1)");
 
   const double inf = std::numeric_limits<double>::infinity();
   Metric out;
@@ -63,7 +62,7 @@ Metric metric_from_gram(const Eigen::MatrixXd& gram, std::int64_t m, const Metri
   const double lambda_1 = m > n + 1 ? 0.0 : std::max(g(0), 0.0);
   const double lambda_n = std::max(g(1), 0.0);       // lambda_{m-n+1}
   const double lambda_m = std::max(g(n), 0.0);
-  auto q = [&](double lambda) { return std::sqrt(weights.w1 * lambda + weights.w2) / out.sigma1; };
+  auto q = [&](double lambda) { return std::sqrt(weights.w1 * lambda + weights.w2()) / out.sigma1; };
   out.q_min = q(lambda_1);
   out.q_n = q(lambda_n);
   out.q_max = q(lambda_m);

@@ -7,9 +7,10 @@
 
 namespace lf3pm {
 
+/// q = sqrt(w1 lambda + w2) / sigma1 with w2 = 1 - w1 (the paper's weights sum to one).
 struct MetricWeights {
   double w1 = 0.5;
-  double w2 = 0.5;
+  double w2() const { return 1.0 - w1; }
 };
 
 struct Metric {

@@ -19,7 +19,7 @@ struct ScanParams {
   std::uint64_t seed = 0;
   std::uint64_t stream = 0;  // independent noise per pose under one seed
   double scan_voxel = 0.0;   // keep the first hit per voxel of this edge (sensor frame); 0 = off
-  int threads = 1;
+  int threads = 0;           // 0 = all cores
 };
 
 struct SimulatedScan {

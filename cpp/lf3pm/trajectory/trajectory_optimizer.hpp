@@ -72,6 +72,15 @@ struct OptimizeOutcome {
   CostTerms terms;           ///< at the solution
 };
 
+/// The trajectory optimiser's L-BFGS: lbfgs.hpp's defaults but a relative decrease of
+/// 1e-4 over 3 iterations ends it (delta), since the sampled objective stops improving
+/// the plan long before 1e-9 (docs/planner_backend.md).
+inline LbfgsParams trajectory_lbfgs() {
+  LbfgsParams p;
+  p.delta = 1e-4;
+  return p;
+}
+
 /// Restarts of L-BFGS when it stalls with a limit exceeded (see optimize).
 constexpr int kRestarts = 3;
 

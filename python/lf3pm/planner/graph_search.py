@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
+from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
@@ -107,10 +108,9 @@ def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float 
     flat_mask = np.ascontiguousarray(np.moveaxis(mask, 0, -1), dtype=np.uint8).ravel()
     index = [(iy * nx + ix) * layers + k for ix, iy, k in ends]
     t0 = time.perf_counter()
-    out = _core.grid_search(flat_cost, flat_mask, nx, ny, layers, res, index[0], index[1],
-                            weight=float(weight),
-                            turn_length=float(turn_radius) * step, turn_while_moving=turn_while_moving,
-                            heuristic=heuristic)
+    params = core_struct(_core.SearchParams(), weight=float(weight), turn_length=float(turn_radius) * step,
+                         turn_while_moving=bool(turn_while_moving), heuristic=bool(heuristic))
+    out = _core.grid_search(flat_cost, flat_mask, nx, ny, layers, res, index[0], index[1], params)
     elapsed = time.perf_counter() - t0
     if not out["found"]:
         raise Lf3pmError(f"goal {format_pose(goal)} is unreachable from start {format_pose(start)}: "

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
+from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
@@ -66,11 +67,16 @@ def sample_segments(start, segments, spacing: float = 0.05) -> np.ndarray:
     return _core.sample_segments(as_pose(start, "start"), seg, float(spacing))
 
 
-def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: float = 1.0,
-                    clearance: float = 0.0, yaw_bins: int = 72, step: float = 0.0,
-                    sample_step: float = 0.0, spacing: float = 0.05, analytic_every: int = 5,
-                    max_expansions: int = 2_000_000, heuristic: bool = True,
-                    heuristic_weight: float = 1.0, esdf_field: GridField | None = None) -> HybridPath:
+#: The search's defaults (C++ HybridParams, written there once).
+_DEFAULT = _core.HybridParams()
+
+
+def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: float = _DEFAULT.weight,
+                    clearance: float = _DEFAULT.clearance, yaw_bins: int = _DEFAULT.yaw_bins,
+                    step: float = _DEFAULT.step, sample_step: float = _DEFAULT.sample_step, spacing: float = 0.05,
+                    analytic_every: int = _DEFAULT.analytic_every, max_expansions: int = _DEFAULT.max_expansions,
+                    heuristic: bool = _DEFAULT.heuristic, heuristic_weight: float = _DEFAULT.heuristic_weight,
+                    esdf_field: GridField | None = None) -> HybridPath:
     """Least-cost forward path of a car of turning radius ``radius`` from ``start`` to
     ``goal`` (x, y, yaw), exactly.
 
@@ -110,11 +116,13 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
     for name, pose in (("start", start), ("goal", goal)):
         _check_end(name, pose, esdf, esdf_field, clearance)
     t0 = time.perf_counter()
+    params = core_struct(_core.HybridParams(), radius=float(radius), weight=float(weight),
+                         clearance=float(clearance), yaw_bins=int(yaw_bins), step=float(step),
+                         sample_step=float(sample_step), analytic_every=int(analytic_every),
+                         max_expansions=int(max_expansions), heuristic=bool(heuristic),
+                         heuristic_weight=float(heuristic_weight))
     out = _core.hybrid_search(esdf_field._core, None if cost_field is None else cost_field._core,
-                              start, goal, float(radius), weight=float(weight), clearance=float(clearance),
-                              yaw_bins=int(yaw_bins), step=float(step), sample_step=float(sample_step),
-                              analytic_every=int(analytic_every), max_expansions=int(max_expansions),
-                              heuristic=heuristic, heuristic_weight=float(heuristic_weight))
+                              start, goal, params)
     elapsed = time.perf_counter() - t0
     if not out["found"]:
         raise Lf3pmError(f"no forward path of turning radius {radius:g} m from start {format_pose(start)} to goal "
@@ -128,16 +136,17 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
                       int(out["analytic_tries"]), int(out["relaxed_cells"]), elapsed)
 
 
-def search_heuristic(cost, esdf: Esdf, poses, goal, *, radius: float, weight: float = 1.0,
-                     clearance: float = 0.0, yaw_bins: int = 72) -> np.ndarray:
+def search_heuristic(cost, esdf: Esdf, poses, goal, *, radius: float, weight: float = _DEFAULT.weight,
+                     clearance: float = _DEFAULT.clearance, yaw_bins: int = _DEFAULT.yaw_bins) -> np.ndarray:
     """:func:`search_car_path`'s heuristic at each of ``poses`` (N, 3) (+inf: pruned), for tests."""
     _radius(radius)
     field = esdf.grid_field()
     cost_field = _cost_field(cost, esdf)
     q = np.ascontiguousarray(np.asarray(poses, dtype=np.float64).reshape(-1, 3))
+    params = core_struct(_core.HybridParams(), radius=float(radius), weight=float(weight),
+                         clearance=float(clearance), yaw_bins=int(yaw_bins))
     return _core.hybrid_heuristic(field._core, None if cost_field is None else cost_field._core, q,
-                                  as_pose(goal, "goal"), float(radius), float(weight), float(clearance),
-                                  int(yaw_bins))
+                                  as_pose(goal, "goal"), params)
 
 
 def _cost_field(cost, esdf: Esdf) -> GridField | None:

@@ -181,12 +181,16 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
                       np.concatenate(flat).astype(bool))
 
 
+#: The C++ optimiser's L-BFGS defaults (trajectory_optimizer.hpp), written there once.
+_LBFGS = _core.trajectory_lbfgs()
+
+
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                         w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
                         esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
                         corners: bool = False,
-                        g_epsilon: float = 1e-6, rel_cost_tol: float = 1e-4,
-                        max_iterations: int = 0, check_rate: float = 100.0) -> OptimizeResult:
+                        g_epsilon: float = _LBFGS.g_epsilon, rel_cost_tol: float = _LBFGS.delta,
+                        max_iterations: int = _LBFGS.max_iterations, check_rate: float = 100.0) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
     ``cost``: the localisability cost (a SOLM channel; None to leave it out), weighted
@@ -205,7 +209,9 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
                            penalty=penalty, esdf_margin=esdf_margin, samples=samples,
                            piece_length=piece_length, corners=corners)
-    out = problem.optimize(g_epsilon=g_epsilon, delta=rel_cost_tol, max_iterations=max_iterations)
+    lbfgs = _core.trajectory_lbfgs()
+    lbfgs.g_epsilon, lbfgs.delta, lbfgs.max_iterations = g_epsilon, rel_cost_tol, max_iterations
+    out = problem.optimize(lbfgs)
     coefficients, durations = problem.trajectory(out["x"])
     wall = time.perf_counter() - start
     trajectory = Trajectory(coefficients, durations, np.ones(len(durations), bool) if robot.nonholonomic else None)

@@ -3,12 +3,14 @@ resumable (see store.py)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from lf3pm import __version__, _core
-from lf3pm.errors import Lf3pmError, finite_number
+from lf3pm.config import MetricConfig, ScanConfig, SolmConfig, validated
+from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map
 from lf3pm.sensors import Sensor, get_sensor
 from lf3pm.solm.grid import SolmGrid
@@ -17,12 +19,14 @@ from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.yaw_reuse import sector_layout
 from lf3pm.terrain import body_blocked, column_minimum
 
+_SCAN, _METRIC, _SOLM = ScanConfig(), MetricConfig(), SolmConfig()
 
-def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = 0,
-               noise: float | None = None, robot_radius: float = 0.3, floor_clearance: float = 0.2,
-               association: str = "knn", w1: float = 0.5, threads: int = 0,
-               yaw_reuse: bool = False, ray_stride: int = 1, tile: int = TILE, max_tiles: int | None = None,
-               progress=None) -> dict:
+
+def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = _SCAN.seed,
+               noise: float | None = _SCAN.noise, robot_radius: float = _SOLM.robot_radius,
+               floor_clearance: float = 0.2, association: str = _METRIC.association, w1: float = _METRIC.w1,
+               threads: int = _SCAN.threads, yaw_reuse: bool = _SOLM.yaw_reuse, ray_stride: int = _SOLM.ray_stride,
+               tile: int = TILE, max_tiles: int | None = None, progress=None) -> dict:
     """Builds (or resumes) the SOLM of ``world`` for ``sensor`` (a Sensor or a preset
     name) on ``grid`` into the Zarr store ``out``. Cell c (linear index over the
     channel's shape) uses noise stream c, so results do not depend on tiling or resumption.
@@ -31,16 +35,20 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
     ``ray_stride`` K casts every K-th azimuth column of the pattern and scales
     the Gram up (ray_thinning.py): about K times faster, approximate.
     ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
-    after that many tiles (for tests of resumption)."""
+    after that many tiles (for tests of resumption). The parameters are validated
+    by lf3pm.config's ScanConfig, MetricConfig and SolmConfig."""
+    scan = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
+    metric = validated(MetricConfig, "metric", association=association, w1=w1)
+    layout = validated(SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride)
+    seed, threads, association, w1 = scan.seed, scan.threads, metric.association, metric.w1
+    robot_radius, yaw_reuse, ray_stride = layout.robot_radius, layout.yaw_reuse, layout.ray_stride
     if isinstance(sensor, str):
         sensor = get_sensor(sensor)
-    sigma = finite_number("range noise", sensor.range_noise_sigma if noise is None else noise, low=0.0)
-    robot_radius = finite_number("robot radius", robot_radius, low=0.0)
-    floor_clearance = finite_number("floor clearance", floor_clearance, low=0.0)
+    sigma = scan.noise_for(sensor)
+    if not (math.isfinite(floor_clearance) and floor_clearance >= 0):
+        raise Lf3pmError(f"floor clearance must be a number >= 0 m, got {floor_clearance}")
     if tile < 1:
         raise Lf3pmError(f"tile must be >= 1, got {tile}")
-    if sigma < 0 or robot_radius < 0 or floor_clearance < 0:
-        raise Lf3pmError("noise, robot radius and floor clearance must be >= 0")
     ground_robot = grid.space != "r3"
     if yaw_reuse and grid.space != "se2":
         raise Lf3pmError("yaw reuse applies to se2 grids only")
@@ -49,6 +57,7 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
         sector_rays, ray_weight = thin_rays(sectors[0], ray_stride)
     else:
         directions, ray_weight = thin_rays(sensor.directions, ray_stride)
+    params = metric.core(scan.core(sensor), ray_weight)
     attrs = {"lf3pm_version": __version__, "grid": grid.to_dict(), "sensor": sensor.name,
              "sensor_rays": sensor.num_rays, "noise": sigma, "seed": int(seed),
              "w1": w1, "w2": 1.0 - w1, "association": association, "robot_radius": robot_radius,
@@ -99,19 +108,14 @@ def build_solm(world: Map, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: i
             positions = np.ascontiguousarray(np.stack([xx[cell2d], yy[cell2d], z[0][cell2d]], axis=1))
             res = _core.evaluate_yaw_sectors(world.index, positions,
                                              cell_index[0][cell2d].astype(np.uint64), sector_rays,
-                                             grid.yaw_bins, sectors[1], sensor.min_range,
-                                             sensor.max_range, noise=sigma, seed=int(seed),
-                                             association=association, w1=w1, w2=1.0 - w1,
-                                             threads=threads, ray_weight=ray_weight)
+                                             grid.yaw_bins, sectors[1], params)
             for name in CHANNELS:
                 values[name][:, cell2d] = res[name].T
             degenerate[:, cell2d] = res["degenerate"].T.astype(np.uint8)
         elif valid.any():
             poses = _pose_matrices(X[valid], Y[valid], z[valid], yaw[valid])
             res = _core.evaluate_many(world.index, poses, cell_index[valid].astype(np.uint64),
-                                      directions, sensor.min_range, sensor.max_range,
-                                      noise=sigma, seed=int(seed), association=association,
-                                      w1=w1, w2=1.0 - w1, threads=threads, ray_weight=ray_weight)
+                                      directions, params)
             for name in CHANNELS:
                 values[name][valid] = res[name]
             degenerate[valid] = res["degenerate"].astype(np.uint8)

@@ -15,11 +15,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError, finite_number
+from lf3pm.config import DEFAULT_HEIGHT, SolmConfig, validated
+from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map
-from lf3pm.terrain import DEFAULT_HEIGHT
-
-SPACES = ("r2", "se2", "r3")
 
 
 @dataclass(frozen=True)
@@ -62,48 +60,45 @@ class SolmGrid:
         return d
 
 
+_DEFAULT = SolmConfig()
 #: The most poses a grid may hold unless the caller raises ``max_cells`` (`lf3pm solm
 #: build --max-cells`): 10 M poses are hours of scans on a workstation, and a typo in
 #: --res (1e-6 for 1e-1) should be refused at once, not run out of memory.
-MAX_CELLS = 10_000_000
+MAX_CELLS = _DEFAULT.max_cells
 
 
-def make_grid(world: Map, space: str, res: float, *, bounds=None, yaw_bins: int = 36,
-              height: float = DEFAULT_HEIGHT, z_levels=None, max_cells: int = MAX_CELLS) -> SolmGrid:
+def make_grid(world: Map, space: str = _DEFAULT.space, res: float = _DEFAULT.res, *, bounds=None,
+              yaw_bins: int = _DEFAULT.yaw_bins, height: float = _DEFAULT.height, z_levels=None,
+              max_cells: int = MAX_CELLS) -> SolmGrid:
     """The grid over ``bounds`` (xmin, ymin, xmax, ymax; default the map's extent);
-    Lf3pmError when it would hold more than ``max_cells`` poses."""
-    if space not in SPACES:
-        raise Lf3pmError(f"unknown space {space!r}; use one of {', '.join(SPACES)}")
-    res = finite_number("resolution", res)
-    if res <= 0:
-        raise Lf3pmError(f"resolution must be > 0, got {res}")
-    height = finite_number("sensor height", height)
-    if height <= 0:
-        raise Lf3pmError(f"sensor height must be > 0 m, got {height}")
+    Lf3pmError when it would hold more than ``max_cells`` poses. The parameters are
+    validated by :class:`lf3pm.config.SolmConfig`."""
+    config = validated(SolmConfig, "solm", space=space, res=res, bounds=bounds, yaw_bins=yaw_bins, height=height,
+                       max_cells=max_cells)
+    space, res, height, yaw_bins = config.space, config.res, config.height, config.yaw_bins
     lower, upper = world.bounds
-    if bounds is None:
-        bounds = (lower[0], lower[1], upper[0], upper[1])
-    xmin, ymin, xmax, ymax = (finite_number("bounds", b) for b in bounds)
+    bounds = config.bounds or (lower[0], lower[1], upper[0], upper[1])
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
     if not (xmin < xmax and ymin < ymax):
         raise Lf3pmError(f"bounds {bounds} are empty: need xmin < xmax and ymin < ymax")
     if xmax <= lower[0] or xmin >= upper[0] or ymax <= lower[1] or ymin >= upper[1]:
         raise Lf3pmError(f"bounds {bounds} lie outside the map's extent "
                          f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]")
     nx, ny = math.ceil((xmax - xmin) / res), math.ceil((ymax - ymin) / res)
-    if space == "se2" and yaw_bins < 1:
-        raise Lf3pmError(f"yaw bins must be >= 1, got {yaw_bins}")
     layers = yaw_bins if space == "se2" else 1
     if space == "r3":
         layers = len(z_levels) if z_levels is not None else max(0, math.ceil((upper[2] - lower[2] - height) / res))
     cells = nx * ny * max(layers, 1)
-    if cells > max_cells:
+    if cells > config.max_cells:
         raise Lf3pmError(f"the grid would hold {cells:,} poses ({nx} x {ny} x {max(layers, 1)}), more than "
-                         f"{max_cells:,}: use a coarser --res or smaller --bounds, or raise --max-cells")
+                         f"{config.max_cells:,}: use a coarser --res or smaller --bounds, or raise --max-cells")
     levels = ()
     if space == "r3":
         if z_levels is None:
             z_levels = np.arange(lower[2] + height, upper[2], res)
-        levels = tuple(finite_number("z level", z) for z in z_levels)
+        levels = tuple(float(z) for z in z_levels)
+        if not all(math.isfinite(z) for z in levels):
+            raise Lf3pmError(f"z levels must be finite, got {levels}")
         if not levels:
             raise Lf3pmError("an r3 grid needs at least one z level")
     return SolmGrid(space, xmin, ymin, float(res), nx, ny, yaw_bins if space == "se2" else 1,

@@ -15,11 +15,15 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError, finite_number
+from lf3pm.config import MdeConfig, ScanConfig, validated
+from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
 from lf3pm.scan_simulator import simulate_scan
 from lf3pm.sensors import Sensor, get_sensor
+
+
+_MDE = MdeConfig()
 
 
 class RegistrationTarget:
@@ -61,8 +65,8 @@ class MdeResult:
         return asdict(self)
 
 
-def mde(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, trials: int = 20,
-        sigma_t: float = 0.1, sigma_r_deg: float = 2.0, noise: float | None = None,
+def mde(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, trials: int = _MDE.trials,
+        sigma_t: float = _MDE.sigma_t, sigma_r_deg: float = _MDE.sigma_r, noise: float | None = None,
         seed: int = 0, scan_voxel: float = 0.0, max_correspondence_distance: float = 1.0,
         max_iterations: int = 50, target: RegistrationTarget | None = None,
         threads: int = 0, clearance: float = 0.1) -> MdeResult:
@@ -74,19 +78,20 @@ def mde(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, trials: int = 2
     """
     import small_gicp
 
+    disturbance = validated(MdeConfig, "mde", trials=trials, sigma_t=sigma_t, sigma_r=sigma_r_deg)
+    scan_config = validated(ScanConfig, "scan", noise=noise, seed=seed, scan_voxel=scan_voxel, threads=threads)
+    trials, sigma_t, sigma_r_deg = disturbance.trials, disturbance.sigma_t, disturbance.sigma_r
     if not isinstance(map, Map):
         map = load_map(map)
     if not isinstance(sensor, Sensor):
         sensor = get_sensor(sensor)
-    if trials < 1:
-        raise Lf3pmError(f"trials must be >= 1, got {trials}")
-    # A start disturbed by more than the map is across (or a turn past 180 degrees) is
-    # no registration problem, and small_gicp would grind through it for minutes.
-    extent = float(np.max(map.bounds[1] - map.bounds[0]))
-    sigma_t = finite_number("the translation disturbance sigma_t (m)", sigma_t, low=0.0, high=max(extent, 1.0))
-    sigma_r_deg = finite_number("the rotation disturbance sigma_r (deg)", sigma_r_deg, low=0.0, high=180.0)
-    sigma = finite_number("range noise", sensor.range_noise_sigma if noise is None else noise, low=0.0)
-    scan_voxel = finite_number("scan voxel", scan_voxel, low=0.0)
+    # A start disturbed by more than the map is across is no registration problem, and
+    # small_gicp would grind through it for minutes.
+    extent = max(float(np.max(map.bounds[1] - map.bounds[0])), 1.0)
+    if sigma_t > extent:
+        raise Lf3pmError(f"mde.sigma_t {sigma_t:g} m is larger than the map ({extent:.3g} m across): "
+                         "no registration starts that far off")
+    sigma, scan_voxel = scan_config.noise_for(sensor), scan_config.scan_voxel
     truth = pose_matrix(pose)
     map.check_pose(truth, clearance)
     if target is None:

@@ -30,7 +30,7 @@ from lf3pm.validation.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHI
 from lf3pm.validation.trajectory import check_trajectory
 from lf3pm.map import Map
 from lf3pm.pose import pose_matrices
-from lf3pm.terrain import DEFAULT_HEIGHT
+from lf3pm.config import DEFAULT_HEIGHT
 
 #: Knots per second of the height polynomial (besides the samples): the CSV's rate.
 Z_KNOT_RATE = 100.0

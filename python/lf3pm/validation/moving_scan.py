@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
+from lf3pm.scan_simulator import scan_params
 from lf3pm.errors import Lf3pmError
 
 
@@ -82,8 +83,9 @@ def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: floa
     directions = np.ascontiguousarray(directions, dtype=np.float64)
     fractions = firing_fractions(len(directions))
     ray_poses = np.ascontiguousarray(motion.pose(end - (1.0 - fractions) * period))
-    scan = _core.simulate_moving_scan(index, ray_poses, directions, min_range, max_range, noise=noise,
-                                      seed=int(seed), stream=int(stream), threads=threads)
+    scan = _core.simulate_moving_scan(index, ray_poses, directions,
+                                      scan_params(min_range, max_range, noise=noise, seed=seed, stream=stream,
+                                                  threads=threads))
     reference = ray_poses[-1]  # the last ray fires at the reference time
     world = scan["world_points"]
     return MovingScan(end=float(end), period=float(period), points=scan["sensor_points"],

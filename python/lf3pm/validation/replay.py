@@ -29,9 +29,9 @@ from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versi
 from lf3pm.validation.scans import ScanStream
 from lf3pm.map import Map, load_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
-from lf3pm.terrain import DEFAULT_HEIGHT
+from lf3pm.config import REPLAY_METHODS, ReplayConfig, ScanConfig, validated
 
-METHODS = ("localization", "lio", "odometry")
+METHODS = REPLAY_METHODS
 
 #: Seconds the sensor stands still at the first pose before a ``lio`` replay's trajectory
 #: (scored from the trajectory's start): GenZ-LIO, like FAST-LIO2, initialises gravity and
@@ -63,6 +63,9 @@ def resolve_sensor(sensor: Sensor | str, rate: float) -> Sensor:
     return get_sensor(sensor, integration_time=1.0 / rate)
 
 
+_REPLAY = ReplayConfig()
+
+
 def check_method(method: str, params: dict) -> dict:
     """The method's parameters: its defaults updated by ``params``. Raises
     Lf3pmError for an unknown method or parameter."""
@@ -77,7 +80,7 @@ def check_method(method: str, params: dict) -> dict:
 
 
 def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method: str = "localization",
-           seed: int = 0, *, rate: float = 10.0, height: float = DEFAULT_HEIGHT, noise: float | None = None,
+           seed: int = 0, *, rate: float = _REPLAY.rate, height: float = _REPLAY.height, noise: float | None = None,
            target: RegistrationTarget | None = None, threads: int = 0, progress=None, **params) -> ReplayResult:
     """Replays a trajectory with ``method`` (module docstring) and scores it.
 
@@ -94,8 +97,9 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method
     Raises Lf3pmError for bad input.
     """
     params = check_method(method, params)
-    if not (math.isfinite(rate) and rate > 0):
-        raise Lf3pmError(f"the scan rate must be > 0 Hz, got {rate}")
+    run = validated(ReplayConfig, "replay", method=method, rate=rate, height=height)
+    rate, height = run.rate, run.height
+    noise = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads).noise
     if not isinstance(map, Map):
         map = load_map(map)
     sensor = resolve_sensor(sensor, rate)

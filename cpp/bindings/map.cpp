@@ -1,0 +1,103 @@
+// nanobind bindings of the map stage (cpp/lf3pm/map/): its parameters, the map index, plane fits.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "bindings/numpy.hpp"
+#include "lf3pm/map/map_index.hpp"
+#include "lf3pm/map/plane_fit.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace lf3pm;
+using lf3pm::bindings::points_to_numpy;
+using lf3pm::bindings::to_numpy;
+
+void bind_map(nb::module_& m) {
+  using PointsIn = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+
+  nb::class_<MapParams>(m, "MapParams", "Map indexing and FAST-LIO association parameters (the defaults).")
+      .def(nb::init<>())
+      .def_rw("cell_size", &MapParams::cell_size, "Voxel edge of the k-NN grid (m); 0 = from the point spacing.")
+      .def_rw("knn", &MapParams::knn, "Neighbours per association plane (FAST-LIO NUM_MATCH_POINTS).")
+      .def_rw("plane_threshold", &MapParams::plane_threshold,
+              "Plane validity: every neighbour within this of the plane (m).")
+      .def_rw("max_neighbor_distance", &MapParams::max_neighbor_distance,
+              "The k-th neighbour must lie within this of the hit (m; FAST-LIO sqrt 5).")
+      .def_rw("threads", &MapParams::threads, "Worker threads (0 = all cores).");
+
+  nb::class_<MapIndex>(m, "MapIndex", "Per-map precomputation: voxel k-NN grid, point planes, surfel caster.")
+      .def("__init__",
+           [](MapIndex* self, PointsIn pts, const MapParams& params) {
+             const double* data = pts.data();
+             const std::size_t n = pts.shape(0);
+             nb::gil_scoped_release release;
+             new (self) MapIndex(data, n, params);
+           },
+           "points"_a, "params"_a = MapParams())
+      .def_prop_ro("size", &MapIndex::size)
+      .def_prop_ro("duplicates_removed", &MapIndex::duplicates_removed)
+      .def_prop_ro("cell_size", &MapIndex::cell_size)
+      .def_prop_ro("median_spacing", &MapIndex::median_spacing)
+      .def_prop_ro("memory_bytes", &MapIndex::memory_bytes)
+      .def_prop_ro("points", [](const MapIndex& self) { return points_to_numpy(self.points()); },
+                   "Map points in index order (sorted by voxel), float64 N x 3.", nb::rv_policy::move)
+      .def_prop_ro("normals", [](const MapIndex& self) {
+             std::vector<Eigen::Vector3d> v(self.size());
+             for (std::size_t i = 0; i < v.size(); ++i) v[i] = self.normal(i);
+             return points_to_numpy(v);
+           }, nb::rv_policy::move)
+      .def_prop_ro("disc_radius", [](const MapIndex& self) {
+             std::vector<float> v(self.size());
+             for (std::size_t i = 0; i < v.size(); ++i) v[i] = self.disc_radius(i);
+             return to_numpy(std::move(v), {self.size()});
+           }, nb::rv_policy::move)
+      .def("nearest",
+           [](const MapIndex& self, PointsIn q, int k, double max_distance) {
+             const std::size_t n = q.shape(0);
+             std::vector<std::int64_t> idx(n * k, -1);
+             std::vector<double> dist(n * k, std::numeric_limits<double>::infinity());
+             const double* data = q.data();
+             {
+               nb::gil_scoped_release release;
+               std::vector<std::uint32_t> id(k);
+               std::vector<double> d2(k);
+               for (std::size_t i = 0; i < n; ++i) {
+                 const int f = self.grid().nearest(Eigen::Vector3d(data + 3 * i), k, max_distance, id.data(), d2.data());
+                 for (int j = 0; j < f; ++j) {
+                   idx[i * k + j] = id[j];
+                   dist[i * k + j] = std::sqrt(d2[j]);
+                 }
+               }
+             }
+             return nb::make_tuple(to_numpy(std::move(idx), {n, std::size_t(k)}),
+                                   to_numpy(std::move(dist), {n, std::size_t(k)}));
+           },
+           "queries"_a, "k"_a, "max_distance"_a,
+           "k nearest map points (index order) within max_distance: (indices, distances), -1/inf when missing.");
+
+  m.def("fit_planes",
+        [](nb::ndarray<const double, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu> sets) {
+          const std::size_t m = sets.shape(0), n = sets.shape(1);
+          std::vector<double> normals(3 * m), centroids(3 * m), max_distance(m);
+          const double* data = sets.data();
+          std::vector<Eigen::Vector3d> pts(n);
+          for (std::size_t i = 0; i < m; ++i) {
+            for (std::size_t j = 0; j < n; ++j) pts[j] = Eigen::Vector3d(data + 3 * (i * n + j));
+            const Plane p = fit_plane(pts.data(), static_cast<int>(n));
+            for (int a = 0; a < 3; ++a) {
+              normals[3 * i + a] = p.normal[a];
+              centroids[3 * i + a] = p.centroid[a];
+            }
+            max_distance[i] = p.max_distance;
+          }
+          return nb::make_tuple(to_numpy(std::move(normals), {m, 3}), to_numpy(std::move(centroids), {m, 3}),
+                                to_numpy(std::move(max_distance), {m}));
+        },
+        "point_sets"_a,
+        "PCA plane of each of M sets of N points (M x N x 3): (normals M x 3, centroids M x 3, "
+        "largest |distance| of a set's points to its plane, M).");
+}

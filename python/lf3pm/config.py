@@ -1,0 +1,331 @@
+"""One typed configuration for every parameter a user sets (pydantic, as kiss-icp's).
+
+Each section maps one to one onto a C++ parameter struct of the core and reads its
+defaults from it, so that a default is written once, in C++ (``MapParams``,
+``ScanParams``, ``EvalParams``, ``RobotLimits``; the sections with no C++ struct write
+theirs here). Every value is validated once, here: finite, in range, an integer where
+one is meant. The library's entry points (``load_map``, ``evaluate``, ``mde``,
+``make_grid``, ``build_solm``, ``replay``, ``Robot``) validate their arguments through
+these sections, and the CLI builds a :class:`Config` from ``--config FILE.yaml``
+overridden by its flags. Checks that need the data (bounds inside the map, a grid's
+size, a disturbance against the map's extent) stay where the data are.
+
+A YAML file holds any subset of the sections (see config/*.yaml)::
+
+    sensor: mid70
+    scan: {noise: 0.01, seed: 3}
+    solm: {space: se2, res: 0.25}
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import fields
+from pathlib import Path
+from typing import Literal, Optional, Tuple
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from lf3pm import _core
+from lf3pm.errors import Lf3pmError
+from lf3pm.planner.cost_map import COST_CHANNELS, DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
+from lf3pm.planner.robots import Robot
+
+_MAP = _core.MapParams()
+_SCAN = _core.ScanParams()
+_EVAL = _core.EvalParams()
+
+#: The core's noise streams take 64-bit seeds (Python's and numpy's seed sequences take
+#: any non-negative int; 2^63 - 1 keeps a seed an int64 in JSON and Zarr attributes).
+MAX_SEED = 2**63 - 1
+#: OpenMP aborts the process when asked for a negative or huge team of threads.
+MAX_THREADS = 1024
+
+#: The SOLM's state spaces (lf3pm.solm.grid) and the replay's state estimators.
+SPACES = ("r2", "se2", "r3")
+REPLAY_METHODS = ("localization", "lio", "odometry")
+
+#: Sensor height above the local ground (m) of a ground robot: a LiDAR on a small
+#: wheeled base. SOLM grids and the replay's motion take it by default.
+DEFAULT_HEIGHT = 1.0
+
+
+class ConfigError(Lf3pmError):
+    """A parameter out of range, of the wrong type or unknown."""
+
+
+class Section(BaseModel):
+    """A group of parameters: unknown names, NaN and infinities are refused."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class MapConfig(Section):
+    """Map indexing and FAST-LIO association (C++ MapParams)."""
+
+    voxel: Optional[float] = Field(None, gt=0, description="Voxel-downsample the map first (m; none: off).")
+    cell_size: float = Field(_MAP.cell_size, ge=0, description="k-NN grid voxel (m; 0: from the point spacing).")
+    knn: int = Field(_MAP.knn, ge=3, le=64, description="Neighbours per association plane (FAST-LIO NUM_MATCH_POINTS).")
+    plane_threshold: float = Field(_MAP.plane_threshold, gt=0,
+                                   description="Plane validity: every neighbour within this of the plane (m).")
+    max_neighbor_distance: float = Field(_MAP.max_neighbor_distance, gt=0,
+                                         description="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt 5).")
+
+    def core(self, threads: int = 0) -> _core.MapParams:
+        """The C++ struct."""
+        return core_struct(_core.MapParams(), cell_size=self.cell_size, knn=self.knn,
+                           plane_threshold=self.plane_threshold,
+                           max_neighbor_distance=self.max_neighbor_distance, threads=threads)
+
+    def association_params(self) -> dict:
+        """What a metric depends on, for result provenance."""
+        return {"knn": self.knn, "plane_threshold": self.plane_threshold,
+                "max_neighbor_distance": self.max_neighbor_distance}
+
+
+class ScanConfig(Section):
+    """Scan simulation (C++ ScanParams; the ranges come from the sensor)."""
+
+    noise: Optional[float] = Field(None, ge=0, le=10.0, description="Range noise sigma (m; none: the sensor's).")
+    seed: int = Field(_SCAN.seed, ge=0, le=MAX_SEED, description="Seed of the range noise.")
+    scan_voxel: float = Field(_SCAN.scan_voxel, ge=0, le=100.0,
+                              description="Scan downsampling voxel (m; FAST-LIO filter_size_surf; 0: off).")
+    threads: int = Field(_SCAN.threads, ge=0, le=MAX_THREADS, description="Worker threads (0 = all cores).")
+
+    def noise_for(self, sensor) -> float:
+        """The range noise sigma: this section's, else the sensor's."""
+        return float(sensor.range_noise_sigma if self.noise is None else self.noise)
+
+    def core(self, sensor, stream: int = 0) -> _core.ScanParams:
+        """The C++ struct for ``sensor``'s ranges."""
+        return core_struct(_core.ScanParams(), min_range=float(sensor.min_range), max_range=float(sensor.max_range),
+                           noise_sigma=self.noise_for(sensor), seed=self.seed, stream=int(stream),
+                           scan_voxel=self.scan_voxel, threads=self.threads)
+
+
+class MetricConfig(Section):
+    """The metric's state space, association and weight (C++ EvalParams, MetricWeights)."""
+
+    dof: Literal[3, 6] = Field(_EVAL.dof, description="6 for SE(3), 3 for (x, y, yaw).")
+    association: Literal["knn", "surfel"] = Field(
+        _EVAL.association.name, description="'knn' (FAST-LIO's k-NN plane at each hit) or 'surfel' "
+                                            "(the hit map point's precomputed plane; faster).")
+    w1: float = Field(_EVAL.weights.w1, gt=0, lt=1, description="Metric weight w1 (w2 = 1 - w1).")
+
+    def core(self, scan: _core.ScanParams, ray_weight: float = 1.0) -> _core.EvalParams:
+        """The C++ struct around ``scan``."""
+        params = _core.EvalParams()
+        params.scan = scan
+        params.dof = self.dof
+        params.association = getattr(_core.Association, self.association)
+        params.weights.w1 = self.w1
+        params.ray_weight = float(ray_weight)
+        return params
+
+
+class MdeConfig(Section):
+    """MDE: registration from disturbed starts."""
+
+    trials: int = Field(20, ge=1, le=100_000, description="Disturbed registration starts.")
+    sigma_t: float = Field(0.1, ge=0, description="Start disturbance, translation sigma per axis (m).")
+    sigma_r: float = Field(2.0, ge=0, le=180, description="Start disturbance, rotation sigma per axis (deg).")
+
+
+class SolmConfig(Section):
+    """The SOLM grid and build."""
+
+    space: Literal[SPACES] = Field("r2", description="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z).")
+    res: float = Field(0.5, gt=0, description="Cell size (m).")
+    yaw_bins: int = Field(36, ge=1, le=3600, description="Yaw bins (se2).")
+    yaw_reuse: bool = Field(False, description="se2: one scan per yaw sector, summed per bin (faster, "
+                                               "approximate; docs/solm.md).")
+    ray_stride: int = Field(1, ge=1, le=1000, description="Cast every K-th azimuth column and scale the Gram "
+                                                         "(about K times faster, approximate; docs/solm.md).")
+    height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the local ground (m; r2, se2).")
+    bounds: Optional[Tuple[float, float, float, float]] = Field(
+        None, description="XMIN YMIN XMAX YMAX (m; none: the map's extent).")
+    robot_radius: float = Field(0.3, ge=0, le=100, description="Robot radius for the obstacle mask (m).")
+    max_cells: int = Field(10_000_000, ge=1, description="Refuse a grid of more poses than this.")
+
+
+class GuidanceConfig(Section):
+    """How a SOLM channel guides the planner (docs/benefit.md)."""
+
+    metric: Literal[COST_CHANNELS] = Field(
+        DEFAULT_CHANNEL, description="SOLM channel guiding the plan (none: shortest path).")
+    weight: float = Field(DEFAULT_WEIGHT, ge=0, le=1e6, description="lambda: an edge through cells of cost c costs "
+                                                                    "length (1 + lambda c); a median cell has c = 1.")
+    power: float = Field(DEFAULT_POWER, gt=0, le=10, description="Exponent applied to the channel (over its median).")
+
+
+class ReplayConfig(Section):
+    """Replays of a trajectory through a state estimator."""
+
+    method: Literal[REPLAY_METHODS] = Field(
+        "localization", description="localization (prior map), lio or odometry (KISS-ICP).")
+    seeds: int = Field(1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1.")
+    height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the smoothed ground (m).")
+    rate: float = Field(10.0, gt=0, le=1000, description="Scans per second.")
+
+
+class StudyConfig(Section):
+    """The counts the experiments take (each study fixes the rest of its setup)."""
+
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="Seed of the scenes, poses, noise and disturbances.")
+    pair_seed: int = Field(0, ge=0, le=MAX_SEED, description="Seed of the start/goal pairs.")
+    poses: int = Field(8, ge=1, le=100_000, description="Poses per scene.")
+    poses_per_map: int = Field(40, ge=3, le=100_000, description="Random free poses per map.")
+    trials: int = Field(10, ge=1, le=100_000, description="MDE trials per pose.")
+    bootstrap: int = Field(1000, ge=1, le=1_000_000, description="Bootstrap resamples.")
+    seeds: int = Field(3, ge=1, le=10_000, description="Replay seeds per plan and method.")
+    workers: int = Field(2, ge=1, le=MAX_THREADS, description="Replay processes.")
+
+
+class Config(Section):
+    """Every section; what ``--config FILE.yaml`` holds (any subset)."""
+
+    sensor: str = Field("vlp16", min_length=1, description="Sensor preset name or YAML file.")
+    map: MapConfig = MapConfig()
+    scan: ScanConfig = ScanConfig()
+    metric: MetricConfig = MetricConfig()
+    mde: MdeConfig = MdeConfig()
+    solm: SolmConfig = SolmConfig()
+    robot: Robot = Robot()
+    guidance: GuidanceConfig = GuidanceConfig()
+    replay: ReplayConfig = ReplayConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _robot_from_mapping(cls, data):
+        # Robot is a frozen dataclass with positional fields; a YAML mapping builds it.
+        if isinstance(data, dict) and isinstance(data.get("robot"), dict):
+            known = {f.name for f in fields(Robot)}
+            unknown = sorted(set(data["robot"]) - known)
+            if unknown:
+                raise ConfigError(f"robot.{unknown[0]} is not a parameter lf3pm knows")
+            data = {**data, "robot": Robot(**data["robot"])}
+        return data
+
+
+def core_struct(struct, **fields):
+    """``struct`` (a bound C++ parameter struct) with ``fields`` set; an unknown name is an error."""
+    for name, value in fields.items():
+        if not hasattr(struct, name):
+            raise AttributeError(f"{type(struct).__name__} has no field {name!r}")
+        setattr(struct, name, value)
+    return struct
+
+
+def validated(section: type[Section], where: str = "", flags: dict | None = None, **values) -> Section:
+    """``section(**values)``, or ConfigError naming the first bad value in one line
+    (as ``flags[name]`` when given, else ``where.name``)."""
+    try:
+        return section(**values)
+    except ValidationError as err:
+        raise ConfigError(describe(err, where, flags)) from None
+
+
+def check_threads(threads) -> int:
+    """``threads`` checked as ScanConfig.threads is (0 = all cores)."""
+    return validated(ScanConfig, threads=threads).threads
+
+
+def describe(err: ValidationError, where: str = "", flags: dict | None = None) -> str:
+    """One line for a pydantic error: the parameter (its CLI flag when given), what is wrong, the value."""
+    first = err.errors(include_url=False)[0]
+    path = _parameter(first["loc"])
+    name = (flags or {}).get(path) or (f"{where}.{path}" if where else path)
+    message = first["msg"]
+    if first["type"] == "finite_number":
+        message = "must be finite"
+    elif message.startswith("Input should be "):
+        message = "must be " + message[len("Input should be "):]
+    elif first["type"] == "extra_forbidden":
+        message = "is not a parameter lf3pm knows"
+    value = first.get("input")
+    shown = "" if first["type"] in ("extra_forbidden", "missing") or isinstance(value, dict) else f", got {value!r}"
+    return f"{name} {message}{shown}"
+
+
+def _parameter(loc) -> str:
+    """section.name of an error's location (an element of a tuple names its parameter)."""
+    return ".".join(str(part) for part in loc if not isinstance(part, int))
+
+
+def load_config(path: str | Path | None = None, overrides: dict | None = None,
+                flags: dict | None = None) -> Config:
+    """The configuration of ``path`` (YAML; None: the defaults), then ``overrides``.
+
+    ``overrides``: {"section.name": value} (None values are skipped: an option not given);
+    ``flags``: {"section.name": "--flag"}, to name the flag in an error. Raises ConfigError.
+    """
+    data: dict = {}
+    if path is not None:
+        try:
+            text = Path(path).read_text()
+        except OSError as err:
+            raise ConfigError(f"{path}: cannot read the config ({err.strerror or err})") from None
+        try:
+            loaded = yaml.safe_load(text)
+        except yaml.YAMLError as err:
+            raise ConfigError(f"{path}: not YAML ({str(err).splitlines()[0]})") from None
+        if loaded is not None and not isinstance(loaded, dict):
+            raise ConfigError(f"{path}: a config is a mapping of sections, got {type(loaded).__name__}")
+        data = loaded or {}
+    for key, value in (overrides or {}).items():
+        if value is None:
+            continue
+        section, _, name = key.rpartition(".")
+        target = data
+        if section:
+            current = data.get(section)
+            target = data[section] = dict(current) if isinstance(current, dict) else ({} if current is None else current)
+            if not isinstance(target, dict):
+                break  # the file's bad section is reported below
+        target[name] = value
+    try:
+        return Config(**data)
+    except ValidationError as err:
+        loc = _parameter(err.errors(include_url=False)[0]["loc"])
+        if flags and loc in flags and (overrides or {}).get(loc) is not None:
+            raise ConfigError(describe(err, flags=flags)) from None
+        raise ConfigError((f"{path}: " if path is not None else "") + describe(err)) from None
+    except Lf3pmError as err:  # a Robot's own checks
+        raise ConfigError(f"{path}: {err}" if path is not None else str(err)) from None
+
+
+def to_yaml(config: Config) -> str:
+    """``config`` as YAML that :func:`load_config` reads back to the same values."""
+    data = config.model_dump(mode="json")
+    robot = config.robot
+    if robot.vmax_norm is None or robot.vmax_norm == max(robot.vmax_lon, robot.vmax_lat):
+        del data["robot"]["vmax_norm"]  # derived from the speed limits unless set
+    return yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
+
+
+def default(path: str):
+    """The default of ``section.name`` (for the CLI's help)."""
+    section, _, name = path.rpartition(".")
+    owner = getattr(DEFAULTS, section) if section else DEFAULTS
+    return getattr(owner, name)
+
+
+def help_with_default(path: str, text: str | None = None) -> str:
+    """The parameter's description (or ``text``) with its default."""
+    section, _, name = path.rpartition(".")
+    model = type(getattr(DEFAULTS, section)) if section else Config
+    description = text
+    if description is None:
+        field = getattr(model, "model_fields", {}).get(name)
+        description = field.description if field is not None else ""
+    value = default(path)
+    if value is None:
+        return description
+    if isinstance(value, float) and math.isfinite(value):
+        value = f"{value:g}"
+    return f"{description} (default: {value})"
+
+
+#: Every default, in one object.
+DEFAULTS = Config()
