@@ -15,7 +15,7 @@ $(PY):
 # requirements live in .venv, the C++ core rebuilds on import when sources change.
 $(STAMP): $(PY) pyproject.toml CMakeLists.txt
 	$(PY) -m pip install -q $(BUILD_DEPS)
-	$(PY) -m pip install -q --no-build-isolation -Ceditable.rebuild=true -e ".[test,lio]"
+	$(PY) -m pip install -q --no-build-isolation -Ceditable.rebuild=true -e ".[test,lio,cluster]"
 	touch $(STAMP)
 
 build: $(STAMP)
@@ -26,10 +26,11 @@ demo: build
 test: build
 	$(PY) -m pytest -q
 
-# The SOLM benchmark's baseline uses Open3D, whose import needs Debian's
+# bench_evaluate.py's Embree baseline needs embreex. The SOLM benchmark's baseline
+# uses Open3D, whose import needs Debian's
 # libusb-1.0-0 (shared BUILD-NOTES): installed here when we may, else said why not.
 bench: build
-	$(PY) -m pip install -q "open3d>=0.18"
+	$(PY) -m pip install -q "open3d>=0.18" embreex
 	@$(PY) -c "import open3d" 2>/dev/null || { [ "$$(id -u)" = 0 ] && apt-get install -y -q libusb-1.0-0 >/dev/null; } \
 	  || { echo "open3d cannot load: install Debian's libusb-1.0-0 (as root) for bench/bench_solm.py"; exit 1; }
 	$(PY) bench/bench_evaluate.py

@@ -26,7 +26,7 @@ from lf3pm.metric import eval_params
 from lf3pm.scan_simulator import scan_params
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.scenes import build_scene
-from lf3pm.solm.build import _pose_matrices
+from lf3pm.solm.tiles import pose_matrices
 from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.yaw_reuse import sector_layout
 
@@ -52,7 +52,7 @@ def main() -> None:
     lo, hi = world.bounds
     cells = np.array(random_free_poses(world, args.cells, np.random.default_rng(args.seed),
                                        sensor_height=1.0, region=(lo[0], lo[1], hi[0], hi[1])))
-    poses = _pose_matrices(cells[:, 0], cells[:, 1], cells[:, 2], np.zeros(len(cells)))
+    poses = pose_matrices(cells[:, 0], cells[:, 1], cells[:, 2], np.zeros(len(cells)))
     streams = np.arange(len(cells), dtype=np.uint64)
     print(f"gobi: {world.size:,} points; {len(cells)} random free cells; {args.threads} threads")
 
@@ -114,7 +114,7 @@ def main() -> None:
     bins, few = 36, poses[: max(4, len(poses) // 6)]
     positions = np.ascontiguousarray(few[:, :3, 3])
     t = time.perf_counter()
-    yaw_poses = np.concatenate([_pose_matrices(positions[:, 0], positions[:, 1], positions[:, 2],
+    yaw_poses = np.concatenate([pose_matrices(positions[:, 0], positions[:, 1], positions[:, 2],
                                                np.full(len(few), 2 * np.pi * k / bins)) for k in range(bins)])
     _core.evaluate_many(world.index, yaw_poses, np.arange(len(yaw_poses), dtype=np.uint64),
                         mid70.directions, eval_params(mid70.min_range, mid70.max_range,

@@ -1,9 +1,11 @@
 // nanobind bindings of the map stage (cpp/lf3pm/map/): its parameters, the map index, plane fits.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/tuple.h>
 
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include "bindings/numpy.hpp"
@@ -29,15 +31,43 @@ void bind_map(nb::module_& m) {
               "The k-th neighbour must lie within this of the hit (m; FAST-LIO sqrt 5).")
       .def_rw("threads", &MapParams::threads, "Worker threads (0 = all cores).");
 
+  // A frame travels to other processes (cluster builds), so it pickles as its eight numbers.
+  using FrameState = std::tuple<double, double, double, double, double, double, double, double>;
+  auto frame_state = [](const MapFrame& f) {
+    return FrameState{f.point_lower.x(), f.point_lower.y(), f.point_lower.z(), f.caster_lower.x(),
+                      f.caster_lower.y(), f.caster_lower.z(), f.cell_size, f.median_spacing};
+  };
+  nb::class_<MapFrame>(m, "MapFrame", "The frame of a map's index, in which an index of its crop matches it.")
+      .def_ro("cell_size", &MapFrame::cell_size)
+      .def_ro("median_spacing", &MapFrame::median_spacing)
+      .def("__getstate__", frame_state)
+      .def("__setstate__", [](MapFrame& f, const FrameState& s) {
+        new (&f) MapFrame{{std::get<0>(s), std::get<1>(s), std::get<2>(s)},
+                          {std::get<3>(s), std::get<4>(s), std::get<5>(s)}, std::get<6>(s), std::get<7>(s)};
+      })
+      .def("__eq__", [frame_state](const MapFrame& a, const MapFrame& b) { return frame_state(a) == frame_state(b); });
+
+  m.def("map_frame",
+        [](PointsIn pts, const MapParams& params) {
+          const double* data = pts.data();
+          const std::size_t n = pts.shape(0);
+          nb::gil_scoped_release release;
+          return map_frame(data, n, params);
+        },
+        "points"_a, "params"_a = MapParams(),
+        "The frame MapIndex(points, params) would have, without building the index.");
+
   nb::class_<MapIndex>(m, "MapIndex", "Per-map precomputation: voxel k-NN grid, point planes, surfel caster.")
       .def("__init__",
-           [](MapIndex* self, PointsIn pts, const MapParams& params) {
+           [](MapIndex* self, PointsIn pts, const MapParams& params, const MapFrame* frame) {
              const double* data = pts.data();
              const std::size_t n = pts.shape(0);
              nb::gil_scoped_release release;
-             new (self) MapIndex(data, n, params);
+             new (self) MapIndex(data, n, params, frame);
            },
-           "points"_a, "params"_a = MapParams())
+           "points"_a, "params"_a = MapParams(), "frame"_a.none() = nb::none(),
+           "The index of points (N x 3); in `frame` (another index's), an index of that map's crop.")
+      .def_prop_ro("frame", &MapIndex::frame)
       .def_prop_ro("size", &MapIndex::size)
       .def_prop_ro("duplicates_removed", &MapIndex::duplicates_removed)
       .def_prop_ro("cell_size", &MapIndex::cell_size)

@@ -564,20 +564,28 @@ def _print_replay(results, summary: dict) -> None:
 @contextmanager
 def progress_bar():
     """A rich progress bar on stderr; yields step(label, total, advance=1, restart=False)
-    (restart: a new phase, counted from zero)."""
+    (restart: a new phase, counted from zero). The bar appears at the first step, so that
+    an error before any work is its one line alone."""
     from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
 
-    with Progress("[progress.description]{task.description}", BarColumn(),
-                  "{task.completed}/{task.total}", TimeElapsedColumn(), TimeRemainingColumn(),
-                  console=err_console) as bar:
-        task = bar.add_task("starting", total=None)
+    bar = Progress("[progress.description]{task.description}", BarColumn(), "{task.completed}/{task.total}",
+                   TimeElapsedColumn(), TimeRemainingColumn(), console=err_console)
+    task = None
 
-        def step(label, total, advance=1, restart=False):
-            if restart:
-                bar.reset(task, total=total, description=label)
-            bar.update(task, description=label, total=total, advance=advance)
+    def step(label, total, advance=1, restart=False):
+        nonlocal task
+        if task is None:
+            bar.start()
+            task = bar.add_task(label, total=total)
+        elif restart:
+            bar.reset(task, total=total, description=label)
+        bar.update(task, description=label, total=total, advance=advance)
 
+    try:
         yield step
+    finally:
+        if task is not None:
+            bar.stop()
 
 
 solm_app = typer.Typer(help="Static Observation Loss Maps: build, view, export.", no_args_is_help=True)
@@ -602,20 +610,36 @@ def solm_build(
     noise: Optional[float] = option("scan.noise"),
     threads: Optional[int] = option("scan.threads"),
     max_cells: Optional[int] = option("solm.max_cells"),
+    engine: str = typer.Option("local", help="local (this machine, --threads) or ray (one task per tile on a "
+                                             "Ray cluster; docs/scale.md)."),
+    address: Optional[str] = typer.Option(None, metavar="HOST:PORT",
+                                          help="The Ray cluster's head (`ray start --head`; default: a local "
+                                               "cluster on this machine's cores)."),
+    crop: bool = typer.Option(False, help="local: build each tile on its own crop of the map (exact; the "
+                                          "ray engine always does)."),
+    crop_above: Optional[int] = option("solm.crop_above"),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():
         paths = {"sensor": "sensor", "seed": "scan.seed", "noise": "scan.noise", "threads": "scan.threads",
                  **{name: f"solm.{name}" for name in ("space", "res", "yaw_bins", "yaw_reuse", "ray_stride",
-                                                      "height", "bounds", "robot_radius", "max_cells")}}
+                                                      "height", "bounds", "robot_radius", "max_cells",
+                                                      "crop_above")}}
         cfg = configure(config, locals(), paths)
-        from lf3pm.map import load_map
+        from lf3pm.map import load_map_points
         from lf3pm.sensors import get_sensor
         from lf3pm.solm import build_solm, make_grid
 
         grid_config = cfg.solm
         lidar = get_sensor(cfg.sensor)
-        world = load_map(map_path, **map_options(cfg))
+        world = load_map_points(map_path, **map_options(cfg))
+        # A local build of a map small enough indexes it whole; otherwise each tile is built
+        # on its own crop (the same store, bitwise).
+        if engine == "local" and not crop and world.size <= grid_config.crop_above:
+            world = world.indexed(cfg.scan.threads)
+        elif engine == "local" and not crop:
+            err_console.print(f"{map_path}: {world.size:,} points, more than --crop-above "
+                              f"{grid_config.crop_above:,}: building tile by tile on crops", highlight=False)
         grid = make_grid(world, grid_config.space, grid_config.res, bounds=grid_config.bounds,
                          yaw_bins=grid_config.yaw_bins, height=grid_config.height, max_cells=grid_config.max_cells)
         with progress_bar() as step:
@@ -625,7 +649,8 @@ def solm_build(
             result = build_solm(world, lidar, grid, out, seed=cfg.scan.seed, noise=cfg.scan.noise,
                                 robot_radius=grid_config.robot_radius, yaw_reuse=grid_config.yaw_reuse,
                                 ray_stride=grid_config.ray_stride, threads=cfg.scan.threads,
-                                association=cfg.metric.association, w1=cfg.metric.w1, progress=advance)
+                                association=cfg.metric.association, w1=cfg.metric.w1, crop=crop,
+                                engine=engine, address=address, progress=advance)
         console.print(f"{out}: {grid.space} grid {grid.shape} at {grid.res} m; tiles built now "
                       f"{result['built_now']} of {result['tiles']}; complete: {result['complete']}")
 

@@ -147,6 +147,8 @@ class SolmConfig(Section):
         None, description="XMIN YMIN XMAX YMAX (m; none: the map's extent).")
     robot_radius: float = Field(0.3, ge=0, le=100, description="Robot radius for the obstacle mask (m).")
     max_cells: int = Field(10_000_000, ge=1, description="Refuse a grid of more poses than this.")
+    crop_above: int = Field(20_000_000, ge=1, description="Build maps of more points than this tile by tile, "
+                                                          "each tile on its crop (docs/scale.md).")
 
 
 class GuidanceConfig(Section):

@@ -63,6 +63,19 @@ class Map:
                 raise PoseError(f"pose {matrix[:3, 3].tolist()} lies inside an obstacle: a map point "
                                 f"is {dist[0, 0]:.3f} m from the sensor (clearance {clearance} m)")
 
+    @property
+    def frame(self) -> "_core.MapFrame":
+        """The frame of the map's index (in which its crops are indexed)."""
+        return self.index.frame
+
+    def crop(self, bounds, margin: float, threads: int = 0) -> "Map":
+        """The points within ``margin`` m (in x, y) of ``bounds`` (xmin, ymin, xmax,
+        ymax), indexed in this map's frame: a point whose k nearest neighbours all lie
+        in the crop has this map's plane and disc there, and a ray that stays within
+        the crop hits what it hits here (see :func:`crop_points`)."""
+        return crop_points(self.points, self.frame, self.association_params, bounds, margin,
+                           source=self.source, sha256=self.sha256, threads=threads)
+
     def describe(self) -> dict:
         lower, upper = self.bounds
         return {
@@ -77,6 +90,25 @@ class Map:
         }
 
 
+def crop_points(points: np.ndarray, frame: "_core.MapFrame", association_params: dict, bounds, margin: float, *,
+                source: str, sha256: str, threads: int = 0) -> Map:
+    """The crop (bounds grown by ``margin`` in x and y, every z) of a map's ``points``
+    (in its index order), indexed in the map's ``frame`` with its association
+    parameters. The crop keeps the points' order, and its grids share the map's
+    origins and cell size, so its index repeats the map's float operations. The
+    result carries the whole map's source and hash: a SOLM tile built on it belongs
+    to the whole map's store."""
+    xmin, ymin, xmax, ymax = bounds
+    keep = ((points[:, 0] >= xmin - margin) & (points[:, 0] <= xmax + margin) &
+            (points[:, 1] >= ymin - margin) & (points[:, 1] <= ymax + margin))
+    config = MapConfig(**association_params)
+    if keep.sum() < config.knn:
+        raise MapError(f"{source}: the crop {tuple(bounds)} + {margin:g} m holds {int(keep.sum())} points, "
+                       f"fewer than knn = {config.knn}")
+    index = _core.MapIndex(np.ascontiguousarray(points[keep]), config.core(threads), frame)
+    return Map(index=index, source=source, sha256=sha256, association_params=dict(association_params))
+
+
 def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
              knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
              max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> Map:
@@ -86,6 +118,68 @@ def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.
     0 lets the index choose its voxel edge from the point spacing; the association
     parameters are FAST-LIO's (:class:`lf3pm.config.MapConfig`, which validates them).
     """
+    return load_map_points(source, voxel=voxel, cell_size=cell_size, knn=knn, plane_threshold=plane_threshold,
+                           max_neighbor_distance=max_neighbor_distance, threads=threads).indexed(threads)
+
+
+@dataclass(frozen=True)
+class MapPoints:
+    """A map read but not indexed whole: its points (as read), the frame its index would
+    have and its hash. A SOLM build takes it tile by tile, each tile on its indexed
+    :meth:`crop`, with the very results of the whole map's index (lf3pm.solm.tiles), so
+    a map too large to index whole still builds, and a build's driver holds no index."""
+
+    points: np.ndarray
+    frame: _core.MapFrame
+    source: str
+    sha256: str
+    association_params: dict
+
+    @property
+    def size(self) -> int:
+        return len(self.points)
+
+    @cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Axis-aligned bounding box (lower, upper) of the points."""
+        return self.points.min(axis=0), self.points.max(axis=0)
+
+    def indexed(self, threads: int = 0) -> Map:
+        """The whole map indexed (in its frame: the index :func:`load_map` builds)."""
+        config = MapConfig(**self.association_params)
+        try:
+            index = _core.MapIndex(self.points, config.core(threads), self.frame)
+        except ValueError as err:
+            raise MapError(f"{self.source}: {err}") from None
+        if index.duplicates_removed:
+            warnings.warn(f"{self.source}: {index.duplicates_removed} duplicate points dropped", UserWarning,
+                          stacklevel=3)
+        return Map(index=index, source=self.source, sha256=self.sha256,
+                   association_params=dict(self.association_params))
+
+    def crop(self, bounds, margin: float, threads: int = 0) -> Map:
+        """As :meth:`Map.crop`."""
+        return crop_points(self.points, self.frame, self.association_params, bounds, margin,
+                           source=self.source, sha256=self.sha256, threads=threads)
+
+
+def load_map_points(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
+                    knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
+                    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> MapPoints:
+    """Reads a map as :func:`load_map` does, without indexing it whole (:class:`MapPoints`);
+    its hash is load_map's, so a SOLM store accepts either."""
+    points, name, digest, config, threads = _read(source, voxel, cell_size, knn, plane_threshold,
+                                                  max_neighbor_distance, threads)
+    try:
+        frame = _core.map_frame(points, config.core(threads))
+    except ValueError as err:
+        raise MapError(f"{name}: {err}") from None
+    return MapPoints(points=points, frame=frame, source=name, sha256=digest,
+                     association_params=config.association_params())
+
+
+def _read(source, voxel, cell_size, knn, plane_threshold, max_neighbor_distance, threads):
+    """The points of a file or array, checked; with their name, hash, MapConfig and threads."""
     config = validated(MapConfig, "map", voxel=voxel, cell_size=cell_size, knn=knn,
                        plane_threshold=plane_threshold, max_neighbor_distance=max_neighbor_distance)
     threads = check_threads(threads)
@@ -102,15 +196,6 @@ def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.
             points = voxel_downsample(points, voxel)
         name = "<array>"
     points = np.ascontiguousarray(points, dtype=np.float64)
-    if len(points) < knn:
-        raise MapError(f"{name}: the map has {len(points)} points, fewer than knn = {knn}")
-    digest = hashlib.sha256(points.tobytes()).hexdigest()
-    try:
-        index = _core.MapIndex(points, config.core(threads))
-    except ValueError as err:
-        raise MapError(f"{name}: {err}") from None
-    if index.duplicates_removed:
-        warnings.warn(f"{name}: {index.duplicates_removed} duplicate points dropped", UserWarning,
-                      stacklevel=2)
-    return Map(index=index, source=name, sha256=digest,
-               association_params=config.association_params())
+    if len(points) < config.knn:
+        raise MapError(f"{name}: the map has {len(points)} points, fewer than knn = {config.knn}")
+    return points, name, hashlib.sha256(points.tobytes()).hexdigest(), config, threads

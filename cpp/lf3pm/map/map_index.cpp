@@ -48,7 +48,9 @@ double estimate_spacing(const std::vector<Eigen::Vector3d>& pts, int threads) {
 
 }  // namespace
 
-MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params) : params_(params) {
+namespace {
+
+void check_params(const MapParams& params, std::size_t count) {
   if (params.knn < 3 || params.knn > kMaxKnn)
     throw std::invalid_argument("knn must be between 3 and 32");
   if (!(params.plane_threshold > 0) || !(params.max_neighbor_distance > 0))
@@ -56,16 +58,53 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
   if (count < static_cast<std::size_t>(params.knn))
     throw std::invalid_argument("the map has fewer points than knn");
   if (count >= std::size_t(0xFFFFFFFEu)) throw std::invalid_argument("the map has too many points");
+}
+
+std::vector<Eigen::Vector3d> read_points(const double* xyz, std::size_t count) {
   std::vector<Eigen::Vector3d> input(count);
   for (std::size_t i = 0; i < count; ++i) {
     input[i] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
     if (!input[i].allFinite()) throw std::invalid_argument("the map has non-finite coordinates");
   }
+  return input;
+}
+
+// The widest disc an index of this frame makes: three cells or the neighbour gate,
+// never narrower than the smallest disc (0.75 of the median spacing).
+double largest_disc(double cell_size, double median_spacing, const MapParams& params) {
+  return std::max(0.75 * median_spacing, std::min(3.0 * cell_size, params.max_neighbor_distance));
+}
+
+MapFrame frame_of(const std::vector<Eigen::Vector3d>& input, const MapParams& params) {
+  MapFrame f;
+  f.median_spacing = estimate_spacing(input, params.threads);
+  f.cell_size = params.cell_size > 0 ? params.cell_size
+                                     : std::clamp(f.median_spacing * std::sqrt(kPointsPerCell), 0.05, 4.0);
+  f.point_lower = input.front();
+  for (const auto& p : input) f.point_lower = f.point_lower.cwiseMin(p);
+  // One cell more than the widest disc: float rounding of the radii never crosses it.
+  f.caster_lower = f.point_lower -
+                   Eigen::Vector3d::Constant(largest_disc(f.cell_size, f.median_spacing, params) + f.cell_size);
+  return f;
+}
+
+}  // namespace
+
+MapFrame map_frame(const double* xyz, std::size_t count, const MapParams& params) {
+  check_params(params, count);
+  return frame_of(read_points(xyz, count), params);
+}
+
+MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params, const MapFrame* frame)
+    : params_(params) {
+  check_params(params, count);
+  std::vector<Eigen::Vector3d> input = read_points(xyz, count);
   const int threads = params.threads;
-  median_spacing_ = estimate_spacing(input, threads);
-  cell_size_ = params.cell_size > 0 ? params.cell_size
-                                    : std::clamp(median_spacing_ * std::sqrt(kPointsPerCell), 0.05, 4.0);
-  grid_ = PointGrid(input, cell_size_);
+  const MapFrame own = frame != nullptr ? *frame : frame_of(input, params);
+  if (!(own.cell_size > 0 && own.median_spacing > 0)) throw std::invalid_argument("invalid map frame");
+  median_spacing_ = own.median_spacing;
+  cell_size_ = own.cell_size;
+  grid_ = PointGrid(input, cell_size_, &own.point_lower);
   input.clear();
   input.shrink_to_fit();
 
@@ -76,7 +115,8 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
   valid_.resize(n);
   radii_.resize(n);
   const int k = params.knn;
-  const double max_radius = std::min(3.0 * cell_size_, params.max_neighbor_distance);
+  const double smallest_radius = 0.75 * median_spacing_;
+  const double largest_radius = largest_disc(cell_size_, median_spacing_, params);
   parallel_for(n, 4096, threads, [&](std::size_t b, std::size_t e) {
     std::uint32_t idx[kMaxKnn];
     double d2[kMaxKnn];
@@ -94,10 +134,12 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
       // disc is listed in every cell it touches, and sparse clutter with
       // metre-wide discs would otherwise multiply the caster's memory.
       const double reach = found > 1 ? std::sqrt(d2[found - 1]) : median_spacing_;
-      radii_[i] = static_cast<float>(std::clamp(reach, 0.75 * median_spacing_, max_radius));
+      radii_[i] = static_cast<float>(std::clamp(reach, smallest_radius, largest_radius));
     }
   });
-  caster_ = SurfelCaster(pts, normals_, radii_, cell_size_);
+  // The caster's corner comes from the frame, not from the discs: a crop's edge discs
+  // are wider (their neighbours are cut off), and the crop must share the corner.
+  caster_ = SurfelCaster(pts, normals_, radii_, cell_size_, &own.caster_lower);
 }
 
 bool MapIndex::associate(const Eigen::Vector3d& w, Plane* plane) const {

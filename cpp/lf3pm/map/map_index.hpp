@@ -22,15 +22,34 @@ struct MapParams {
   int threads = 0;                             // 0 = all cores
 };
 
+/// What an index takes from its whole map beyond its own points: an index of a crop
+/// built in its map's frame holds, for every point whose k nearest neighbours lie in
+/// the crop, the very planes and discs of the whole map's index, and casts rays that
+/// stay in the crop to the very same hits (the grids share their origins, so every
+/// float operation is the same; docs/scale.md).
+struct MapFrame {
+  Eigen::Vector3d point_lower = Eigen::Vector3d::Zero();   // the k-NN grid's lower corner
+  Eigen::Vector3d caster_lower = Eigen::Vector3d::Zero();  // the surfel caster's lower corner
+  double cell_size = 0.0;
+  double median_spacing = 0.0;
+};
+
+/// The frame an index of these points would have, without building the index (a map
+/// too large to index whole is built tile by tile in it). Throws as MapIndex does.
+MapFrame map_frame(const double* xyz, std::size_t count, const MapParams& params);
+
 class MapIndex {
  public:
-  /// Builds the index of `points` (N x 3, finite, N >= knn). Throws
-  /// std::invalid_argument on bad input.
-  MapIndex(const double* xyz, std::size_t count, const MapParams& params);
+  /// Builds the index of `points` (N x 3, finite, N >= knn), in its own frame or, given
+  /// `frame`, in that of the map it is cut from (every point must lie above the frame's
+  /// lower corners). Throws std::invalid_argument on bad input.
+  MapIndex(const double* xyz, std::size_t count, const MapParams& params, const MapFrame* frame = nullptr);
 
   const MapParams& params() const { return params_; }
   double cell_size() const { return cell_size_; }
   double median_spacing() const { return median_spacing_; }
+  /// This index's frame: an index of a crop built with it matches this one (MapFrame).
+  MapFrame frame() const { return {grid_.lower(), caster_.lower(), cell_size_, median_spacing_}; }
   std::size_t size() const { return grid_.points().size(); }
   std::size_t duplicates_removed() const { return grid_.duplicates_removed(); }
 

@@ -3,15 +3,21 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace lf3pm {
 
-PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size) {
+PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size, const Eigen::Vector3d* lower) {
   Eigen::Vector3d lo = points.front(), hi = points.front();
   for (const auto& p : points) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
+  if (lower != nullptr) {
+    if ((lo.array() < lower->array()).any()) throw std::invalid_argument("points lie below the grid's lower corner");
+    lo = *lower;
+  }
+  lower_ = lo;
   grid_ = VoxelGrid(lo, hi, cell_size);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)

@@ -20,7 +20,8 @@ class PointGrid {
   /// Indexes `points` with cubic cells of edge `cell_size`; the points are
   /// reordered by cell (order() maps new index -> input index) and exact
   /// duplicates are dropped (a duplicate would count twice among k neighbours).
-  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size);
+  /// `lower`: the grid's lower corner (default: the points'; a crop passes its map's).
+  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size, const Eigen::Vector3d* lower = nullptr);
 
   /// Up to k nearest points to q within max_distance, nearest first (equal
   /// distances by index). Returns the count found; idx/sq_dist receive them.
@@ -31,11 +32,13 @@ class PointGrid {
   const std::vector<std::uint32_t>& order() const { return order_; }
   std::size_t duplicates_removed() const { return duplicates_removed_; }
   const VoxelGrid& grid() const { return grid_; }
+  const Eigen::Vector3d& lower() const { return lower_; }
 
  private:
   std::vector<Eigen::Vector3d> points_;
   std::vector<std::uint32_t> order_;
   std::size_t duplicates_removed_ = 0;
+  Eigen::Vector3d lower_ = Eigen::Vector3d::Zero();
   VoxelGrid grid_;
 };
 

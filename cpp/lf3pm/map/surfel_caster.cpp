@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace lf3pm {
 
@@ -97,12 +98,17 @@ std::vector<std::uint8_t> upward_chebyshev_distance(const VoxelGrid& grid) {
 
 SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
                            const std::vector<Eigen::Vector3d>& normals, const std::vector<float>& radii,
-                           double cell_size) {
+                           double cell_size, const Eigen::Vector3d* lower) {
   Eigen::Vector3d lo = centres.front(), hi = centres.front();
   for (std::size_t i = 0; i < centres.size(); ++i) {
     lo = lo.cwiseMin(centres[i] - Eigen::Vector3d::Constant(radii[i]));
     hi = hi.cwiseMax(centres[i] + Eigen::Vector3d::Constant(radii[i]));
   }
+  if (lower != nullptr) {
+    if ((lo.array() < lower->array()).any()) throw std::invalid_argument("discs lie below the caster's lower corner");
+    lo = *lower;
+  }
+  lower_ = lo;
   frame_origin_ = lo - Eigen::Vector3d::Constant(cell_size);
   grid_ = VoxelGrid(lo, hi, cell_size * kWalkCellScale);
   // A disc is listed in every cell its bounding box touches: a ray then meets

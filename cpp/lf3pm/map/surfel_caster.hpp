@@ -41,13 +41,15 @@ class SurfelCaster {
   SurfelCaster() = default;
   /// Discs at `centres` with unit `normals` and `radii`, for a map indexed with
   /// cells of edge `cell_size` (the caster walks somewhat larger cells).
+  /// `lower`: the discs' lower corner (default: their boxes'; a crop passes its map's).
   SurfelCaster(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& normals,
-               const std::vector<float>& radii, double cell_size);
+               const std::vector<float>& radii, double cell_size, const Eigen::Vector3d* lower = nullptr);
 
   /// Nearest disc hit of the ray origin + s * direction (unit) with 0 < s <= max_range.
   RayHit cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_range) const;
 
   const VoxelGrid& grid() const { return grid_; }
+  const Eigen::Vector3d& lower() const { return lower_; }
   std::size_t memory_bytes() const;
 
  private:
@@ -70,6 +72,7 @@ class SurfelCaster {
   // discs' lower corner less one map cell), not to the walk grid's origin, so
   // the hits' float rounding does not depend on the walk's cell size.
   Eigen::Vector3d frame_origin_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d lower_ = Eigen::Vector3d::Zero();
   VoxelGrid grid_;
   std::vector<Cell> cells_;         // per occupied cell
   std::vector<DiscGroup> groups_;   // centres relative to the grid origin

@@ -34,6 +34,13 @@ def tiles_shape(ny: int, nx: int, tile: int) -> tuple[int, int]:
 PROVENANCE = {"map_source"}
 
 
+def check_new_store(path: Path) -> None:
+    """Raises Lf3pmError when a store could not be created at ``path`` (no such folder)."""
+    path = Path(path)
+    if not path.exists() and not path.parent.exists():
+        raise Lf3pmError(f"output folder {path.parent} does not exist")
+
+
 def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: int):
     """The store at ``path``: created when absent, else checked against ``attrs``
     (every attribute but the PROVENANCE ones must be equal)."""
@@ -51,8 +58,7 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
             raise Lf3pmError(f"{path} was built from another map or with other parameters "
                              f"(differs in: {', '.join(differ)}); remove it or choose another output")
         return group
-    if not path.parent.exists():
-        raise Lf3pmError(f"output folder {path.parent} does not exist")
+    check_new_store(path)
     try:
         group = zarr.open_group(str(path), mode="w")
         group.attrs.update(attrs)
