@@ -29,6 +29,37 @@ def surfel_mesh(centres: np.ndarray, normals: np.ndarray, radii: np.ndarray):
     return vertices, triangles
 
 
+def voxel_mesh(points: np.ndarray, normals: np.ndarray, voxel: float = 0.1):
+    """The mesh a user would build at the map's own resolution: one square (2 triangles)
+    per occupied voxel of edge ``voxel``, at its points' centroid, in the plane of their
+    mean normal, 1.5 voxel edges wide so that neighbouring squares overlap and the surface
+    has no holes."""
+    keys = np.floor(points / voxel).astype(np.int64)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    centres = np.zeros((len(counts), 3))
+    np.add.at(centres, inverse, points)
+    centres /= counts[:, None]
+    # Normals are unoriented: align each to its voxel's first before averaging.
+    first = np.zeros((len(counts), 3))
+    first[inverse[::-1]] = normals[::-1]
+    signed = normals * np.sign(np.sum(normals * first[inverse], axis=1, keepdims=True) + 1e-12)
+    mean = np.zeros((len(counts), 3))
+    np.add.at(mean, inverse, signed)
+    mean /= np.linalg.norm(mean, axis=1, keepdims=True)
+    helper = np.where(np.abs(mean[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    u = np.cross(mean, helper)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = np.cross(mean, u)
+    half = 0.75 * voxel
+    corners = np.stack([centres + half * (su * u + sv * v) for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))],
+                       axis=1)
+    vertices = corners.reshape(-1, 3).astype(np.float32)
+    quad = np.array([[0, 1, 2], [0, 2, 3]], np.uint32)
+    triangles = (np.arange(len(centres), dtype=np.uint32)[:, None, None] * 4 + quad).reshape(-1, 3)
+    return vertices, triangles
+
+
 class BaselinePipeline:
     """Open3D casting + cKDTree association + NumPy metric (noise-free scans)."""
 
