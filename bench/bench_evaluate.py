@@ -24,7 +24,7 @@ from baseline_pipeline import association_and_metric
 import lf3pm
 from lf3pm import _core
 from lf3pm.metric import eval_params
-from lf3pm.scan_simulator import scan_params
+from lf3pm.config import scan_params
 
 
 def town_map(seed: int = 0) -> np.ndarray:

@@ -25,7 +25,7 @@ import numpy as np
 
 import lf3pm
 from lf3pm import _core
-from lf3pm.scan_simulator import scan_params
+from lf3pm.config import scan_params
 from lf3pm.validation.moving_scan import simulate_moving_scan
 from lf3pm.validation.odometry import replay_odometry
 from lf3pm.validation.trajectory import LinearMotion, interpolate_poses

@@ -25,7 +25,7 @@ import numpy as np
 import lf3pm
 from lf3pm import _core
 from lf3pm.metric import eval_params
-from lf3pm.scan_simulator import scan_params
+from lf3pm.config import scan_params
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.scenes import build_scene
 from lf3pm.solm.tiles import pose_matrices

@@ -23,8 +23,7 @@ import numpy as np
 import lf3pm
 from lf3pm.solm import build_solm, make_grid
 from lf3pm.solm.store import CHANNELS
-from lf3pm.solm.tiles import TileJob, crop_margin
-from lf3pm.config import MetricConfig
+from lf3pm.solm.tiles import crop_margin, make_job
 
 
 def stores_equal(a: Path, b: Path) -> bool:
@@ -46,9 +45,7 @@ def main() -> None:
     sensor = lf3pm.get_sensor("vlp16")
     cx, cy, h = 0.0, 0.0, args.size / 2
     grid = make_grid(world, "r2", args.res, bounds=(cx - h, cy - h, cx + h, cy + h))
-    job = TileJob(grid=grid, tile=args.tile, rays=sensor.directions, sector_half_width=None, ray_weight=1.0,
-                  min_range=sensor.min_range, max_range=sensor.max_range, noise=0.0, seed=0,
-                  metric=MetricConfig(), robot_radius=0.3, floor_clearance=0.2)
+    job = make_job(sensor, grid, tile=args.tile, noise=0.0)
     crop = world.crop(job.bounds(0, 0), crop_margin(job, world))
     tiles = int(np.ceil(grid.ny / args.tile) * np.ceil(grid.nx / args.tile))
     print(f"map: {world.size:,} points, index {world.index.memory_bytes / 2**20:.0f} MiB; grid {grid.shape} "

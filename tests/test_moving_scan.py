@@ -9,7 +9,7 @@ from kiss_icp.preprocess import Preprocessor
 
 from analytic_scenes import grid_plane
 from lf3pm import _core
-from lf3pm.scan_simulator import scan_params
+from lf3pm.config import scan_params
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.moving_scan import firing_fractions, simulate_moving_scan
 from lf3pm.validation.trajectory import LinearMotion

@@ -7,7 +7,7 @@ from scipy.spatial import cKDTree
 
 from lf3pm import _core
 from lf3pm.metric import eval_params
-from lf3pm.scan_simulator import scan_params
+from lf3pm.config import scan_params
 from analytic_scenes import (box_room, grid_plane, random_directions, ray_box_distance,
                              rigid_transform, spinning_directions)
 

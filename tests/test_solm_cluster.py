@@ -72,13 +72,10 @@ def test_the_crop_margin_holds_what_a_tile_sees(town):
 
 
 def _job(town):
-    from lf3pm.config import MetricConfig
-    from lf3pm.solm.tiles import TileJob
+    from lf3pm.solm.tiles import make_job
 
     world, sensor, grid = town
-    return TileJob(grid=grid, tile=8, rays=sensor.directions, sector_half_width=None, ray_weight=1.0,
-                   min_range=sensor.min_range, max_range=sensor.max_range, noise=sensor.range_noise_sigma, seed=0,
-                   metric=MetricConfig(), robot_radius=0.3, floor_clearance=0.2)
+    return make_job(sensor, grid, tile=8, noise=sensor.range_noise_sigma)
 
 
 def test_crop_build_equals_the_whole_map_build_bitwise(town, whole, tmp_path):

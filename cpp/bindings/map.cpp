@@ -18,6 +18,8 @@ using namespace lf3pm;
 using lf3pm::bindings::points_to_numpy;
 using lf3pm::bindings::to_numpy;
 
+static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "points are viewed as packed N x 3 doubles");
+
 void bind_map(nb::module_& m) {
   using PointsIn = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
 
@@ -73,8 +75,13 @@ void bind_map(nb::module_& m) {
       .def_prop_ro("cell_size", &MapIndex::cell_size)
       .def_prop_ro("median_spacing", &MapIndex::median_spacing)
       .def_prop_ro("memory_bytes", &MapIndex::memory_bytes)
-      .def_prop_ro("points", [](const MapIndex& self) { return points_to_numpy(self.points()); },
-                   "Map points in index order (sorted by voxel), float64 N x 3.", nb::rv_policy::move)
+      // A read-only view of the index's own points (Vector3d is three packed doubles), kept
+      // alive by the index: a SOLM build crops them once per tile, so no copy per call.
+      .def_prop_ro("points", [](const MapIndex& self) {
+             return nb::ndarray<nb::numpy, const double, nb::shape<-1, 3>>(self.points().front().data(),
+                                                                          {self.size(), 3}, nb::handle());
+           },
+           "Map points in index order (sorted by voxel), float64 N x 3, read-only.", nb::rv_policy::reference_internal)
       .def_prop_ro("normals", [](const MapIndex& self) {
              std::vector<Eigen::Vector3d> v(self.size());
              for (std::size_t i = 0; i < v.size(); ++i) v[i] = self.normal(i);

@@ -119,13 +119,14 @@ void bind_metric(nb::module_& m) {
         "map"_a, "pose"_a, "directions"_a, "params"_a,
         "Scan, associate and compute the metric at one 4x4 sensor-to-world pose.");
 
-  m.def("pose_observations",
+  m.def("evaluate_with_observations",
         [](const MapIndex& map, PoseIn pose, PointsIn dirs, const EvalParams& params) {
           const Pose ps = pose_from_matrix(pose.data());
           PoseObservations o;
+          PoseEvaluation evaluation;
           {
             nb::gil_scoped_release release;
-            o = pose_observations(map, ps, dirs.data(), dirs.shape(0), params);
+            evaluation = evaluate_pose(map, ps, dirs.data(), dirs.shape(0), params, &o);
           }
           const std::size_t rows = static_cast<std::size_t>(o.observations.b.size());
           const std::size_t dof = static_cast<std::size_t>(params.dof);
@@ -138,11 +139,11 @@ void bind_metric(nb::module_& m) {
           out["points"] = points_to_numpy(o.scan.world_points);
           out["sensor_points"] = points_to_numpy(o.scan.sensor_points);
           out["row_hit"] = to_numpy(std::move(o.observations.hit), {rows});
-          return out;
+          return nb::make_tuple(evaluation, out);
         },
         "map"_a, "pose"_a, "directions"_a, "params"_a,
-        "The explicit observations at one pose: dict of A (m x dof), b (m), points and sensor_points of "
-        "the scan's hits, row_hit (row -> hit).");
+        "evaluate() and the explicit observations of the same scan: (PoseEvaluation, dict of A (m x dof), "
+        "b (m), points and sensor_points of the scan's hits, row_hit (row -> hit)).");
 
   m.def("evaluate_many",
         [](const MapIndex& map, PosesIn poses, StreamsIn streams, PointsIn dirs, const EvalParams& params) {

@@ -99,9 +99,8 @@ class ScanConfig(Section):
 
     def core(self, sensor, stream: int = 0) -> _core.ScanParams:
         """The C++ struct for ``sensor``'s ranges."""
-        return core_struct(_core.ScanParams(), min_range=float(sensor.min_range), max_range=float(sensor.max_range),
-                           noise_sigma=self.noise_for(sensor), seed=self.seed, stream=int(stream),
-                           scan_voxel=self.scan_voxel, threads=self.threads)
+        return scan_params(sensor.min_range, sensor.max_range, noise=self.noise_for(sensor), seed=self.seed,
+                           stream=stream, scan_voxel=self.scan_voxel, threads=self.threads)
 
 
 class MetricConfig(Section):
@@ -219,6 +218,14 @@ def core_struct(struct, **fields):
     return struct
 
 
+def scan_params(min_range: float, max_range: float, *, noise: float = 0.0, seed: int = 0, stream: int = 0,
+                scan_voxel: float = 0.0, threads: int = 0) -> _core.ScanParams:
+    """The core's ScanParams (values as given: ScanConfig validates what users set)."""
+    return core_struct(_core.ScanParams(), min_range=float(min_range), max_range=float(max_range),
+                       noise_sigma=float(noise), seed=int(seed), stream=int(stream), scan_voxel=float(scan_voxel),
+                       threads=int(threads))
+
+
 def validated(section: type[Section], where: str = "", flags: dict | None = None, **values) -> Section:
     """``section(**values)``, or ConfigError naming the first bad value in one line
     (as ``flags[name]`` when given, else ``where.name``)."""
@@ -276,16 +283,14 @@ def load_config(path: str | Path | None = None, overrides: dict | None = None,
             raise ConfigError(f"{path}: a config is a mapping of sections, got {type(loaded).__name__}")
         data = loaded or {}
     for key, value in (overrides or {}).items():
-        if value is None:
-            continue
         section, _, name = key.rpartition(".")
-        target = data
+        current = data.get(section) if section else None
+        if value is None or not isinstance(current, (dict, type(None))):
+            continue  # not given, or the file's section is not a mapping (reported below)
         if section:
-            current = data.get(section)
-            target = data[section] = dict(current) if isinstance(current, dict) else ({} if current is None else current)
-            if not isinstance(target, dict):
-                break  # the file's bad section is reported below
-        target[name] = value
+            data[section] = {**(current or {}), name: value}
+        else:
+            data[name] = value
     try:
         return Config(**data)
     except ValidationError as err:

@@ -7,26 +7,8 @@ traceback for these.
 """
 
 
-import math
-
-
 class Lf3pmError(Exception):
     """Base class of errors caused by user input; the message is one line."""
-
-
-def finite_number(name: str, value, *, low: float | None = None, high: float | None = None) -> float:
-    """``value`` as a float, or Lf3pmError naming ``name`` when it is not a finite number
-    within [low, high] (either bound optional)."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise Lf3pmError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(number):
-        raise Lf3pmError(f"{name} must be finite, got {value}")
-    if (low is not None and number < low) or (high is not None and number > high):
-        span = f">= {low:g}" if high is None else f"<= {high:g}" if low is None else f"in [{low:g}, {high:g}]"
-        raise Lf3pmError(f"{name} must be {span}, got {number:g}")
-    return number
 
 
 class CoreInputError(Lf3pmError, ValueError):

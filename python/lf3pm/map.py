@@ -101,11 +101,18 @@ def crop_points(points: np.ndarray, frame: "_core.MapFrame", association_params:
     xmin, ymin, xmax, ymax = bounds
     keep = ((points[:, 0] >= xmin - margin) & (points[:, 0] <= xmax + margin) &
             (points[:, 1] >= ymin - margin) & (points[:, 1] <= ymax + margin))
+    return _indexed(np.ascontiguousarray(points[keep]), frame, association_params, source, sha256, threads)
+
+
+def _indexed(points, frame, association_params: dict, source: str, sha256: str, threads: int) -> Map:
+    """``points`` indexed in ``frame``, as a Map of the map ``source`` (a crop or the whole)."""
     config = MapConfig(**association_params)
-    if keep.sum() < config.knn:
-        raise MapError(f"{source}: the crop {tuple(bounds)} + {margin:g} m holds {int(keep.sum())} points, "
-                       f"fewer than knn = {config.knn}")
-    index = _core.MapIndex(np.ascontiguousarray(points[keep]), config.core(threads), frame)
+    if len(points) < config.knn:
+        raise MapError(f"{source}: {len(points)} points, fewer than knn = {config.knn}")
+    try:
+        index = _core.MapIndex(points, config.core(threads), frame)
+    except ValueError as err:
+        raise MapError(f"{source}: {err}") from None
     return Map(index=index, source=source, sha256=sha256, association_params=dict(association_params))
 
 
@@ -146,16 +153,11 @@ class MapPoints:
 
     def indexed(self, threads: int = 0) -> Map:
         """The whole map indexed (in its frame: the index :func:`load_map` builds)."""
-        config = MapConfig(**self.association_params)
-        try:
-            index = _core.MapIndex(self.points, config.core(threads), self.frame)
-        except ValueError as err:
-            raise MapError(f"{self.source}: {err}") from None
-        if index.duplicates_removed:
-            warnings.warn(f"{self.source}: {index.duplicates_removed} duplicate points dropped", UserWarning,
+        whole = _indexed(self.points, self.frame, self.association_params, self.source, self.sha256, threads)
+        if whole.index.duplicates_removed:
+            warnings.warn(f"{self.source}: {whole.index.duplicates_removed} duplicate points dropped", UserWarning,
                           stacklevel=3)
-        return Map(index=index, source=self.source, sha256=self.sha256,
-                   association_params=dict(self.association_params))
+        return whole
 
     def crop(self, bounds, margin: float, threads: int = 0) -> Map:
         """As :meth:`Map.crop`."""
@@ -168,18 +170,6 @@ def load_map_points(source, *, voxel: float | None = None, cell_size: float = _D
                     max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> MapPoints:
     """Reads a map as :func:`load_map` does, without indexing it whole (:class:`MapPoints`);
     its hash is load_map's, so a SOLM store accepts either."""
-    points, name, digest, config, threads = _read(source, voxel, cell_size, knn, plane_threshold,
-                                                  max_neighbor_distance, threads)
-    try:
-        frame = _core.map_frame(points, config.core(threads))
-    except ValueError as err:
-        raise MapError(f"{name}: {err}") from None
-    return MapPoints(points=points, frame=frame, source=name, sha256=digest,
-                     association_params=config.association_params())
-
-
-def _read(source, voxel, cell_size, knn, plane_threshold, max_neighbor_distance, threads):
-    """The points of a file or array, checked; with their name, hash, MapConfig and threads."""
     config = validated(MapConfig, "map", voxel=voxel, cell_size=cell_size, knn=knn,
                        plane_threshold=plane_threshold, max_neighbor_distance=max_neighbor_distance)
     threads = check_threads(threads)
@@ -198,4 +188,9 @@ def _read(source, voxel, cell_size, knn, plane_threshold, max_neighbor_distance,
     points = np.ascontiguousarray(points, dtype=np.float64)
     if len(points) < config.knn:
         raise MapError(f"{name}: the map has {len(points)} points, fewer than knn = {config.knn}")
-    return points, name, hashlib.sha256(points.tobytes()).hexdigest(), config, threads
+    try:
+        frame = _core.map_frame(points, config.core(threads))
+    except ValueError as err:
+        raise MapError(f"{name}: {err}") from None
+    return MapPoints(points=points, frame=frame, source=name, sha256=hashlib.sha256(points.tobytes()).hexdigest(),
+                     association_params=config.association_params())

@@ -9,10 +9,9 @@ from dataclasses import asdict, dataclass, field
 
 from lf3pm import _core
 from lf3pm.calibration import calibration_applies, packaged_calibration, predict_mde
-from lf3pm.config import MetricConfig, ScanConfig, validated
+from lf3pm.config import MetricConfig, ScanConfig, scan_params, validated
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
-from lf3pm.scan_simulator import scan_params
 from lf3pm.sensors import Sensor, get_sensor
 
 _SCAN = ScanConfig()
@@ -108,14 +107,17 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     matrix = pose_matrix(pose)
     map.check_pose(matrix, clearance)
     params = metric.core(scan.core(sensor))
-    result = _core.evaluate(map.index, matrix, sensor.directions, params)
+    obs = None
+    if observations:
+        result, obs = _core.evaluate_with_observations(map.index, matrix, sensor.directions, params)
+    else:
+        result = _core.evaluate(map.index, matrix, sensor.directions, params)
     values = result.metric.as_dict()
     calibration = packaged_calibration()
     prediction = None
     if calibration_applies(calibration, sensor=sensor.name, dof=metric.dof, association=metric.association,
                            scan_voxel=scan.scan_voxel, noise_is_default=scan.noise is None, w1=metric.w1):
         prediction = predict_mde(calibration, values[calibration["predictor"]])
-    obs = _core.pose_observations(map.index, matrix, sensor.directions, params) if observations else None
     recorded = {"seed": scan.seed, "noise": scan.noise_for(sensor), "dof": metric.dof, "w1": metric.w1,
                 "scan_voxel": scan.scan_voxel, "association": metric.association, "map_sha256": map.sha256,
                 **map.association_params}

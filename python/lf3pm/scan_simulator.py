@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import core_struct
+from lf3pm.config import scan_params
 from lf3pm.map import Map
 
 
@@ -39,10 +39,3 @@ def simulate_scan(map: Map, pose: np.ndarray, directions: np.ndarray, min_range:
                                           scan_voxel=scan_voxel, threads=threads))
     return SimulatedScan(**raw)
 
-
-def scan_params(min_range: float, max_range: float, *, noise: float = 0.0, seed: int = 0, stream: int = 0,
-                scan_voxel: float = 0.0, threads: int = 0) -> _core.ScanParams:
-    """The core's ScanParams (values as given: lf3pm.config validates what users set)."""
-    return core_struct(_core.ScanParams(), min_range=float(min_range), max_range=float(max_range),
-                       noise_sigma=float(noise), seed=int(seed), stream=int(stream), scan_voxel=float(scan_voxel),
-                       threads=int(threads))

@@ -74,21 +74,17 @@ Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params) {
 }
 
 PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
-                             std::size_t count, const EvalParams& params) {
-  const SimulatedScan scan = simulate_scan(map, pose, directions, count, params.scan);
+                             std::size_t count, const EvalParams& params, PoseObservations* observations) {
+  SimulatedScan scan = simulate_scan(map, pose, directions, count, params.scan);
   const GramAccumulator gram = scan_gram(map, pose, scan, params);
   PoseEvaluation out;
   out.metric = weighted_metric(gram, params);
   out.rays = static_cast<std::int64_t>(count);
   out.hits = static_cast<std::int64_t>(scan.world_points.size());
-  return out;
-}
-
-PoseObservations pose_observations(const MapIndex& map, const Pose& pose, const double* directions,
-                                   std::size_t count, const EvalParams& params) {
-  PoseObservations out;
-  out.scan = simulate_scan(map, pose, directions, count, params.scan);
-  out.observations = scan_observations(map, pose, out.scan, params);
+  if (observations != nullptr) {
+    observations->observations = scan_observations(map, pose, scan, params);
+    observations->scan = std::move(scan);
+  }
   return out;
 }
 

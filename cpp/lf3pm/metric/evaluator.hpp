@@ -30,23 +30,21 @@ struct PoseEvaluation {
   std::int64_t hits = 0;  // rays with a return (after scan downsampling)
 };
 
-
-PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
-                             std::size_t count, const EvalParams& params);
-
 /// One pose's explicit observations with the scan they came from (for export and tests).
 struct PoseObservations {
   SimulatedScan scan;
   Observations observations;
 };
 
-PoseObservations pose_observations(const MapIndex& map, const Pose& pose, const double* directions,
-                                   std::size_t count, const EvalParams& params);
+/// Simulates the scan at `pose` and computes its metric; given `observations`, also fills
+/// in that same scan and its explicit observations.
+PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
+                             std::size_t count, const EvalParams& params, PoseObservations* observations = nullptr);
 
-/// The Gram of [A | b] of a scan and its row count; deterministic for any thread count.
 /// The metric of an accumulated Gram, scaled by params.ray_weight.
 Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params);
 
+/// The Gram of [A | b] of a scan and its row count; deterministic for any thread count.
 GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
                           const EvalParams& params);
 

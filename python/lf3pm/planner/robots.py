@@ -7,7 +7,7 @@ read from it here, so that the library, the CLI and the experiments share them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
@@ -92,6 +92,3 @@ class Robot:
         out.vmax_norm = float(self.vmax_norm) if self.vmax_norm is not None and math.isfinite(self.vmax_norm) else 0.0
         return out
 
-
-#: Each field's default, for the CLI and configs (one place: the C++ core's RobotLimits).
-DEFAULTS = {f.name: f.default for f in fields(Robot)}

@@ -14,10 +14,8 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, MapPoints
 from lf3pm.sensors import Sensor, get_sensor
 from lf3pm.solm.grid import SolmGrid
-from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.store import CHANNELS, TILE, check_new_store, open_or_create, tiles_shape
-from lf3pm.solm.tiles import TileJob, compute_tile, crop_margin, write_tile
-from lf3pm.solm.yaw_reuse import sector_layout
+from lf3pm.solm.tiles import compute_tile, crop_margin, make_job, write_tile
 from lf3pm.terrain import column_minimum
 
 _SCAN, _METRIC, _SOLM = ScanConfig(), MetricConfig(), SolmConfig()
@@ -61,12 +59,9 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         raise Lf3pmError(f"tile must be >= 1, got {tile}")
     if layout.yaw_reuse and grid.space != "se2":
         raise Lf3pmError("yaw reuse applies to se2 grids only")
-    sectors = sector_layout(sensor, grid.yaw_bins) if layout.yaw_reuse else None
-    rays, ray_weight = thin_rays(sensor.directions if sectors is None else sectors[0], layout.ray_stride)
-    job = TileJob(grid=grid, tile=tile, rays=rays, sector_half_width=None if sectors is None else sectors[1],
-                  ray_weight=ray_weight, min_range=float(sensor.min_range), max_range=float(sensor.max_range),
-                  noise=scan.noise_for(sensor), seed=scan.seed, metric=metric, robot_radius=layout.robot_radius,
-                  floor_clearance=float(floor_clearance))
+    job = make_job(sensor, grid, tile=tile, noise=scan.noise_for(sensor), seed=scan.seed, metric=metric,
+                   robot_radius=layout.robot_radius, floor_clearance=floor_clearance, yaw_reuse=layout.yaw_reuse,
+                   ray_stride=layout.ray_stride)
     attrs = {"lf3pm_version": __version__, "grid": grid.to_dict(), "sensor": sensor.name,
              "sensor_rays": sensor.num_rays, "noise": job.noise, "seed": scan.seed,
              "w1": metric.w1, "w2": 1.0 - metric.w1, "association": metric.association,
@@ -106,9 +101,8 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         crop = crop or isinstance(world, MapPoints)
         margin = crop_margin(job, world) if crop else None
         for ty, tx in todo:
-            ys_, xs_ = job.slices(ty, tx)
             where = world.crop(job.bounds(ty, tx), margin, scan.threads) if crop else world
-            arrays = compute_tile(where, job, ty, tx, None if ground is None else ground[ys_, xs_], scan.threads)
+            arrays = compute_tile(where, job, ty, tx, job.ground(ground, ty, tx), scan.threads)
             finished(ty, tx, write_tile(group, job, ty, tx, arrays))
     return {"tiles": ty_n * tx_n, "built_now": len(todo),
             "complete": bool(group["done"][...].all())}

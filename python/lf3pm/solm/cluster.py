@@ -55,23 +55,25 @@ def build_tiles(world: Map | MapPoints, job: TileJob, todo: list, ground, out: P
     import ray
 
     remote = ray.remote(num_cpus=1, max_retries=RETRIES)(solm_tile)
-    points = ray.put(world.points)
+    # The points and the job (its rays are 0.7 MB for a VLP-16) go to the object store
+    # once; each task then carries only its tile's indices and ground heights.
+    points, shared_job = ray.put(world.points), ray.put(job)
     margin = crop_margin(job, world)
     store = str(Path(out).resolve())
-    pending = {}
-    for ty, tx in todo:
-        ys_, xs_ = job.slices(ty, tx)
-        ref = remote.remote(points, world.frame, world.association_params, world.source, world.sha256,
-                            job, ty, tx, None if ground is None else ground[ys_, xs_], margin, store)
-        pending[ref] = (ty, tx)
+    tile_of = {remote.remote(points, world.frame, world.association_params, world.source, world.sha256,
+                             shared_job, ty, tx, job.ground(ground, ty, tx), margin, store): (ty, tx)
+               for ty, tx in todo}
+    pending = list(tile_of)
     while pending:
-        ready, _ = ray.wait(list(pending), num_returns=1)
-        ty, tx = pending.pop(ready[0])
-        try:
-            cells = ray.get(ready[0])
-        except ray.exceptions.RayError as err:
-            raise Lf3pmError(f"tile ({ty}, {tx}) failed on the cluster: {_first_line(err)}") from None
-        finished(ty, tx, cells)
+        # Whatever finished within a second: one wait per batch, not one per tile.
+        ready, pending = ray.wait(pending, num_returns=len(pending), timeout=1.0)
+        for ref in ready:
+            ty, tx = tile_of[ref]
+            try:
+                cells = ray.get(ref)
+            except ray.exceptions.RayError as err:
+                raise Lf3pmError(f"tile ({ty}, {tx}) failed on the cluster: {_first_line(err)}") from None
+            finished(ty, tx, cells)
 
 
 def solm_tile(points, frame, association_params: dict, source: str, sha256: str, job: TileJob, ty: int, tx: int,

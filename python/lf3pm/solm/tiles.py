@@ -22,11 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import MetricConfig
+from lf3pm.config import MetricConfig, scan_params
 from lf3pm.map import Map, MapPoints
-from lf3pm.scan_simulator import scan_params
 from lf3pm.solm.grid import SolmGrid
+from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.store import CHANNELS
+from lf3pm.solm.yaw_reuse import sector_layout
 from lf3pm.terrain import body_blocked
 
 
@@ -57,11 +58,28 @@ class TileJob:
         grid, t = self.grid, self.tile
         return slice(ty * t, min(grid.ny, (ty + 1) * t)), slice(tx * t, min(grid.nx, (tx + 1) * t))
 
+    def ground(self, ground: np.ndarray | None, ty: int, tx: int) -> np.ndarray | None:
+        """The tile's part of the grid's ground heights (None for aerial grids)."""
+        return None if ground is None else ground[self.slices(ty, tx)]
+
     def bounds(self, ty: int, tx: int) -> tuple[float, float, float, float]:
         """x-y extent (xmin, ymin, xmax, ymax) of the tile's poses (its cell centres)."""
         ys, xs = self.slices(ty, tx)
         cx, cy = self.grid.xs()[xs], self.grid.ys()[ys]
         return float(cx[0]), float(cy[0]), float(cx[-1]), float(cy[-1])
+
+
+def make_job(sensor, grid: SolmGrid, *, tile: int, noise: float, seed: int = 0,
+             metric: MetricConfig = MetricConfig(), robot_radius: float = 0.3, floor_clearance: float = 0.2,
+             yaw_reuse: bool = False, ray_stride: int = 1) -> TileJob:
+    """The job of a build (values as given: build_solm validates them): the sensor's rays,
+    thinned by ``ray_stride`` and, under ``yaw_reuse``, laid out in yaw sectors."""
+    sectors = sector_layout(sensor, grid.yaw_bins) if yaw_reuse else None
+    rays, ray_weight = thin_rays(sensor.directions if sectors is None else sectors[0], ray_stride)
+    return TileJob(grid=grid, tile=tile, rays=rays, sector_half_width=None if sectors is None else sectors[1],
+                   ray_weight=ray_weight, min_range=float(sensor.min_range), max_range=float(sensor.max_range),
+                   noise=float(noise), seed=int(seed), metric=metric, robot_radius=float(robot_radius),
+                   floor_clearance=float(floor_clearance))
 
 
 def crop_margin(job: TileJob, world: Map | MapPoints) -> float:

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.scan_simulator import scan_params
+from lf3pm.config import scan_params
 from lf3pm.errors import Lf3pmError
 
 
