@@ -221,6 +221,24 @@ def test_npy_of_integers(tmp_path):
     np.testing.assert_array_equal(load_points(tmp_path / "grid.npy"), grid)
 
 
+@pytest.mark.parametrize("layout", ["float64", "big-endian float32, 4 columns", "fortran"])
+def test_npy_read_in_chunks_equals_numpy(tmp_path, monkeypatch, layout):
+    """The chunked reader (rows straight into the float64 result) reads what np.load reads,
+    across chunk boundaries and for every layout."""
+    monkeypatch.setattr(lf3pm.io.npy, "_CHUNK_ROWS", 7)
+    table = np.random.default_rng(17).normal(size=(50, 4))
+    if layout == "float64":
+        table = table[:, :3].copy()
+    elif layout.startswith("big"):
+        table = table.astype(">f4")
+    else:
+        table = np.asfortranarray(table)
+    np.save(tmp_path / "t.npy", table)
+    loaded = load_points(tmp_path / "t.npy")
+    np.testing.assert_array_equal(loaded, np.load(tmp_path / "t.npy")[:, :3].astype(np.float64))
+    assert loaded.flags.c_contiguous and loaded.dtype == np.float64
+
+
 def test_npz_prefers_the_array_named_points(tmp_path):
     points = random_points(seed=16, n=40)
     np.savez(tmp_path / "map.npz", colors=np.zeros((40, 3)), points=points, poses=np.eye(4))

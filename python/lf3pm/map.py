@@ -165,6 +165,11 @@ class MapPoints:
                            source=self.source, sha256=self.sha256, threads=threads)
 
 
+def _sha256(points: np.ndarray) -> str:
+    """The hash of a C-contiguous array's bytes, read in place (``tobytes`` would copy the map)."""
+    return hashlib.sha256(memoryview(points).cast("B")).hexdigest()
+
+
 def load_map_points(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
                     knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
                     max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> MapPoints:
@@ -192,5 +197,5 @@ def load_map_points(source, *, voxel: float | None = None, cell_size: float = _D
         frame = _core.map_frame(points, config.core(threads))
     except ValueError as err:
         raise MapError(f"{name}: {err}") from None
-    return MapPoints(points=points, frame=frame, source=name, sha256=hashlib.sha256(points.tobytes()).hexdigest(),
+    return MapPoints(points=points, frame=frame, source=name, sha256=_sha256(points),
                      association_params=config.association_params())

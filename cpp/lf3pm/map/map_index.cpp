@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "lf3pm/common/parallel.hpp"
@@ -16,32 +17,50 @@ constexpr int kMaxKnn = 32;
 // 27-cell k-NN search against the cost of walking empty cells along a ray.
 constexpr double kPointsPerCell = 12.0;
 
-// Median distance from a point to its nearest other point, estimated on a
-// seeded sample with a coarse provisional grid.
-double estimate_spacing(const std::vector<Eigen::Vector3d>& pts, int threads) {
-  Eigen::Vector3d lo = pts.front(), hi = pts.front();
-  for (const auto& p : pts) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+// Points of the map searched at a time by the spacing estimate: its coarse grid then
+// needs about 70 MB whatever the map's size (one grid over a 60 M-point map needed
+// 4 GB, three times the points themselves: bench/bench_solm_memory.py).
+constexpr std::size_t kSpacingChunk = std::size_t(1) << 20;
+
+// Median distance from a point to its nearest other point, estimated on a seeded
+// sample: for each sample, the nearest point of different coordinates within four
+// coarse cells, found chunk by chunk (the nearest over the map is the least of the
+// chunks' nearest). `lo`, `hi`: the points' bounding box.
+double estimate_spacing(const double* xyz, std::size_t n, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                        int threads) {
+  auto point = [xyz](std::size_t i) { return Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]); };
   const Eigen::Vector3d ext = (hi - lo).cwiseMax(1.0);
   // Surface-like data: N points over roughly the largest face of the box.
   const double area = std::max({ext.x() * ext.y(), ext.x() * ext.z(), ext.y() * ext.z()});
-  double cell = std::max(0.02, 4.0 * std::sqrt(area / pts.size()));
+  double cell = std::max(0.02, 4.0 * std::sqrt(area / n));
   const double volume_cap = std::cbrt(ext.prod() / (1 << 26)) * 8.0;  // keep the provisional grid small
   cell = std::max(cell, volume_cap);
-  PointGrid coarse(pts, cell);
-  const std::size_t samples = std::min<std::size_t>(pts.size(), 4000);
+  const std::size_t samples = std::min<std::size_t>(n, 4000);
+  std::vector<Eigen::Vector3d> queries(samples);
+  for (std::size_t s = 0; s < samples; ++s) queries[s] = point(splitmix64(s) % n);
+  const double reach = 4.0 * cell;
+  std::vector<double> nearest_sq(samples, std::numeric_limits<double>::infinity());
+  std::vector<Eigen::Vector3d> chunk;
+  for (std::size_t begin = 0; begin < n; begin += kSpacingChunk) {
+    const std::size_t end = std::min(n, begin + kSpacingChunk);
+    chunk.resize(end - begin);
+    for (std::size_t i = begin; i < end; ++i) chunk[i - begin] = point(i);
+    const PointGrid coarse(chunk, cell);  // drops exact duplicates: at most one result equals q
+    parallel_for(samples, 256, threads, [&](std::size_t b, std::size_t e) {
+      std::uint32_t idx[2];
+      double d2[2];
+      for (std::size_t s = b; s < e; ++s) {
+        const int found = coarse.nearest(queries[s], 2, reach, idx, d2);
+        for (int j = 0; j < found; ++j)
+          if (coarse.points()[idx[j]] != queries[s]) {
+            nearest_sq[s] = std::min(nearest_sq[s], d2[j]);
+            break;
+          }
+      }
+    });
+  }
   std::vector<double> nn(samples);
-  parallel_for(samples, 256, threads, [&](std::size_t b, std::size_t e) {
-    std::uint32_t idx[2];
-    double d2[2];
-    for (std::size_t s = b; s < e; ++s) {
-      const std::size_t i = splitmix64(s) % pts.size();
-      const int found = coarse.nearest(pts[i], 2, 4.0 * cell, idx, d2);
-      nn[s] = found == 2 ? std::sqrt(d2[1]) : 4.0 * cell;
-    }
-  });
+  for (std::size_t s = 0; s < samples; ++s) nn[s] = std::isfinite(nearest_sq[s]) ? std::sqrt(nearest_sq[s]) : reach;
   std::nth_element(nn.begin(), nn.begin() + samples / 2, nn.end());
   return std::max(nn[samples / 2], 1e-4);
 }
@@ -60,12 +79,15 @@ void check_params(const MapParams& params, std::size_t count) {
   if (count >= std::size_t(0xFFFFFFFEu)) throw std::invalid_argument("the map has too many points");
 }
 
+void check_finite(const double* xyz, std::size_t count) {
+  for (std::size_t i = 0; i < 3 * count; ++i)
+    if (!std::isfinite(xyz[i])) throw std::invalid_argument("the map has non-finite coordinates");
+}
+
 std::vector<Eigen::Vector3d> read_points(const double* xyz, std::size_t count) {
+  check_finite(xyz, count);
   std::vector<Eigen::Vector3d> input(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    input[i] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
-    if (!input[i].allFinite()) throw std::invalid_argument("the map has non-finite coordinates");
-  }
+  for (std::size_t i = 0; i < count; ++i) input[i] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
   return input;
 }
 
@@ -75,13 +97,20 @@ double largest_disc(double cell_size, double median_spacing, const MapParams& pa
   return std::max(0.75 * median_spacing, std::min(3.0 * cell_size, params.max_neighbor_distance));
 }
 
-MapFrame frame_of(const std::vector<Eigen::Vector3d>& input, const MapParams& params) {
+// The frame of `count` finite points (x, y, z rows), read in place: nothing of the
+// map's size is allocated, so a map too large to index whole has its frame computed.
+MapFrame frame_of(const double* xyz, std::size_t count, const MapParams& params) {
+  Eigen::Vector3d lo(xyz[0], xyz[1], xyz[2]), hi = lo;
+  for (std::size_t i = 1; i < count; ++i) {
+    const Eigen::Vector3d p(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
   MapFrame f;
-  f.median_spacing = estimate_spacing(input, params.threads);
+  f.median_spacing = estimate_spacing(xyz, count, lo, hi, params.threads);
   f.cell_size = params.cell_size > 0 ? params.cell_size
                                      : std::clamp(f.median_spacing * std::sqrt(kPointsPerCell), 0.05, 4.0);
-  f.point_lower = input.front();
-  for (const auto& p : input) f.point_lower = f.point_lower.cwiseMin(p);
+  f.point_lower = lo;
   // One cell more than the widest disc: float rounding of the radii never crosses it.
   f.caster_lower = f.point_lower -
                    Eigen::Vector3d::Constant(largest_disc(f.cell_size, f.median_spacing, params) + f.cell_size);
@@ -92,7 +121,8 @@ MapFrame frame_of(const std::vector<Eigen::Vector3d>& input, const MapParams& pa
 
 MapFrame map_frame(const double* xyz, std::size_t count, const MapParams& params) {
   check_params(params, count);
-  return frame_of(read_points(xyz, count), params);
+  check_finite(xyz, count);
+  return frame_of(xyz, count, params);
 }
 
 MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params, const MapFrame* frame)
@@ -100,7 +130,7 @@ MapIndex::MapIndex(const double* xyz, std::size_t count, const MapParams& params
   check_params(params, count);
   std::vector<Eigen::Vector3d> input = read_points(xyz, count);
   const int threads = params.threads;
-  const MapFrame own = frame != nullptr ? *frame : frame_of(input, params);
+  const MapFrame own = frame != nullptr ? *frame : frame_of(xyz, count, params);
   if (!(own.cell_size > 0 && own.median_spacing > 0)) throw std::invalid_argument("invalid map frame");
   median_spacing_ = own.median_spacing;
   cell_size_ = own.cell_size;

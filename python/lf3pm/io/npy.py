@@ -10,16 +10,34 @@ import numpy as np
 from lf3pm.errors import MapError
 from lf3pm.io._common import reading
 
+#: Rows of a .npy read at a time.
+_CHUNK_ROWS = 1 << 20
+
 
 def read_npy(path: str) -> np.ndarray:
     """Reads the first three columns of an (N, 3) or (N, >=3) .npy array as float64 (N, 3).
 
-    The file is memory-mapped, so the only full copy made is the float64 result.
+    The header is read through a memory map (numpy's parser: never a pickle), the data
+    in chunks of rows straight into the result, so the only full copy made is the
+    float64 result (copying through one map of the whole file kept its pages resident
+    beside the copy: twice the map at the peak).
     """
-    # Unlike np.load, open_memmap accepts only the .npy format: never a pickle.
     with reading(path, ".npy"):
         array = np.lib.format.open_memmap(path, mode="r")
-    return _xyz(path, array)
+    _check(path, array)  # before any data are read
+    if not array.flags.c_contiguous:
+        return _xyz(path, array)  # Fortran order: rare, copied as numpy reads it
+    rows, columns = array.shape
+    dtype, offset = array.dtype, array.offset
+    del array
+    out = np.empty((rows, 3), dtype=np.float64)
+    for start in range(0, rows, _CHUNK_ROWS):
+        count = min(_CHUNK_ROWS, rows - start)
+        with reading(path, ".npy"):
+            part = np.fromfile(path, dtype=dtype, count=count * columns,
+                               offset=offset + start * columns * dtype.itemsize)
+        out[start:start + count] = part.reshape(count, columns)[:, :3]
+    return out
 
 
 def read_npz(path: str) -> np.ndarray:
@@ -43,12 +61,16 @@ def read_npz(path: str) -> np.ndarray:
 
 
 def _xyz(path: str, array: np.ndarray) -> np.ndarray:
+    _check(path, array)
+    # np.array copies (also out of a memory map) and drops the columns after z.
+    return np.array(array[:, :3], dtype=np.float64, order="C")
+
+
+def _check(path: str, array: np.ndarray) -> None:
     if array.dtype.kind not in "iuf":
         raise MapError(f"{path}: the array holds {array.dtype} values, expected real numbers")
     if array.ndim != 2 or array.shape[1] < 3:
         raise MapError(f"{path}: expected an N x 3 (or N x >=3) array, got shape {array.shape}")
-    # np.array copies (also out of a memory map) and drops the columns after z.
-    return np.array(array[:, :3], dtype=np.float64, order="C")
 
 
 def write_npy(fp: BinaryIO, points: np.ndarray) -> None:
