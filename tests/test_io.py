@@ -187,6 +187,26 @@ def test_pcd_with_mixed_type_fields_hand_written(tmp_path, data):
     np.testing.assert_array_equal(load_points(path), xyz_of(records))
 
 
+def test_binary_pcd_and_las_read_in_chunks(tmp_path, monkeypatch):
+    """The chunked readers (records straight into the float64 result) read what pypcd4 and
+    laspy read whole, across chunk boundaries."""
+    import lf3pm.io.las
+    import lf3pm.io.pcd
+
+    monkeypatch.setattr(lf3pm.io.pcd, "_CHUNK_RECORDS", 7)
+    monkeypatch.setattr(lf3pm.io.las, "_CHUNK_POINTS", 7)
+    records = mixed_records(seed=18, n=50)
+    pcd = tmp_path / "lidar.pcd"
+    pcd.write_bytes(mixed_pcd_header(50, "binary") + records.tobytes())
+    np.testing.assert_array_equal(load_points(pcd), xyz_of(records))
+    points = random_points(seed=19, n=50)
+    for suffix in (".las", ".laz"):
+        path = tmp_path / f"map{suffix}"
+        write_points(path, points)
+        las = laspy.read(path)
+        np.testing.assert_array_equal(load_points(path), np.c_[las.x, las.y, las.z])
+
+
 def test_pcd_with_mixed_type_fields_binary_compressed(tmp_path):
     records = mixed_records(seed=13, n=2000)
     records["x"] = np.round(records["x"])  # compressible

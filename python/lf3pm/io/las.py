@@ -12,6 +12,8 @@ from lf3pm.errors import MapError
 from lf3pm.io._common import reading, stack_xyz
 
 _LAZ_BACKEND = laspy.LazBackend.LazrsParallel
+#: Points decoded at a time.
+_CHUNK_POINTS = 1 << 20
 
 # LAS stores coordinates as int32 counts of a per-axis scale; keep a margin below 2**31 - 1.
 _INT32_REACH = 2**31 - 2
@@ -29,8 +31,20 @@ def read_las(path: str) -> np.ndarray:
             if stored < header.point_count:
                 raise MapError(f"{path}: truncated LAS file: the header declares "
                                f"{header.point_count} points, the file holds {max(stored, 0)}")
-        points = reader.read_points(-1)
-    return stack_xyz(points.x, points.y, points.z)
+        # Chunk by chunk into the result: the whole record array beside it cost two to
+        # three times the coordinates.
+        xyz = np.empty((header.point_count, 3), dtype=np.float64)
+        start = 0
+        for chunk in reader.chunk_iterator(_CHUNK_POINTS):
+            end = start + len(chunk)
+            if end > len(xyz):
+                raise MapError(f"{path}: corrupt LAS file: more points than its header declares")
+            xyz[start:end] = stack_xyz(chunk.x, chunk.y, chunk.z)
+            start = end
+    if start != len(xyz):
+        raise MapError(f"{path}: truncated LAS/LAZ file: the header declares {len(xyz)} points, "
+                       f"the file holds {start}")
+    return xyz
 
 
 def write_las(fp: BinaryIO, points: np.ndarray) -> None:

@@ -6,9 +6,15 @@ from typing import BinaryIO
 
 import numpy as np
 from pypcd4 import Encoding, PointCloud
+from pypcd4.pypcd4 import MetaData
 
 from lf3pm.errors import MapError
 from lf3pm.io._common import reading, stack_xyz
+
+
+#: Records of a binary PCD read at a time (pypcd4 reads the whole data section, then
+#: the x, y, z copy doubles it).
+_CHUNK_RECORDS = 1 << 20
 
 
 def read_pcd(path: str) -> np.ndarray:
@@ -16,23 +22,62 @@ def read_pcd(path: str) -> np.ndarray:
 
     Other fields, of any type and count (intensity, ring, timestamp, ...), are
     skipped: the records are decoded by the header's field layout, never by
-    assuming 3 or 4 floats per point.
+    assuming 3 or 4 floats per point. Binary files are read in chunks of records
+    straight into the result; ascii and binary_compressed ones through pypcd4.
     """
     _check_declared_size(path)
     with reading(path, "PCD"):
+        with open(path, "rb") as fp:
+            metadata, data_offset = _header(fp)
+        if metadata.data == Encoding.BINARY:
+            return _read_binary(path, metadata, data_offset)
         cloud = PointCloud.from_path(path)
     # A one-point ascii PCD parses (np.loadtxt) to a 0-d array.
     records = np.atleast_1d(cloud.pc_data)
-    names = records.dtype.names or ()
-    missing = [axis for axis in "xyz" if axis not in names]
-    if missing:
-        raise MapError(f"{path}: the PCD has no {'/'.join(missing)} field "
-                       f"(fields: {' '.join(cloud.metadata.fields)})")
+    _check_xyz(path, records.dtype, cloud.metadata)
     # pypcd4 returns whatever records a short binary data section holds.
     if len(records) != cloud.metadata.points:
         raise MapError(f"{path}: truncated or corrupt PCD file: the header declares "
                        f"{cloud.metadata.points} points, the data section holds {len(records)}")
     return stack_xyz(records["x"], records["y"], records["z"])
+
+
+def _header(fp) -> tuple[MetaData, int]:
+    """The parsed header of an open PCD file and the offset of its data section."""
+    lines = []
+    for raw in fp:
+        line = raw.decode("utf-8").strip()
+        if not line or line.startswith("#"):
+            continue
+        lines.append(line)
+        if line.startswith("DATA"):
+            break
+    return MetaData.parse_header(lines), fp.tell()
+
+
+def _check_xyz(path: str, dtype: np.dtype, metadata: MetaData) -> None:
+    missing = [axis for axis in "xyz" if axis not in (dtype.names or ())]
+    if missing:
+        raise MapError(f"{path}: the PCD has no {'/'.join(missing)} field "
+                       f"(fields: {' '.join(metadata.fields)})")
+
+
+def _read_binary(path: str, metadata: MetaData, offset: int) -> np.ndarray:
+    """x, y, z of a binary PCD's records, a chunk of records at a time (its size is
+    checked by _check_declared_size)."""
+    dtype = metadata.build_dtype()
+    _check_xyz(path, dtype, metadata)
+    total = metadata.points
+    xyz = np.empty((total, 3), dtype=np.float64)
+    for start in range(0, total, _CHUNK_RECORDS):
+        count = min(_CHUNK_RECORDS, total - start)
+        records = np.fromfile(path, dtype=dtype, count=count, offset=offset + start * dtype.itemsize)
+        if len(records) != count:
+            raise MapError(f"{path}: truncated or corrupt PCD file: the header declares "
+                           f"{total} points, the data section holds {start + len(records)}")
+        for axis, name in enumerate("xyz"):
+            xyz[start:start + count, axis] = records[name]
+    return xyz
 
 
 #: How many times its compressed size an LZF block can grow (a 3-byte back-reference
