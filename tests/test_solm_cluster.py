@@ -178,10 +178,14 @@ def test_an_unreachable_cluster_is_one_line(tmp_path, address, message):
     assert not (tmp_path / "s.zarr").exists()
 
 
-def test_a_store_in_a_missing_folder_is_refused_before_the_cluster_starts(tmp_path):
+def test_a_store_in_a_missing_or_unwritable_folder_is_refused_before_the_cluster_starts(tmp_path):
     path = tmp_path / "boxes.npy"
     np.save(path, lf3pm.build_scene("boxes").points)
     done = run_cli("solm", "build", path, "-o", tmp_path / "no" / "s.zarr", "--res", "2", "--engine", "ray")
     assert done.returncode == 2 and "does not exist" in done.stderr and "Traceback" not in done.stderr
+    # A regular file where the folder should be: as a read-only disk, even for root.
+    (tmp_path / "file").write_text("")
+    done = run_cli("solm", "build", path, "-o", tmp_path / "file" / "s.zarr", "--res", "2", "--engine", "ray")
+    assert done.returncode == 2 and "is not a folder" in done.stderr and "Traceback" not in done.stderr
     done = run_cli("solm", "build", path, "-o", tmp_path / "s.zarr", "--res", "2", "--engine", "spark")
     assert done.returncode == 2 and "unknown engine 'spark'" in done.stderr

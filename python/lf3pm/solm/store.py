@@ -12,6 +12,7 @@ store built from another map or with other parameters is refused, never mixed.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 from pathlib import Path
 
@@ -35,10 +36,18 @@ PROVENANCE = {"map_source"}
 
 
 def check_new_store(path: Path) -> None:
-    """Raises Lf3pmError when a store could not be created at ``path`` (no such folder)."""
+    """Raises Lf3pmError when a store could not be created at ``path``: its folder does not
+    exist, is not a folder, or is not writable."""
     path = Path(path)
-    if not path.exists() and not path.parent.exists():
-        raise Lf3pmError(f"output folder {path.parent} does not exist")
+    if path.exists():
+        return
+    parent = path.parent
+    if not parent.exists():
+        raise Lf3pmError(f"output folder {parent} does not exist")
+    if not parent.is_dir():
+        raise Lf3pmError(f"cannot write {path}: {parent} is not a folder")
+    if not os.access(parent, os.W_OK):
+        raise Lf3pmError(f"cannot write {path}: output folder {parent} is read-only")
 
 
 def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: int):
