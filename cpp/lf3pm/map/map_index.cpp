@@ -18,8 +18,8 @@ constexpr int kMaxKnn = 32;
 constexpr double kPointsPerCell = 12.0;
 
 // Points of the map searched at a time by the spacing estimate: its coarse grid then
-// needs about 70 MB whatever the map's size (one grid over a 60 M-point map needed
-// 4 GB, three times the points themselves: bench/bench_solm_memory.py).
+// needs about 70 MB whatever the map's size (one grid over every point, with the copy
+// it was built from, took about 70 bytes a point: 4 GB for 60 M points).
 constexpr std::size_t kSpacingChunk = std::size_t(1) << 20;
 
 // Median distance from a point to its nearest other point, estimated on a seeded
