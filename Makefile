@@ -33,6 +33,7 @@ bench: build
 	$(PY) -m pip install -q "open3d>=0.18" embreex
 	@$(PY) -c "import open3d" 2>/dev/null || { [ "$$(id -u)" = 0 ] && apt-get install -y -q libusb-1.0-0 >/dev/null; } \
 	  || { echo "open3d cannot load: install Debian's libusb-1.0-0 (as root) for bench/bench_solm.py"; exit 1; }
+	$(PY) bench/bench_builds.py
 	$(PY) bench/bench_evaluate.py
 	$(PY) bench/bench_solm.py
 	$(PY) bench/bench_solm_yaw_reuse.py

@@ -147,16 +147,45 @@ def test_lbfgs_rosenbrock():
     np.testing.assert_allclose(r["x"], 1.0, atol=1e-6)
 
 
-def test_lbfgs_convex_quadratic():
+def _convex_quadratic():
     rng = np.random.default_rng(2)
     m = rng.normal(size=(30, 30))
-    a = m @ m.T + 0.5 * np.eye(30)  # condition number in the hundreds
+    a = m @ m.T + 0.5 * np.eye(30)  # condition number 214
     b = rng.normal(size=30)
+    return a, b, lambda x: (0.5 * x @ a @ x - b @ x, a @ x - b)
+
+
+def test_lbfgs_convex_quadratic_converges_to_what_float_precision_allows():
+    a, b, fun = _convex_quadratic()
     params = _core.LbfgsParams()
-    params.g_epsilon, params.delta = 1e-7, 0.0
-    r = _core.lbfgs_minimize(lambda x: (0.5 * x @ a @ x - b @ x, a @ x - b), np.zeros(30), params)
-    assert r["status"] == "converged"
-    np.testing.assert_allclose(r["x"], np.linalg.solve(a, b), rtol=1e-6, atol=1e-7)
+    params.g_epsilon, params.delta = 1e-12, 0.0  # below what rounding lets |g| reach here
+    r = _core.lbfgs_minimize(fun, np.zeros(30), params)
+    assert r["status"] == "converged" and r["reason"].startswith("float precision"), r["reason"]
+    # f = x'Ax/2 - b'x in float64 is exact to within n eps (|x|'|A||x|/2 + |b|'|x|) (Higham, dot
+    # products); no x whose excess (x - x*)'A(x - x*)/2 is smaller can be told from x* by f.
+    x_star = np.linalg.solve(a, b)
+    rounding = 30 * np.finfo(float).eps * (0.5 * np.abs(x_star) @ np.abs(a) @ np.abs(x_star) + np.abs(b) @ np.abs(x_star))
+    e = r["x"] - x_star
+    assert 0.5 * e @ a @ e <= rounding
+    assert np.linalg.norm(e) <= np.sqrt(2 * rounding / np.linalg.eigvalsh(a)[0])
+
+
+def test_lbfgs_convex_quadratic_meets_a_gradient_tolerance_above_rounding():
+    a, b, fun = _convex_quadratic()
+    params = _core.LbfgsParams()
+    params.g_epsilon, params.delta = 1e-5, 0.0
+    r = _core.lbfgs_minimize(fun, np.zeros(30), params)
+    assert r["status"] == "converged" and r["reason"].startswith("gradient"), r["reason"]
+    assert r["gradient_norm"] <= 1e-5 * max(1.0, np.linalg.norm(r["x"]))
+    # |x - x*| <= |A^-1| |g|
+    assert np.linalg.norm(r["x"] - np.linalg.solve(a, b)) <= r["gradient_norm"] / np.linalg.eigvalsh(a)[0]
+
+
+def test_lbfgs_line_search_that_sees_f_change_is_still_a_failure():
+    # A gradient that contradicts f (f = |x|^2 / 2, its minimum at 0, "gradient" x + 1):
+    # every step along -g raises f by far more than rounding.
+    r = _core.lbfgs_minimize(lambda x: (0.5 * x @ x, x + 1.0), np.zeros(4))
+    assert r["status"] == "line_search_failed" and r["reason"].startswith("no step"), r["reason"]
 
 
 # --- The objective's gradient ----------------------------------------------------------

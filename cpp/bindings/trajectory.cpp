@@ -146,6 +146,7 @@ void bind_trajectory(nb::module_& m) {
           out["evaluations"] = r.evaluations;
           out["gradient_norm"] = r.gradient_norm;
           out["status"] = std::string(to_string(r.status));
+          out["reason"] = r.reason;
           return out;
         },
         "fun"_a, "x0"_a, "params"_a = LbfgsParams(), "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
@@ -230,9 +231,10 @@ void bind_trajectory(nb::module_& m) {
              out["iterations"] = o.iterations;
              out["evaluations"] = o.evaluations;
              out["status"] = o.status;
+             out["reason"] = o.reason;
              out["terms"] = terms_dict(o.terms);
              return out;
            },
            "params"_a = trajectory_lbfgs(),
-           "L-BFGS from the initial guess; dict of x, iterations, evaluations, status, terms.");
+           "L-BFGS from the initial guess; dict of x, iterations, evaluations, status, reason, terms.");
 }

@@ -691,7 +691,7 @@ def solm_export(
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """The CLI (the `lf3pm` command runs it through lf3pm.__main__)."""
     app()
 
 

@@ -16,6 +16,11 @@ class CoreInputError(Lf3pmError, ValueError):
     a ValueError too, so that callers of lf3pm._core may catch either."""
 
 
+class CoreLevelError(Lf3pmError, ImportError):
+    """No build of the compiled core runs on this CPU, or LF3PM_CORE names one that
+    was not built or cannot run here."""
+
+
 class MapError(Lf3pmError):
     """A map file cannot be read or holds no usable points."""
 

@@ -6,6 +6,8 @@ Accepted forms (docs/design.md, Conventions: metres and radians, yaw about +z):
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from lf3pm.errors import PoseError
@@ -97,7 +99,7 @@ def se3_log(T) -> np.ndarray:
     """Twist (rho, phi) of the 4 x 4 transform T: the inverse of se3_exp."""
     R, t = T[:3, :3], T[:3, 3]
     cos_theta = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
-    theta = np.arccos(cos_theta)
+    theta = math.acos(cos_theta)
     if theta < 1e-8:
         phi = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
     elif np.pi - theta < 1e-6:

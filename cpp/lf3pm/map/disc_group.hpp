@@ -5,16 +5,16 @@
 // loads, no branch per disc), which is what makes a cell of twenty discs cost
 // about as much as one step of the voxel walk. A cell's groups are contiguous,
 // so its discs arrive in whole cache lines instead of from eight arrays. The
-// AVX2 path spells out the fused multiply-adds that GCC contracts the scalar
-// fallback's expressions into (a*b + c*d + e*f becomes fma(e, f, fma(a, b,
-// c*d))), so with FMA both paths return the same hits to the last bit.
+// AVX2 path multiplies and adds in the scalar fallback's order, without fused
+// multiply-adds (the core is built with -ffp-contract=off), so both paths return
+// the same hits to the last bit and a build for any x86-64 level casts the same scan.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
-#if defined(__AVX2__) && defined(__FMA__)
+#if defined(__AVX2__)
 #include <immintrin.h>
 #define LF3PM_DISC_AVX2 1
 #endif
@@ -44,15 +44,15 @@ inline void nearest_disc_hit(const DiscGroup* groups, std::uint32_t count, const
     const DiscGroup& q = groups[g];
     const __m256 n0 = _mm256_load_ps(q.nx), n1 = _mm256_load_ps(q.ny), n2 = _mm256_load_ps(q.nz);
     const __m256 c0 = _mm256_load_ps(q.cx), c1 = _mm256_load_ps(q.cy), c2 = _mm256_load_ps(q.cz);
-    const __m256 denom = _mm256_fmadd_ps(n2, dz, _mm256_fmadd_ps(n0, dx, _mm256_mul_ps(n1, dy)));
-    const __m256 num =
-        _mm256_fmadd_ps(n2, _mm256_sub_ps(c2, oz),
-                        _mm256_fmadd_ps(n0, _mm256_sub_ps(c0, ox), _mm256_mul_ps(n1, _mm256_sub_ps(c1, oy))));
+    const __m256 denom = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n0, dx), _mm256_mul_ps(n1, dy)), _mm256_mul_ps(n2, dz));
+    const __m256 num = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(n0, _mm256_sub_ps(c0, ox)), _mm256_mul_ps(n1, _mm256_sub_ps(c1, oy))),
+        _mm256_mul_ps(n2, _mm256_sub_ps(c2, oz)));
     const __m256 t = _mm256_div_ps(num, denom);
-    const __m256 qx = _mm256_sub_ps(_mm256_fmadd_ps(dx, t, ox), c0);
-    const __m256 qy = _mm256_sub_ps(_mm256_fmadd_ps(dy, t, oy), c1);
-    const __m256 qz = _mm256_sub_ps(_mm256_fmadd_ps(dz, t, oz), c2);
-    const __m256 q2 = _mm256_fmadd_ps(qz, qz, _mm256_fmadd_ps(qx, qx, _mm256_mul_ps(qy, qy)));
+    const __m256 qx = _mm256_sub_ps(_mm256_add_ps(ox, _mm256_mul_ps(t, dx)), c0);
+    const __m256 qy = _mm256_sub_ps(_mm256_add_ps(oy, _mm256_mul_ps(t, dy)), c1);
+    const __m256 qz = _mm256_sub_ps(_mm256_add_ps(oz, _mm256_mul_ps(t, dz)), c2);
+    const __m256 q2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, qx), _mm256_mul_ps(qy, qy)), _mm256_mul_ps(qz, qz));
     __m256 ok = _mm256_cmp_ps(_mm256_and_ps(denom, abs_mask), eps, _CMP_GE_OQ);
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(t, tmin, _CMP_GT_OQ));
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(t, _mm256_set1_ps(best), _CMP_LT_OQ));

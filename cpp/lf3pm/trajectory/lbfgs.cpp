@@ -1,6 +1,7 @@
 #include "lf3pm/trajectory/lbfgs.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -10,29 +11,44 @@ namespace lf3pm {
 
 namespace {
 
+/// What a line search found: a step, or none and how far f moved over its trials.
+struct SearchOutcome {
+  bool found = false;
+  double f_moved = 0.0;  ///< max |f(x0 + step d) - f0| over the trials
+};
+
 // Lewis & Overton (2013): bisect a bracket [lo, hi] on the step until the weak
 // Wolfe conditions hold, doubling the step while no upper end is known.
-bool weak_wolfe_search(const Objective& f, const Eigen::VectorXd& x0, double f0, const Eigen::VectorXd& g0,
-                       const Eigen::VectorXd& d, double& step, Eigen::VectorXd& x, double& fx,
-                       Eigen::VectorXd& g, const LbfgsParams& p, int& evaluations) {
+SearchOutcome weak_wolfe_search(const Objective& f, const Eigen::VectorXd& x0, double f0, const Eigen::VectorXd& g0,
+                                const Eigen::VectorXd& d, double& step, Eigen::VectorXd& x, double& fx,
+                                Eigen::VectorXd& g, const LbfgsParams& p, int& evaluations) {
+  SearchOutcome out;
   const double dg0 = g0.dot(d);
-  if (!(dg0 < 0.0)) return false;
+  if (!(dg0 < 0.0)) return out;
   double lo = 0.0, hi = std::numeric_limits<double>::infinity();
   for (int k = 0; k < p.max_linesearch; ++k) {
     x = x0 + step * d;
     fx = f(x, g);
     ++evaluations;
+    out.f_moved = std::max(out.f_moved, std::isfinite(fx) ? std::abs(fx - f0) : fx);
     if (!std::isfinite(fx) || fx > f0 + p.armijo * step * dg0) {
       hi = step;
     } else if (g.dot(d) < p.wolfe * dg0) {
       lo = step;
     } else {
-      return true;
+      out.found = true;
+      return out;
     }
     step = std::isinf(hi) ? 2.0 * step : 0.5 * (lo + hi);
     if (step < p.min_step || step > p.max_step) break;
   }
-  return false;
+  return out;
+}
+
+std::string format(const char* pattern, double a, double b, double c = 0.0) {
+  char text[256];
+  std::snprintf(text, sizeof text, pattern, a, b, c);
+  return text;
 }
 
 }  // namespace
@@ -45,14 +61,19 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
   std::vector<double> rho(m), alpha(m);
   std::vector<double> past_f(std::max(p.past, 1));
 
-  LbfgsResult res{LbfgsStatus::Converged};
+  LbfgsResult res;
   Eigen::VectorXd g(n), x_prev(n), g_prev(n), d(n);
   res.f = f(x, g);
   res.evaluations = 1;
   if (!std::isfinite(res.f)) throw std::invalid_argument("lbfgs: objective is not finite at the start");
   past_f[0] = res.f;
 
-  auto converged = [&] { return g.norm() <= p.g_epsilon * std::max(1.0, x.norm()); };
+  auto converged = [&] {
+    const double bound = p.g_epsilon * std::max(1.0, x.norm());
+    if (g.norm() > bound) return false;
+    res.reason = format("gradient: |g| = %.3g <= g_epsilon max(1, |x|) = %.3g", g.norm(), bound);
+    return true;
+  };
   if (converged()) {
     res.gradient_norm = g.norm();
     return res;
@@ -64,14 +85,27 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
     x_prev = x;
     g_prev = g;
     const double f_prev = res.f;
-    if (!weak_wolfe_search(f, x_prev, f_prev, g_prev, d, step, x, res.f, g, p, res.evaluations)) {
+    const SearchOutcome search = weak_wolfe_search(f, x_prev, f_prev, g_prev, d, step, x, res.f, g, p, res.evaluations);
+    if (!search.found) {
       // Keep the better of the last trial and the start of the search.
       if (!(res.f < f_prev)) {
         x = x_prev;
         g = g_prev;
         res.f = f_prev;
       }
-      res.status = LbfgsStatus::LineSearchFailed;
+      const double promised = -g_prev.dot(d);
+      const double rounding = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(f_prev));
+      if (search.f_moved <= rounding && promised <= 2.0 * search.f_moved) {
+        res.status = LbfgsStatus::Converged;
+        res.reason = format("float precision: over the line search f changed by at most %.3g, within rounding "
+                            "(<= sqrt(eps) max(1, |f|) = %.3g), and by no less than the %.3g decrease the step "
+                            "promised", search.f_moved, rounding, promised);
+      } else {
+        res.status = LbfgsStatus::LineSearchFailed;
+        res.reason = format("no step met the Wolfe conditions: f changed by up to %.3g over the search "
+                            "(rounding stays within %.3g) against a promised decrease of %.3g",
+                            search.f_moved, rounding, promised);
+      }
       break;
     }
     res.iterations = k;
@@ -79,12 +113,15 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
     if (p.past > 0) {
       if (k >= p.past && (past_f[k % p.past] - res.f) <= p.delta * std::max(1.0, std::abs(res.f))) {
         res.status = LbfgsStatus::Stalled;
+        res.reason = format("f fell by %.3g over the last %.0f iterations, <= delta max(1, |f|)",
+                            past_f[k % p.past] - res.f, p.past);
         break;
       }
       past_f[k % p.past] = res.f;
     }
     if (p.max_iterations > 0 && k >= p.max_iterations) {
       res.status = LbfgsStatus::MaxIterations;
+      res.reason = format("reached %.0f iterations", p.max_iterations, 0.0);
       break;
     }
     // Cautious update (Li & Fukushima): keep the pair only with enough curvature,

@@ -11,10 +11,22 @@
 // The Lewis-Overton search (bisection on a bracket, doubling until one exists)
 // asks only for the weak Wolfe conditions, which keeps it robust on objectives
 // whose gradient is merely continuous (penalties switching on, clamped grids).
+//
+// Convergence at float precision. Near a minimum the decrease a step promises
+// (-g.d, twice the quadratic model's for d = -H g) falls below the rounding error
+// of f itself; no trial then passes the sufficient-decrease test, because f no
+// longer changes in its trailing bits but by rounding. A failed search is that, and
+// reported as convergence, when f moved over all its trials by no more than
+// sqrt(eps) max(1, |f|) (its trailing half: the rounding of an objective summing up
+// to ~1e7 terms of |f|'s size, or cancelling that much, stays below it, while a step
+// that really changes f moves it further) and the promised decrease is no larger
+// than what f moved by rounding. Anything else, a search that saw f change and still
+// found no step (a wrong gradient, a kink), stays a failure.
 #pragma once
 
 #include <Eigen/Core>
 #include <functional>
+#include <string>
 
 namespace lf3pm {
 
@@ -34,7 +46,8 @@ struct LbfgsParams {
 enum class LbfgsStatus { Converged, Stalled, MaxIterations, LineSearchFailed };
 
 struct LbfgsResult {
-  LbfgsStatus status;
+  LbfgsStatus status = LbfgsStatus::Converged;
+  std::string reason;  ///< why it stopped, with the numbers that decided it
   int iterations = 0;
   int evaluations = 0;
   double f = 0.0;

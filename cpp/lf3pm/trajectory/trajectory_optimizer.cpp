@@ -123,6 +123,7 @@ OptimizeOutcome optimize(TrajectoryProblem& problem, const LbfgsParams& lbfgs) {
     out.iterations += r.iterations;
     out.evaluations += r.evaluations;
     out.status = to_string(r.status);
+    out.reason = r.reason;
     problem.evaluate(out.x, g, &out.terms);
     // The relative-decrease test can stop L-BFGS in a narrow valley of the cubic
     // penalties with a limit still exceeded; then restart it there, with fresh

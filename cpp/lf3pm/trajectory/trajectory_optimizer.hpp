@@ -69,6 +69,7 @@ struct OptimizeOutcome {
   int iterations = 0;        ///< L-BFGS iterations
   int evaluations = 0;       ///< objective evaluations
   std::string status;        ///< L-BFGS's status
+  std::string reason;        ///< and why it stopped (LbfgsResult::reason)
   CostTerms terms;           ///< at the solution
 };
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.errors import Lf3pmError
 
 COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
@@ -84,7 +85,7 @@ def cost_from_values(values, channel: str = "q_n", *, degenerate=None, power: fl
         scale = float(np.mean(values[finite]))
     if scale <= 0:
         scale = 1.0  # all zero: no place is better than another
-    cost = np.where(finite, (values / scale) ** power, np.inf)
+    cost = np.where(finite, libm.power(values / scale, power), np.inf)
     cap = float(np.percentile(cost[finite], cap_percentile))
     cost = np.minimum(cost, cap)
     cost[np.isnan(values)] = np.nan

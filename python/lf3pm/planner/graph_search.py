@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm import _core
 from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
@@ -148,6 +149,6 @@ def _yaws(x, y, k, step, layers, start, goal):
         return yaw + 2 * math.pi * round((float(start[2]) - yaw[0]) / (2 * math.pi))
     yaw = np.empty(len(x))
     if len(x) > 1:
-        yaw[:-1] = np.arctan2(np.diff(y), np.diff(x))
+        yaw[:-1] = libm.atan2(np.diff(y), np.diff(x))
     yaw[0], yaw[-1] = float(start[2]), float(goal[2])
     return yaw

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.grid_field import GridField
 
@@ -86,6 +87,6 @@ def _segment_cost(a, b, cost: GridField | None, weight: float, step: float, yaw:
         return length
     x, y, heading = _samples(a, b, step)
     if yaw == "travel":
-        heading = np.arctan2(b[1] - a[1], b[0] - a[0])
+        heading = libm.atan2(b[1] - a[1], b[0] - a[0])
     c = cost.sample(x, y, heading)[0]
     return length * (1.0 + weight * float(np.mean(0.5 * (c[1:] + c[:-1]))))

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 
@@ -106,7 +107,7 @@ def _travel_heading(c, tau, durations):
     rest = speed2 <= (1e-6 * scale) ** 2
     sign = np.where(tau > 0.5 * durations, -1.0, 1.0)[:, None]
     u = np.where(rest[:, None], sign * a, v)
-    yaw = np.arctan2(u[:, 1], u[:, 0])
+    yaw = libm.atan2(u[:, 1], u[:, 0])
     cross = lambda x, y: x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]
     a2 = np.sum(a**2, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -115,14 +116,15 @@ def _travel_heading(c, tau, durations):
 
 
 def _powers(c, tau, order: int):
-    """The ``order``-th derivative of the pieces c (n, 4, 3) at times tau (n,)."""
+    """The ``order``-th derivative of the pieces c (n, 4, 3) at times tau (n,), by Horner's
+    rule: products and sums in a fixed order, the same on every CPU (einsum's and
+    power's vector kernels differ with it)."""
+    t = tau[:, None]
     if order == 0:
-        basis = [np.ones_like(tau), tau, tau**2, tau**3]
-    elif order == 1:
-        basis = [np.zeros_like(tau), np.ones_like(tau), 2 * tau, 3 * tau**2]
-    else:
-        basis = [np.zeros_like(tau), np.zeros_like(tau), np.full_like(tau, 2.0), 6 * tau]
-    return np.einsum("nk,nkd->nd", np.stack(basis, axis=1), c)
+        return c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * c[:, 3]))
+    if order == 1:
+        return c[:, 1] + t * (2.0 * c[:, 2] + t * (3.0 * c[:, 3]))
+    return 2.0 * c[:, 2] + t * (6.0 * c[:, 3])
 
 
 def read_csv(path) -> dict:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.grid_field import GridField
@@ -41,7 +42,8 @@ ESDF_MARGIN = DEFAULT_WEIGHTS.esdf_margin
 class OptimizeResult:
     """An optimised trajectory and how it was found.
 
-    ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
+    ``status``: L-BFGS's (converged, stalled, max_iterations, line_search_failed) and
+    ``reason``, why it stopped, with the numbers that decided it (lbfgs.hpp). ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
     heading, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
     max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
     max_omega_ratio, max_a_lon_ratio, max_a_lat_ratio (body-frame acceleration), max_alpha_ratio
@@ -55,6 +57,7 @@ class OptimizeResult:
     iterations: int
     evaluations: int
     status: str
+    reason: str
     terms: dict
     violations: dict
     wall_time: float
@@ -142,7 +145,7 @@ def _travel_yaw(wp: np.ndarray) -> np.ndarray:
     """Direction of travel at the interior waypoints (mean of the adjacent segments'),
     unwrapped from the start's yaw."""
     d = np.diff(wp[:, :2], axis=0)
-    heading = np.arctan2(d[:, 1], d[:, 0])
+    heading = libm.atan2(d[:, 1], d[:, 0])
     heading = np.unwrap(np.concatenate([[wp[0, 2]], heading]))[1:]
     return 0.5 * (heading[1:] + heading[:-1])
 
@@ -218,7 +221,8 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     if robot.kind == "diff":
         wp = np.asarray(waypoints, dtype=np.float64)
         trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax, robot.alpha_max)
-    return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], dict(out["terms"]),
+    return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], out["reason"],
+                          dict(out["terms"]),
                           check_limits(trajectory, robot, esdf, check_rate), wall)
 
 

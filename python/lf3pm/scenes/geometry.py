@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lf3pm import libm
+
 #: Default jitter (1-sigma, metres) of samples on planar man-made surfaces: in the
 #: plane, so the samples are not a perfect grid, and (a third of it) along the
 #: normal, so the surface stays planar to a few millimetres.
@@ -151,7 +153,7 @@ class Heightfield:
         ``amplitude / sqrt(2)`` (that of one sine of that amplitude).
         """
         lo, hi = wavelengths
-        lam = np.exp(rng.uniform(math.log(lo), math.log(hi), waves))
+        lam = libm.exp(rng.uniform(math.log(lo), math.log(hi), waves))
         direction = rng.uniform(0.0, 2.0 * math.pi, waves)
         k = (2.0 * math.pi / lam)[:, None] * np.stack([np.cos(direction), np.sin(direction)], axis=1)
         amp = lam / lam.sum() * rng.uniform(0.5, 1.5, waves)  # longer waves are higher
@@ -363,8 +365,8 @@ def bush(rng: np.random.Generator, centre, radii, leaves_per_m2: float = 120.0,
         tips[:, 2] = np.maximum(tips[:, 2], centre[2])
         delta = tips - feet
         length = np.linalg.norm(delta, axis=1)
-        tilt = np.arccos(np.clip(delta[:, 2] / length, -1.0, 1.0))
-        azimuth = np.arctan2(delta[:, 1], delta[:, 0])
+        tilt = libm.arccos(delta[:, 2] / length)
+        azimuth = libm.atan2(delta[:, 1], delta[:, 0])
         parts.append(blades(rng, feet, length, rng.uniform(0.008, 0.02, branches), tilt, azimuth,
                             0.0, spacing=2 * spacing))
     return stack(parts)

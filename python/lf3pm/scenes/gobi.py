@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.scenes.buildings import Opening, flat_building, house
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, stack, stone
 from lf3pm.scenes.scene import Scene, check_seed, finish, require, resolve_params
@@ -124,7 +125,7 @@ def stones_and_plants(rng: np.random.Generator, terrain: Heightfield, p: dict, x
     """The stones, strewn uniformly off the buildings and the free radius, partly buried,
     and the plants around a fraction of them."""
     count = p["stones"]
-    size = np.clip(np.exp(rng.normal(math.log(0.18), 0.6, count)), 0.05, 1.3)
+    size = np.clip(libm.exp(rng.normal(math.log(0.18), 0.6, count)), 0.05, 1.3)
     x = rng.uniform(*x_range, count)
     y = rng.uniform(*y_range, count)
     clear = np.hypot(x, y) > p["free_radius"] + size + 2.5

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field as dataclass_field
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.errors import SensorError
 
 #: Largest scan the helpers build (rays); beyond this a typo in a rate or time
@@ -99,7 +100,7 @@ class Sensor:
     def angles(self) -> tuple[np.ndarray, np.ndarray]:
         """(azimuth, elevation) of every ray in radians; azimuth in (-pi, pi]."""
         d = self.directions
-        return np.arctan2(d[:, 1], d[:, 0]), np.arcsin(np.clip(d[:, 2], -1.0, 1.0))
+        return libm.atan2(d[:, 1], d[:, 0]), libm.arcsin(d[:, 2])
 
     # A numpy array field breaks the generated __eq__/__hash__; define both.
     def __eq__(self, other):
@@ -186,7 +187,7 @@ def band_directions(n: int, az_min: float, az_max: float, el_min: float, el_max:
     u, v = r2_sequence(n)
     az = az_min + (az_max - az_min) * u
     z_lo, z_hi = math.sin(el_min), math.sin(el_max)
-    el = np.arcsin(np.clip(z_lo + (z_hi - z_lo) * v, -1.0, 1.0))
+    el = libm.arcsin(z_lo + (z_hi - z_lo) * v)
     return directions_from_angles(az, el)
 
 
@@ -217,7 +218,7 @@ def spinning_rings(sensor: Sensor) -> np.ndarray | None:
     beams (Livox patterns). A spinning sensor lists its rays column by column,
     the beams of a column sharing one azimuth."""
     azimuth, elevation = sensor.angles()
-    same = np.abs(np.angle(np.exp(1j * (azimuth - azimuth[0])))) < 1e-9
+    same = np.abs(np.remainder(azimuth - azimuth[0] + np.pi, 2 * np.pi) - np.pi) < 1e-9
     beams = int(np.argmin(same)) if not same.all() else len(same)
     if sensor.num_rays % beams:
         return None

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.errors import Lf3pmError
 
 
@@ -22,7 +23,7 @@ def thin_rays(directions: np.ndarray, stride: int) -> tuple[np.ndarray, float]:
         raise Lf3pmError(f"ray stride must be >= 1, got {stride}")
     if stride == 1:
         return directions, 1.0
-    azimuth = np.round(np.arctan2(directions[:, 1], directions[:, 0]), 9)
+    azimuth = np.round(libm.atan2(directions[:, 1], directions[:, 0]), 9)
     _, column = np.unique(azimuth, return_inverse=True)
     kept = np.ascontiguousarray(directions[column % stride == 0])
     if len(kept) == 0:

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from lf3pm import libm
 from lf3pm.errors import Lf3pmError
 from lf3pm.sensors import Sensor
 
@@ -24,7 +25,7 @@ def sector_layout(sensor: Sensor, bins: int) -> tuple[np.ndarray, int]:
         raise Lf3pmError(f"sector reuse needs a field of view narrower than the {bins} yaw bins "
                          f"(sensor {sensor.name} spans {math.degrees(sensor.horizontal_fov):.0f} deg)")
     d = sensor.directions
-    azimuth = np.arctan2(d[:, 1], d[:, 0])
+    azimuth = libm.atan2(d[:, 1], d[:, 0])
     folded = azimuth - np.round(azimuth / width) * width
     horizontal = np.hypot(d[:, 0], d[:, 1])
     rays = np.stack([horizontal * np.cos(folded), horizontal * np.sin(folded), d[:, 2]], axis=1)
