@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+
 def _exp(x: float) -> float:
     try:
         return math.exp(x)
@@ -44,47 +45,31 @@ def _clipped(f):
     return lambda x: f(min(max(x, -1.0), 1.0)) if x == x else math.nan
 
 
-_ATAN2 = np.frompyfunc(math.atan2, 2, 1)
-_ASIN = np.frompyfunc(_clipped(math.asin), 1, 1)
-_ACOS = np.frompyfunc(_clipped(math.acos), 1, 1)
-_EXP = np.frompyfunc(_exp, 1, 1)
-_LOG = np.frompyfunc(_log, 1, 1)
-_POW = np.frompyfunc(_pow, 2, 1)
+def _elementwise(scalar, arguments: int, doc: str):
+    """``scalar`` (math's) applied to every element of float64 arrays (scalars in,
+    a float out)."""
+    ufunc = np.frompyfunc(scalar, arguments, 1)
+
+    def apply(*values):
+        out = ufunc(*(np.asarray(v, dtype=np.float64) for v in values))
+        return np.asarray(out, dtype=np.float64) if isinstance(out, np.ndarray) else float(out)
+
+    apply.__doc__ = doc
+    return apply
 
 
-def _float64(values):
-    return np.asarray(values, dtype=np.float64) if isinstance(values, np.ndarray) else float(values)
-
-
-def atan2(y, x):
-    """arctan2(y, x) elementwise, through the C library."""
-    return _float64(_ATAN2(np.asarray(y, dtype=np.float64), np.asarray(x, dtype=np.float64)))
-
-
-def arcsin(x):
-    """arcsin(x) elementwise, x clipped to [-1, 1], through the C library."""
-    return _float64(_ASIN(np.asarray(x, dtype=np.float64)))
-
-
-def arccos(x):
-    """arccos(x) elementwise, x clipped to [-1, 1], through the C library."""
-    return _float64(_ACOS(np.asarray(x, dtype=np.float64)))
-
-
-def exp(x):
-    """exp(x) elementwise, through the C library."""
-    return _float64(_EXP(np.asarray(x, dtype=np.float64)))
-
-
-def log(x):
-    """Natural logarithm elementwise (x > 0), through the C library."""
-    return _float64(_LOG(np.asarray(x, dtype=np.float64)))
+atan2 = _elementwise(math.atan2, 2, "arctan2(y, x) elementwise, through the C library.")
+arcsin = _elementwise(_clipped(math.asin), 1, "arcsin(x) elementwise, x clipped to [-1, 1], through the C library.")
+arccos = _elementwise(_clipped(math.acos), 1, "arccos(x) elementwise, x clipped to [-1, 1], through the C library.")
+exp = _elementwise(_exp, 1, "exp(x) elementwise, through the C library.")
+log = _elementwise(_log, 1, "Natural logarithm elementwise (x > 0), through the C library.")
+_power = _elementwise(_pow, 2, "")
 
 
 def power(x, p):
     """x ** p elementwise for x >= 0, through the C library; a scalar p of 1, 2 or 0.5
     is a copy, a square or a square root (exact, so NumPy's are the same everywhere)."""
-    x = np.asarray(x, dtype=np.float64)
     if np.ndim(p) == 0 and float(p) in (1.0, 2.0, 0.5):
-        return _float64({1.0: np.copy, 2.0: np.square, 0.5: np.sqrt}[float(p)](x))
-    return _float64(_POW(x, np.asarray(p, dtype=np.float64)))
+        out = {1.0: np.copy, 2.0: np.square, 0.5: np.sqrt}[float(p)](np.asarray(x, dtype=np.float64))
+        return out if out.ndim else float(out)
+    return _power(x, p)

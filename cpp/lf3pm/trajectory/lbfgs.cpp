@@ -45,9 +45,10 @@ SearchOutcome weak_wolfe_search(const Objective& f, const Eigen::VectorXd& x0, d
   return out;
 }
 
-std::string format(const char* pattern, double a, double b, double c = 0.0) {
+template <typename... Values>
+std::string format(const char* pattern, Values... values) {
   char text[256];
-  std::snprintf(text, sizeof text, pattern, a, b, c);
+  std::snprintf(text, sizeof text, pattern, values...);
   return text;
 }
 
@@ -113,7 +114,7 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
     if (p.past > 0) {
       if (k >= p.past && (past_f[k % p.past] - res.f) <= p.delta * std::max(1.0, std::abs(res.f))) {
         res.status = LbfgsStatus::Stalled;
-        res.reason = format("f fell by %.3g over the last %.0f iterations, <= delta max(1, |f|)",
+        res.reason = format("f fell by %.3g over the last %d iterations, <= delta max(1, |f|)",
                             past_f[k % p.past] - res.f, p.past);
         break;
       }
@@ -121,7 +122,7 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
     }
     if (p.max_iterations > 0 && k >= p.max_iterations) {
       res.status = LbfgsStatus::MaxIterations;
-      res.reason = format("reached %.0f iterations", p.max_iterations, 0.0);
+      res.reason = format("reached %d iterations", p.max_iterations);
       break;
     }
     // Cautious update (Li & Fukushima): keep the pair only with enough curvature,

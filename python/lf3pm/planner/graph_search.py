@@ -25,8 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lf3pm import libm
-from lf3pm import _core
+from lf3pm import _core, libm
 from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer

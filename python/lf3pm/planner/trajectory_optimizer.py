@@ -25,8 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lf3pm import libm
-from lf3pm import _core
+from lf3pm import _core, libm
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.robots import Robot
@@ -43,7 +42,8 @@ class OptimizeResult:
     """An optimised trajectory and how it was found.
 
     ``status``: L-BFGS's (converged, stalled, max_iterations, line_search_failed) and
-    ``reason``, why it stopped, with the numbers that decided it (lbfgs.hpp). ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
+    ``reason``, why it stopped, with the numbers that decided it (lbfgs.hpp).
+    ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
     heading, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
     max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
     max_omega_ratio, max_a_lon_ratio, max_a_lat_ratio (body-frame acceleration), max_alpha_ratio
@@ -222,8 +222,7 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
         wp = np.asarray(waypoints, dtype=np.float64)
         trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax, robot.alpha_max)
     return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], out["reason"],
-                          dict(out["terms"]),
-                          check_limits(trajectory, robot, esdf, check_rate), wall)
+                          dict(out["terms"]), check_limits(trajectory, robot, esdf, check_rate), wall)
 
 
 def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = 100.0) -> dict:
