@@ -109,7 +109,7 @@ def make_scans(world, motion, sensor, noise):
 
 def genz(scans, imu, sensor, first, threads=1):
     """GenZ-LIO through run_lio: (poses, ms per scan, lost scans)."""
-    estimate = run_lio(scans, imu, sensor, initial_pose=first, threads=threads)
+    estimate = run_lio(scans, imu, sensor, initial_pose=first, odometry="genz", threads=threads)
     return estimate.poses, 1e3 * estimate.seconds_per_scan, len(estimate.lost)
 
 

@@ -3,6 +3,7 @@ noise-free run in the boxes room while the sensor moves and yaws fast (and by
 runs with deliberately wrong IMU timing and firing order, which must be far
 worse), anchoring, determinism, statuses and errors."""
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -20,7 +21,11 @@ from lf3pm.scenes import build_scene
 from lf3pm.sensors import get_sensor
 
 pytest.importorskip("genz_lio", reason="genz-lio has wheels for Python 3.8-3.12 only")
-from lf3pm.validation.lio import run_lio  # noqa: E402
+from lf3pm.validation import lio  # noqa: E402
+
+#: GenZ-LIO's conventions are what most tests here check: they name it (the default,
+#: "auto", would run DLIO for the VLP-16); DLIO's tests pass odometry="dlio".
+run_lio = functools.partial(lio.run_lio, odometry="genz")
 
 PERIOD = 0.1
 
@@ -90,7 +95,7 @@ def test_noise_free_run_in_a_room_tracks_closely(run):
     assert rms(yaw) < 0.15 and yaw.max() < 0.5
     assert estimate.status[:2] == ["initializing", "map seeded"]
     assert set(estimate.status[2:]) == {"ok"} and estimate.lost == []
-    assert estimate.odometry == "genz-lio" and estimate.version == "0.1.1"
+    assert (estimate.odometry, estimate.package, estimate.version) == ("GenZ-LIO", "genz-lio", "0.1.1")
 
 
 def rmse(motion, estimate):
@@ -165,7 +170,7 @@ def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
     worker.write_text("import os, signal\nprint('about to crash', flush=True)\nos.kill(os.getpid(), signal.SIGSEGV)\n")
     monkeypatch.setattr(lio, "_WORKER", str(worker))
     motion, sensor, scans, imu, first, _ = run
-    with pytest.raises(Lf3pmError, match=r"genz-lio crashed \(signal 11\) while starting: about to crash"):
+    with pytest.raises(Lf3pmError, match=r"GenZ-LIO crashed \(signal 11\) while starting: about to crash"):
         run_lio(scans[:3], imu, sensor, initial_pose=first)
 
 
@@ -208,16 +213,22 @@ def town():
     return lf3pm.load_map(build_scene("gobi", seed=REDUCED.seed, **REDUCED.scene_params).points)
 
 
-@pytest.mark.parametrize("sensor, turn_rate", [("vlp16", 0.0), ("mid70", 0.3)])
-def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, turn_rate):
-    """The replay's own path (rest, IMU, scans, GenZ-LIO with lf3pm's settings): within
-    2 cm, and no time shift of the truth fits the estimate better (a lagging estimate,
-    as GenZ-LIO's point-to-point residuals made it, 0.15 s behind, shows here)."""
+@pytest.mark.parametrize("sensor, turn_rate, odometry", [("vlp16", 0.0, "genz"), ("vlp16", 0.0, "dlio"),
+                                                         ("mid70", 0.3, "genz")])
+def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, turn_rate, odometry):
+    """The replay's own path (rest, IMU, scans, the odometry with lf3pm's settings):
+    within 2 cm, and no time shift of the truth fits the estimate better (a lagging
+    estimate, as GenZ-LIO's point-to-point residuals made it, 0.15 s behind, shows
+    here). DLIO is scored at its median return times; the rest before the motion runs
+    at negative times, which evalio's unsigned stamps once wrapped (DLIO diverged to
+    1e26 m)."""
     import lf3pm
     from lf3pm.validation.trajectory_metrics import time_offset
 
+    if odometry == "dlio":
+        pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
     motion = town_drive(town, turn_rate)
-    result = lf3pm.replay(town, motion, sensor, "lio", seed=0, noise=0.0, imu_noise=False)
+    result = lf3pm.replay(town, motion, sensor, "lio", seed=0, noise=0.0, imu_noise=False, odometry=odometry)
     assert result.ape["rmse"] < 0.02, result.ape["rmse"]
     timing = time_offset(result.times, result.estimate, motion.pose)
     assert abs(timing["offset"]) <= 0.01, timing
@@ -239,3 +250,58 @@ def test_a_lidar_clock_50ms_late_is_detected(town):
     timing = time_offset(estimate.times[moving], estimate.poses[moving], motion.pose)
     assert timing["offset"] == pytest.approx(-0.05, abs=0.015), timing
     assert timing["rmse_at_zero"] > 2 * timing["rmse"]
+
+
+# --- DLIO (evalio) on the same streams ----------------------------------------------
+
+@pytest.fixture(scope="module")
+def dlio_run(room):
+    """The room's figure of eight after 2 s at rest (DLIO calibrates its IMU over the
+    first 1 s, lio.DLIO_SETTINGS), noise-free, through DLIO."""
+    pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
+    curve = Lissajous((5.5, -0.5, 1.0), (1.2, 0.9, 0.0), (0.5, 1.0, 1.0))
+    motion = CurveMotion(Warp(2.0, 1.0, 2.5, 1.0), curve, TangentHeading(curve, swing=0.6, swing_rate=2.0))
+    sensor = get_sensor("vlp16")
+    scans = scans_along(room, motion, sensor)
+    imu = simulate_imu(motion, noise=False)
+    first = motion.pose(np.array([scans[0].end]))[0]
+    return motion, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first, odometry="dlio")
+
+
+def test_dlio_tracks_the_figure_of_eight_at_its_median_return_times(dlio_run):
+    """DLIO's poses refer to each scan's median return time (its deskewing reference),
+    not to the scan's end: scored there, noise-free, within 2 cm with no better time
+    shift; scored at the ends instead (what a replay assuming GenZ-LIO's convention
+    would do) the truth must be shifted back about half a scan to fit."""
+    from lf3pm.validation.trajectory_metrics import time_offset
+
+    motion, scans, _, _, estimate = dlio_run
+    ends = np.array([s.end for s in scans])
+    assert np.all(estimate.times < ends) and np.all(estimate.times > ends - PERIOD)
+    moving = estimate.status.index("ok")
+    assert set(estimate.status[:moving]) == {"initializing"} and estimate.lost == []
+    assert (estimate.odometry, estimate.package, estimate.version) == ("DLIO", "evalio", "0.6.1")
+    tracked = slice(moving, None)
+    assert ape_translation(motion.pose(estimate.times[tracked]), estimate.poses[tracked])["rmse"] < 0.02
+    at_median = time_offset(estimate.times[tracked], estimate.poses[tracked], motion.pose)
+    at_end = time_offset(ends[tracked], estimate.poses[tracked], motion.pose)
+    assert abs(at_median["offset"]) <= 0.01, at_median
+    assert at_end["offset"] == pytest.approx(-PERIOD / 2, abs=0.015), at_end
+
+
+def test_dlio_deterministic_with_one_thread(dlio_run):
+    motion, scans, imu, first, estimate = dlio_run
+    again = run_lio(scans[:40], imu, "vlp16", initial_pose=first, odometry="dlio")
+    np.testing.assert_array_equal(again.poses, estimate.poses[:40])
+
+
+def test_dlio_settings_and_odometry_names_are_checked(dlio_run):
+    motion, scans, imu, _, _ = dlio_run
+    assert lio.choose_odometry("auto", get_sensor("vlp16")) == "dlio"
+    assert lio.choose_odometry("auto", get_sensor("mid70")) == "genz"
+    assert lio.choose_odometry("genz", get_sensor("vlp16")) == "genz"
+    with pytest.raises(Lf3pmError, match="unknown odometry 'liosam'; use one of auto, genz, dlio"):
+        run_lio(scans[:3], imu, "vlp16", initial_pose=np.eye(4), odometry="liosam")
+    with pytest.raises(Lf3pmError, match="unknown DLIO parameter"):
+        run_lio(scans[:3], imu, "vlp16", initial_pose=np.eye(4), odometry="dlio", voxel=0.5)
+

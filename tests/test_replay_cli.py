@@ -78,6 +78,8 @@ def test_bad_trajectories(files, tmp_path, kind, match):
     (["--rate", "nan"], "--rate"),
     (["--seeds", "0"], "--seeds"),
     (["--height", "-1"], "--height"),
+    (["--method", "lio", "--odometry", "liosam"], "--odometry must be 'auto', 'genz' or 'dlio'"),
+    (["--odometry", "dlio"], "--odometry applies to --method lio, not localization"),
 ])
 def test_bad_options(files, args, match):
     done = replay(files / "traj.csv", "--map", files / "boxes.npy", *args)
@@ -97,3 +99,16 @@ def test_outputs_replace_only_regular_files(files, tmp_path):
 def test_lio_unavailable_is_one_line(files):
     done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio")
     assert done.exit_code == 2 and "method lio is not available" in done.stderr
+
+
+def test_lio_with_dlio_in_json(files):
+    """`--method lio --odometry dlio`: the 2 s boxes trajectory after the LIO's rest, noise-free,
+    through DLIO; the JSON names the odometry and its package's version."""
+    pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio", "--odometry", "dlio",
+                  "--noise", 0, "--json")
+    assert done.exit_code == 0, done.output
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    run = out["runs"][0]
+    assert out["odometry"] == "dlio" and run["versions"]["evalio"] == "0.6.1"
+    assert run["ape"]["rmse"] < 0.05 and run["report"]["odometry"] == "DLIO"

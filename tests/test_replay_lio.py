@@ -30,7 +30,7 @@ class FakeImu:
 class FakeEstimate:
     times: np.ndarray
     poses: np.ndarray
-    name: str = "fake-lio"
+    package: str = "fake-lio"
     version: str = "9.9"
     lost_track: bool = False
     skipped: list = field(default_factory=list)

@@ -438,6 +438,7 @@ def replay_command(
     config: Optional[Path] = CONFIG_OPTION,
     sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
     method: Optional[str] = option("replay.method"),
+    odometry: Optional[str] = option("replay.odometry"),
     seeds: Optional[int] = option("replay.seeds", help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
     seed: Optional[int] = option("scan.seed", help="First seed (range noise, odometry and IMU noise)."),
     height: Optional[float] = option("replay.height"),
@@ -451,7 +452,8 @@ def replay_command(
 ):
     """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
     with user_errors():
-        cfg = configure(config, locals(), {"sensor": "sensor", "method": "replay.method", "seeds": "replay.seeds",
+        cfg = configure(config, locals(), {"sensor": "sensor", "method": "replay.method",
+                                           "odometry": "replay.odometry", "seeds": "replay.seeds",
                                            "seed": "scan.seed", "height": "replay.height", "rate": "replay.rate",
                                            "noise": "scan.noise", "threads": "scan.threads"})
         from lf3pm.validation.replay import lio_modules, resolve_sensor
@@ -468,6 +470,9 @@ def replay_command(
             lio_modules("--bag (it carries the simulated IMU)")
         if method == "lio":
             lio_modules()
+        elif odometry is not None:
+            raise Lf3pmError(f"--odometry applies to --method lio, not {method}")
+        options = {"odometry": cfg.replay.odometry} if method == "lio" else {}
         from lf3pm.validation.motion import Motion
         from lf3pm.validation.replay import METHOD_PARAMS, replay, simulated_imu
         from lf3pm.map import load_map
@@ -488,7 +493,7 @@ def replay_command(
                 label = f"{method} replay, seed {s}"
                 step(label, None, 0, restart=True)
                 results.append(replay(world, motion, lidar, method, s, rate=rate, noise=noise, target=target,
-                                      threads=threads, progress=lambda done, total: step(label, total)))
+                                      threads=threads, progress=lambda done, total: step(label, total), **options))
             bag_info = None
             if bag is not None:
                 from lf3pm.validation.bag import write_bag
@@ -502,10 +507,12 @@ def replay_command(
             from lf3pm.validation.replay_figures import replay_figure
 
             replay_figure(results, png, map_points=world.points,
-                          title=f"lf3pm replay {trajectory.name}: {method}, {lidar.name}, {rate:g} Hz")
+                          title=f"lf3pm replay {trajectory.name}: {method}"
+                          + (f" ({results[0].report.get('odometry')})" if options else "")
+                          + f", {lidar.name}, {rate:g} Hz")
         summary = _replay_medians(results)
         if as_json:
-            print(json.dumps({"trajectory": str(trajectory), "map": str(map_path), "method": method,
+            print(json.dumps({"trajectory": str(trajectory), "map": str(map_path), "method": method, **options,
                               "sensor": lidar.name, "seeds": [r.seed for r in results],
                               "runs": [r.to_dict() for r in results], "median": summary,
                               "png": None if png is None else str(png), "bag": bag_info}))
@@ -544,7 +551,9 @@ def _replay_medians(results) -> dict:
 
 def _print_replay(results, summary: dict) -> None:
     first = results[0]
-    table = Table(title=f"replay: {first.method}, {first.sensor}, {first.scans} scans at "
+    odometry = first.report.get("odometry") if first.method == "lio" else None
+    method = f"{first.method} ({odometry})" if odometry else first.method
+    table = Table(title=f"replay: {method}, {first.sensor}, {first.scans} scans at "
                         f"{first.params['rate']:g} Hz (rmse in mm; RPE deg per scan)", box=box.SIMPLE_HEAD,
                   collapse_padding=True, pad_edge=False)
     table.add_column("seed")

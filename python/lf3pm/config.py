@@ -45,6 +45,9 @@ MAX_THREADS = 1024
 #: The SOLM's state spaces (lf3pm.solm.grid) and the replay's state estimators.
 SPACES = ("r2", "se2", "r3")
 REPLAY_METHODS = ("localization", "lio", "odometry")
+#: The LiDAR-inertial odometries of the ``lio`` replay (lf3pm.validation.lio.ODOMETRIES);
+#: ``auto`` picks by the sensor (lio.choose_odometry).
+LIO_ODOMETRIES = ("auto", "genz", "dlio")
 
 #: Sensor height above the local ground (m) of a ground robot: a LiDAR on a small
 #: wheeled base. SOLM grids and the replay's motion take it by default.
@@ -168,6 +171,9 @@ class ReplayConfig(Section):
     seeds: int = Field(1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1.")
     height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the smoothed ground (m).")
     rate: float = Field(10.0, gt=0, le=1000, description="Scans per second.")
+    odometry: Literal[LIO_ODOMETRIES] = Field(
+        "auto", description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio) or auto "
+                            "(dlio for a spinning sensor, genz for a non-repetitive one: docs/lio.md).")
 
 
 class StudyConfig(Section):

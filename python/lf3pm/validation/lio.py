@@ -1,8 +1,23 @@
-"""LiDAR-inertial odometry on simulated scans and IMU samples: GenZ-LIO (PyPI
-``genz-lio``, pinned 0.1.1), a FAST-LIO2-style iterated error-state Kalman
-filter on a voxel map, run with point-to-plane updates only (its point-to-point
-ones made the estimate lag; default_settings), the paper's FAST-LIO2 setting
-(docs/lio.md).
+"""LiDAR-inertial odometry on simulated scans and IMU samples. Two odometries,
+each fed exactly the same scans and IMU samples (docs/lio.md compares them):
+
+- ``genz`` (default): GenZ-LIO (PyPI ``genz-lio``, pinned 0.1.1, GPL-2.0-only), a
+  FAST-LIO2-style iterated error-state Kalman filter on a voxel map, run with
+  point-to-plane updates only (its point-to-point ones made the estimate lag;
+  default_settings), the paper's FAST-LIO2 setting;
+- ``dlio``: DLIO (Direct LiDAR-Inertial Odometry, UCLA VECTR, MIT) as evalio
+  (PyPI ``evalio``, pinned 0.6.1, MIT) compiles it: GICP scan-to-map registration
+  with a nonlinear geometric observer, deskewing by IMU integration.
+
+LIO-SAM, which evalio also ships, is not offered: on our VLP-16 streams its 0.6.1
+build raised SIGFPE unless every parameter was set, then extracted no features and
+crashed (docs/lio.md, "Three odometries").
+
+The default, ``auto``, picks by measurement (docs/lio.md, bench/compare_odometries.py):
+DLIO for a spinning sensor (VLP-16: 1-6 mm APE on every structured drive, noise-free
+or noisy, where GenZ-LIO gave 1-18 cm and lagged the truth by up to 0.15 s), GenZ-LIO
+for a non-repetitive one (Mid-70: 0.4-5 cm where DLIO lost the narrow 0.1 s petals,
+0.1-3 m).
 
 Why GenZ-LIO and not RKO-LIO (PyPI ``rko-lio`` 0.4.0, PRBonn; measured with
 GenZ-LIO's own defaults, before default_settings): both ran on the same simulated data (``bench/compare_lio.py``: 10 Hz motion-distorted scans,
@@ -49,9 +64,20 @@ LiDAR-IMU extrinsic: identity. The estimate is anchored as initial_pose @ P_k,
 P_k GenZ-LIO's pose after scan k (identity at the first scan, which is
 consumed by the initialisation).
 
-GenZ-LIO runs in a child process (_lio_worker.py): its OpenMP runtime would
-make later forks of the caller hang (shared BUILD-NOTES), and a crash becomes a
-clear error here instead of killing the caller.
+Conventions (evalio 0.6.1's DLIO, read from evalio's binding and DLIO's
+deskewing, checked by the time fit of tests/test_lio.py): a LidarMeasurement
+stamped at the scan's first return, each return carrying its offset from it
+(ns); IMU samples as ImuMeasurement (gyro, accel) in s, rad/s, m/s^2; DLIO
+deskews each scan to its median distinct return time and reports the sensor's
+pose there, so its estimate refers to that time, not to the scan's end
+(LioEstimate.times). It calibrates the IMU biases and gravity over its first
+``imu_calib_time`` s (lf3pm: 1 s, inside the replay's rest; DLIO's own 3 s
+would run into the motion), during which the sensor must be still. evalio
+leaves every parameter it is not given uninitialised, so all are set.
+
+Each odometry runs in a child process (_lio_worker.py): their OpenMP runtimes
+would make later forks of the caller hang (shared BUILD-NOTES), and a crash
+becomes a clear error here instead of killing the caller.
 """
 
 from __future__ import annotations
@@ -66,14 +92,41 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lf3pm.config import ReplayConfig
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.imu import ImuPreset
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
 
-#: The odometry and the version lf3pm is tested with (pinned in pyproject.toml).
-ODOMETRY = "genz-lio"
-VERSION = "0.1.1"
+
+
+@dataclass(frozen=True)
+class Odometry:
+    """A LiDAR-inertial odometry lf3pm runs: its PyPI package and the version
+    lf3pm's conventions are checked for (pinned in pyproject.toml), its licence."""
+
+    name: str
+    package: str
+    version: str
+    licence: str
+
+
+#: The odometries by the name ``run_lio(odometry=...)`` and ``--odometry`` take.
+ODOMETRIES = {"genz": Odometry("GenZ-LIO", "genz-lio", "0.1.1", "GPL-2.0-only"),
+              "dlio": Odometry("DLIO", "evalio", "0.6.1", "MIT (evalio and DLIO)")}
+DEFAULT_ODOMETRY = ReplayConfig.model_fields["odometry"].default
+
+
+def choose_odometry(odometry: str, sensor: Sensor) -> str:
+    """The odometry run for ``odometry`` (a key of ODOMETRIES or "auto") and
+    ``sensor``: "auto" is DLIO for a spinning sensor, GenZ-LIO for a
+    non-repetitive (Livox) one (module docstring). Raises Lf3pmError for an
+    unknown name."""
+    if odometry == "auto":
+        return "dlio" if spinning_rings(sensor) is not None else "genz"
+    if odometry not in ODOMETRIES:
+        raise Lf3pmError(f"unknown odometry {odometry!r}; use one of auto, {', '.join(ODOMETRIES)}")
+    return odometry
 _WORKER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_lio_worker.py")
 #: Factor on the IMU noise variances the filter is told (imu_noise_model). With
 #: the exact ones it trusted the IMU over its biased matches in the open desert
@@ -87,10 +140,11 @@ TRACKING = ("ok", "map seeded")
 
 @dataclass(frozen=True)
 class LioEstimate:
-    """The odometry's estimate at each scan's ``end`` (``times`` (M,)):
-    ``poses`` (M, 4, 4) sensor-to-world, the first equal to the true initial
-    pose. ``status[k]``: "initializing" (consumed by the IMU initialisation),
-    "map seeded", "ok", "rejected" (the filter rolled the update back), "no
+    """The odometry's estimate per scan: ``poses`` (M, 4, 4) sensor-to-world at
+    ``times`` (M,) (GenZ-LIO: each scan's end; DLIO: each scan's median return
+    time), anchored so that the odometry's first pose is the true initial one.
+    ``status[k]``: "initializing" (the odometry is still taking the IMU for a still
+    one's), "map seeded", "ok", "rejected" (the filter rolled the update back), "no
     matches" (no scan point matched the map: lost track), or "skipped: ..."
     (not usable). ``lost`` lists the scans whose status is not "ok", "map
     seeded" or "initializing". ``seconds_per_scan``: the odometry's mean time
@@ -104,33 +158,39 @@ class LioEstimate:
     lost: list
     seconds_per_scan: float
     odometry: str
+    package: str
     version: str
     params: dict
     messages: list = field(repr=False)
 
     def to_dict(self) -> dict:
         """JSON-ready summary (no per-scan arrays)."""
-        return {"odometry": self.odometry, "version": self.version, "scans": len(self.times),
+        return {"odometry": self.odometry, "package": self.package, "version": self.version,
+                "scans": len(self.times),
                 "lost": list(self.lost), "seconds_per_scan": self.seconds_per_scan, "params": self.params,
                 "messages": list(self.messages)}
 
 
-def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, threads: int = 1, **params) -> LioEstimate:
-    """GenZ-LIO on ``scans`` (each with ``end`` s, ``points`` (H, 3) in the
-    sensor frame at their firing times and ``stamps`` (H,) absolute firing
-    times, non-decreasing, <= end; ends increasing) and ``imu`` (ImuSamples:
-    t, accel, gyro on the same clock, covering the first scan's end).
-    ``sensor`` gives the range limits. ``initial_pose`` (a pose lf3pm.pose
-    accepts): the true pose at the first scan; the sensor must be still for
-    the first 20 IMU samples. ``threads``: GenZ-LIO's OpenMP threads (1:
-    deterministic). ``params``: GenZ-LIO settings by section, e.g.
-    ``mapping={"voxel_size": 0.25}``, ``hybrid_metric={"enable": True}``, over
-    :func:`default_settings`.
-    Raises Lf3pmError for malformed input, unknown settings, a missing or
-    other version of genz-lio, or a crash of the odometry.
+def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = DEFAULT_ODOMETRY, threads: int = 1,
+            **params) -> LioEstimate:
+    """The LiDAR-inertial ``odometry`` (a key of ODOMETRIES, or "auto":
+    :func:`choose_odometry`) on ``scans`` (each
+    with ``end`` s, ``points`` (H, 3) in the sensor frame at their firing times
+    and ``stamps`` (H,) absolute firing times, non-decreasing, <= end; ends
+    increasing) and ``imu`` (ImuSamples: t, accel, gyro on the same clock,
+    covering the first scan's end). ``sensor`` gives the range limits.
+    ``initial_pose`` (a pose lf3pm.pose accepts): the true pose at the first
+    scan; the sensor must be still while the odometry initialises (GenZ-LIO:
+    the first 20 IMU samples; DLIO: the first ``imu_calib_time`` s).
+    ``threads``: the odometry's OpenMP threads (1: deterministic). ``params``
+    over :func:`default_settings`: GenZ-LIO's by section, e.g.
+    ``mapping={"voxel_size": 0.25}``; DLIO's by name, e.g. ``vf_res=0.5``.
+    Raises Lf3pmError for malformed input, an unknown odometry or setting, a
+    missing or other version of the odometry's package, or its crash.
     """
     if not isinstance(sensor, Sensor):
         sensor = get_sensor(sensor)
+    odometry = choose_odometry(odometry, sensor)
     origin = pose_matrix(initial_pose)
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise Lf3pmError(f"threads must be an integer >= 1, got {threads!r}")
@@ -144,15 +204,9 @@ def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, threads: int = 1,
         raise Lf3pmError(f"scan ends must increase: scan {k} ends at {ends[k]} s, scan {k - 1} at {ends[k - 1]} s")
     if t[0] > ends[0]:
         raise Lf3pmError(f"the IMU starts at {t[0]} s, after the first scan's end {ends[0]} s")
-    messages = _rest_warning(t, rows, ends[0])
-    for section, values in params.items():
-        if not isinstance(values, dict):
-            raise Lf3pmError(f"GenZ-LIO settings go by section, e.g. mapping={{'voxel_size': 0.5}}; "
-                             f"got {section}={values!r}")
-    overrides = {section: dict(values) for section, values in default_settings(sensor).items()}
-    overrides["noise_model"] = imu_noise_model(imu)
-    for section, values in params.items():
-        overrides[section] = {**overrides.get(section, {}), **values}
+    settings = _settings(odometry, sensor, imu, params)
+    still = settings["imu_calib_time"] if odometry == "dlio" else 0.0
+    messages = _rest_warning(t, rows, max(ends[0], t[0] + still))
     bounds = np.searchsorted(t, ends, side="right")
 
     with tempfile.TemporaryFile() as log:
@@ -164,18 +218,42 @@ def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, threads: int = 1,
         finally:
             os.close(reply_write)
         with os.fdopen(reply_read, "rb") as replies:
-            poses, status, seconds = _drive(child, replies, log, scans, ends, t, rows, bounds, sensor,
-                                            threads, overrides)
+            times, poses, status, seconds = _drive(child, replies, log, scans, ends, t, rows, bounds, sensor,
+                                                   threads, odometry, settings)
         log.seek(0)
         messages += [line for line in log.read().decode(errors="replace").splitlines() if line.strip()]
 
-    estimate = origin @ poses
+    estimate = origin @ np.linalg.inv(poses[0]) @ poses
     lost = [k for k, s in enumerate(status) if s not in TRACKING + ("initializing",)]
-    settings = {"threads": threads, "blind_min": sensor.min_range, "blind_max": sensor.max_range,
-                "lidar_type": "livox", "overrides": overrides}
-    return LioEstimate(times=ends, poses=estimate, status=status, lost=lost,
-                       seconds_per_scan=float(np.mean(seconds)), odometry=ODOMETRY, version=VERSION,
-                       params=settings, messages=messages)
+    spec = ODOMETRIES[odometry]
+    used = {"threads": threads, "blind_min": sensor.min_range, "blind_max": sensor.max_range,
+            **({"lidar_type": "livox", "overrides": settings} if odometry == "genz" else {"settings": settings})}
+    return LioEstimate(times=times, poses=estimate, status=status, lost=lost,
+                       seconds_per_scan=float(np.mean(seconds)), odometry=spec.name, package=spec.package,
+                       version=spec.version,
+                       params=used, messages=messages)
+
+
+def _settings(odometry: str, sensor: Sensor, imu, params: dict) -> dict:
+    """The odometry's settings: lf3pm's defaults, then ``params`` (GenZ-LIO's merged
+    field by field within each section)."""
+    if odometry == "dlio":
+        return {**DLIO_SETTINGS, **params}
+    for section, values in params.items():
+        if not isinstance(values, dict):
+            raise Lf3pmError(f"GenZ-LIO settings go by section, e.g. mapping={{'voxel_size': 0.5}}; "
+                             f"got {section}={values!r}")
+    overrides = {section: dict(values) for section, values in default_settings(sensor).items()}
+    overrides["noise_model"] = imu_noise_model(imu)
+    for section, values in params.items():
+        overrides[section] = {**overrides.get(section, {}), **values}
+    return overrides
+
+
+#: lf3pm's DLIO settings (DLIO's own for the rest): ``imu_calib_time`` 1 s, inside
+#: the replay's 2 s rest (DLIO's 3 s would take the start of the motion for a
+#: still sensor's IMU).
+DLIO_SETTINGS = {"imu_calib_time": 1.0}
 
 
 def default_settings(sensor: Sensor) -> dict:
@@ -217,8 +295,8 @@ def imu_noise_model(imu) -> dict:
     return {key: NOISE_INFLATION * value for key, value in exact.items() if value > 0}
 
 
-def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, params):
-    """Streams the scans to the worker and collects its poses."""
+def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, odometry, settings):
+    """Streams the scans to the worker and collects its poses and their times."""
     def request(message):
         try:
             pickle.dump(message, child.stdin, protocol=pickle.HIGHEST_PROTOCOL)
@@ -234,31 +312,33 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, p
             log.seek(0)
             tail = " | ".join(log.read().decode(errors="replace").strip().splitlines()[-3:])
             how = f"signal {-code}" if code < 0 else f"exit status {code}"
-            raise Lf3pmError(f"{ODOMETRY} crashed ({how}) {where}" + (f": {tail}" if tail else "")) from None
+            raise Lf3pmError(f"{spec.name} crashed ({how}) {where}" + (f": {tail}" if tail else "")) from None
         if answer[0] == "error":
             child.wait()
             raise Lf3pmError(answer[1])
         return answer
 
+    spec = ODOMETRIES[odometry]
     try:
-        request(("config", (float(sensor.min_range), float(sensor.max_range)), threads, params))
+        request(("config", odometry, (float(sensor.min_range), float(sensor.max_range)), threads, settings))
         _, version = reply("while starting")
-        if version != VERSION:
-            raise Lf3pmError(f"{ODOMETRY} {version} is installed; lf3pm's conventions are checked for {VERSION}")
-        poses, status, seconds = np.empty((len(scans), 4, 4)), [], []
+        if version.split()[0] != spec.version:
+            raise Lf3pmError(f"{spec.package} {version} is installed; lf3pm's conventions are checked for "
+                             f"{spec.version}")
+        times, poses, status, seconds = np.empty(len(scans)), np.empty((len(scans), 4, 4)), [], []
         for k, scan in enumerate(scans):
             points, stamps = _scan_arrays(scan, k, ends[k])
             begin = float(stamps[0]) if len(stamps) else float(ends[k])
             lo = bounds[k - 1] if k else 0
             request(("scan", points, begin, float(ends[k]), stamps - begin,
                      np.column_stack([t[lo:bounds[k]], rows[lo:bounds[k]]])))
-            _, poses[k], state, spent = reply(f"at scan {k} (ending at {ends[k]:g} s)")
+            _, poses[k], times[k], state, spent = reply(f"at scan {k} (ending at {ends[k]:g} s)")
             status.append(state)
             seconds.append(spent)
         request(("done",))
         child.stdin.close()
         child.wait()
-        return poses, status, seconds
+        return times, poses, status, seconds
     finally:
         if child.poll() is None:
             child.kill()
@@ -310,8 +390,9 @@ def _scan_arrays(scan, k, end) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _rest_warning(t, rows, end) -> list:
-    """A warning when the IMU moves during GenZ-LIO's initialisation (its first
-    21 samples and those up to the first scan's end), which takes it to be still."""
+    """A warning when the IMU moves while the odometry initialises (its first 21
+    samples and those up to ``end``: the first scan's end, or the end of DLIO's
+    calibration), during which it takes the IMU to be still."""
     window = rows[: max(21, int(np.searchsorted(t, end, side="right")))]
     spread = np.ptp(window[:, :3], axis=0).max()
     rate = np.abs(window[:, 3:]).max()

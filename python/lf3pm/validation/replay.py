@@ -49,6 +49,7 @@ METHOD_PARAMS = {
     "odometry": {"voxel_size": 1.0, "min_points": 100, "deskew": True},
     "lio": {"imu_rate": 200.0, "imu_preset": None, "imu_noise": True, "rest": LIO_REST},
 }
+_REPLAY = ReplayConfig()
 
 
 def resolve_sensor(sensor: Sensor | str, rate: float) -> Sensor:
@@ -62,8 +63,6 @@ def resolve_sensor(sensor: Sensor | str, rate: float) -> Sensor:
         return base
     return get_sensor(sensor, integration_time=1.0 / rate)
 
-
-_REPLAY = ReplayConfig()
 
 
 def check_method(method: str, params: dict) -> dict:
@@ -188,9 +187,9 @@ def _lio(scans: ScanStream, motion: Motion, sensor: Sensor, seed: int, params: d
     # run_lio pulls the scans, so their simulation happened inside it.
     seconds = time.perf_counter() - start - (scans.seconds - simulated_before)
     report = {k: v for k, v in _fields(out).items() if k not in ("times", "poses")}
-    name = str(report.get("name", "lio"))
+    name = str(report.get("package", "lio"))
     run = Estimate(poses=out.poses, hits=scans.hits.copy(), skipped=list(report.pop("skipped", [])),
-                   seconds=seconds, report=report)
+                   seconds=seconds, report=report, times=getattr(out, "times", None))
     method_params = {"imu": {k: params[k] for k in METHOD_PARAMS["lio"]}, "options": extra}
     return run, method_params, {**library_versions(), name: report.get("version")}
 

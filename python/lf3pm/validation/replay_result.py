@@ -15,10 +15,11 @@ from lf3pm.validation.trajectory_metrics import ape_translation, rpe
 
 @dataclass(frozen=True)
 class Estimate:
-    """What an estimator made of a scan stream: ``poses`` (M, 4, 4) at the scans'
-    ends, ``hits`` (M,) per scan, ``skipped`` scan indices it did not use,
-    ``seconds`` spent estimating (not simulating), ``degenerate_directions``
-    (M,) where it tracks them, ``report``: anything else it said."""
+    """What an estimator made of a scan stream: ``poses`` (M, 4, 4) at ``times``
+    (M,; None: the scans' ends), ``hits`` (M,) per scan, ``skipped`` scan indices
+    it did not use, ``seconds`` spent estimating (not simulating),
+    ``degenerate_directions`` (M,) where it tracks them, ``report``: anything else
+    it said."""
 
     poses: np.ndarray
     hits: np.ndarray
@@ -26,6 +27,7 @@ class Estimate:
     seconds: float
     degenerate_directions: np.ndarray | None = None
     report: dict = field(default_factory=dict)
+    times: np.ndarray | None = None
 
 
 def library_versions(*packages: str) -> dict:
@@ -45,8 +47,9 @@ def library_versions(*packages: str) -> dict:
 class ReplayResult:
     """A replay of ``method`` with ``sensor`` under ``seed``.
 
-    ``times`` (M,): the scans' ends (s); ``truth``, ``estimate`` (M, 4, 4):
-    sensor-to-world poses there; ``hits`` (M,): returns per scan;
+    ``times`` (M,): the times the estimate refers to (s; the scans' ends, but for
+    an odometry that estimates each scan at another time, DLIO's median return
+    time); ``truth``, ``estimate`` (M, 4, 4): sensor-to-world poses there; ``hits`` (M,): returns per scan;
     ``skipped``: indices of the scans the estimator did not use (too few
     points; the estimate kept its prediction); ``degenerate_directions`` (M,):
     per scan, the directions in which registration was degenerate and the
@@ -100,10 +103,14 @@ class ReplayResult:
         still is not the trajectory's)."""
         count, keep = len(scans), slice(first, None)
         directions = run.degenerate_directions
+        times, truth = scans.times, scans.truth
+        if run.times is not None and not np.array_equal(run.times, times):
+            times = np.asarray(run.times, float)
+            truth = scans.motion.pose(times)
         estimate = run.poses[keep]
         if first:
-            estimate = scans.truth[first] @ np.linalg.inv(estimate[0]) @ estimate
-        return cls.evaluate(times=scans.times[keep], truth=scans.truth[keep], estimate=estimate,
+            estimate = truth[first] @ np.linalg.inv(estimate[0]) @ estimate
+        return cls.evaluate(times=times[keep], truth=truth[keep], estimate=estimate,
                             hits=run.hits[keep], skipped=[k - first for k in run.skipped if k >= first],
                             degenerate_directions=None if directions is None else directions[keep],
                             seconds_per_scan={"simulate": scans.seconds / count, "estimate": run.seconds / count},

@@ -1,0 +1,111 @@
+"""The LIO replay's odometries side by side (docs/lio.md, "Two odometries"): every
+one fed exactly the same scans and IMU samples through ``lf3pm.replay(...,
+"lio", odometry=...)``, as ``lf3pm replay --method lio --odometry`` runs them.
+
+Drives (10 Hz motion-distorted scans, 200 Hz BMI088 IMU, 2 s at rest first; each
+from rest, speed ramped C2 to 1 m/s over 2 s as a plan starts):
+
+- boxes: the boxes room, a figure of eight between the boxes with the sensor
+  swinging +-0.6 rad about the direction of travel (tests/analytic_motion.py);
+- houses: 15 s along the street of the houses scene, yawing at 0.1 rad/s;
+- gobi town: 8 s out of the reduced gobi's town square, yawing at 0.3 rad/s;
+- tunnel: 15 s from the west plaza into the tunnel (degenerate along its axis).
+
+Each runs noise-free (scans and IMU) and noisy (the sensor's range noise, the
+BMI088 preset, seed 0). Printed per run: APE translation RMSE and max, scored at
+the times each odometry's poses refer to, the best time shift of the truth
+(trajectory_metrics.time_offset), and ms per scan of the odometry alone.
+
+    .venv/bin/python bench/compare_odometries.py [--scenes boxes houses gobi tunnel]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp  # noqa: E402
+
+import lf3pm  # noqa: E402
+from lf3pm.experiments.gobi import REDUCED  # noqa: E402
+from lf3pm.scenes import build_scene  # noqa: E402
+from lf3pm.validation.lio import ODOMETRIES  # noqa: E402
+from lf3pm.validation.motion import Motion  # noqa: E402
+from lf3pm.validation.trajectory_metrics import time_offset  # noqa: E402
+
+RATE = 100.0  # motion samples per second, as a plan's CSV
+
+
+def drive(world, start, turn_rate: float, seconds: float) -> Motion:
+    """From rest at ``start`` (x, y, yaw): the speed ramps (C2) to 1 m/s over 2 s,
+    the yaw turns at up to ``turn_rate`` rad/s with the same ramp (the yaw is the
+    heading); sensor 1 m above the ground."""
+    t = np.arange(0.0, seconds + 1e-9, 1.0 / RATE)
+    s = np.clip(t / 2.0, 0.0, 1.0)
+    ramp = s**3 * (10 - 15 * s + 6 * s**2)
+    v, w = ramp, turn_rate * ramp
+
+    def integral(f):
+        return np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))])
+
+    yaw = start[2] + integral(w)
+    vx, vy = v * np.cos(yaw), v * np.sin(yaw)
+    return Motion.from_arrays(t, start[0] + integral(vx), start[1] + integral(vy), yaw, vx, vy, w, map=world,
+                              height=1.0)
+
+
+def figure_of_eight(world) -> Motion:
+    """The boxes room's figure of eight (tests/test_lio.py's, from rest)."""
+    curve = Lissajous((5.5, -0.5, 1.0), (1.2, 0.9, 0.0), (0.5, 1.0, 1.0))
+    analytic = CurveMotion(Warp(0.0, 1.0, 2.5, 1.0), curve, TangentHeading(curve, swing=0.6, swing_rate=2.0))
+    t = np.arange(analytic.t0, analytic.t1 + 1e-9, 1.0 / RATE)
+    p, v = analytic.position(t), analytic.velocity(t)
+    return Motion.from_arrays(t, p[:, 0], p[:, 1], analytic.yaw(t), v[:, 0], v[:, 1], analytic.yaw_rate(t),
+                              map=world, height=1.0)
+
+
+def scenarios(names):
+    """(name, map, motion) of each drive asked for."""
+    for name in names:
+        if name == "boxes":
+            world = lf3pm.load_map(build_scene("boxes").points)
+            yield name, world, figure_of_eight(world)
+        elif name == "houses":
+            world = lf3pm.load_map(build_scene("houses").points)
+            yield name, world, drive(world, (-20.0, 0.0, 0.0), 0.1, 15.0)
+        elif name == "gobi":
+            world = lf3pm.load_map(build_scene("gobi", seed=REDUCED.seed, **REDUCED.scene_params).points)
+            yield "gobi town", world, drive(world, (0.0, 0.0, 0.0), 0.3, 8.0)
+        elif name == "tunnel":
+            world = lf3pm.load_map(build_scene("tunnel").points)
+            yield name, world, drive(world, (-38.0, 0.0, 0.0), 0.0, 15.0)
+        else:
+            raise SystemExit(f"unknown scene {name!r}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenes", nargs="+", default=["boxes", "houses", "gobi", "tunnel"])
+    parser.add_argument("--sensors", nargs="+", default=["vlp16", "mid70"])
+    args = parser.parse_args()
+    header = f"{'scene':10s} {'sensor':7s} {'data':10s}" + "".join(
+        f" | {name + ' APE rmse/max (m)':>26s} {'shift s':>7s} {'ms/scan':>7s}" for name in ODOMETRIES)
+    print(header)
+    for scene, world, motion in scenarios(args.scenes):
+        for sensor in args.sensors:
+            for label, noise in (("noise-free", {"noise": 0.0, "imu_noise": False}), ("noisy", {})):
+                row = f"{scene:10s} {sensor:7s} {label:10s}"
+                for odometry in ODOMETRIES:
+                    result = lf3pm.replay(world, motion, sensor, "lio", seed=0, odometry=odometry, **noise)
+                    shift = time_offset(result.times, result.estimate, motion.pose)["offset"]
+                    row += (f" | {result.ape['rmse']:12.3f} / {result.ape['max']:9.3f} {shift:+7.3f} "
+                            f"{result.seconds_per_scan['estimate'] * 1e3:7.1f}")
+                print(row, flush=True)
+
+
+if __name__ == "__main__":
+    main()
