@@ -25,6 +25,10 @@ from lf3pm.errors import Lf3pmError
 
 #: An error above this (m) counts as a localization failure.
 FAILURE_APE = 1.0
+#: A guided plan counts as meaningfully worse when its mean error exceeds the unguided
+#: one's beyond seed noise and by more than this (m): a centimetre, below which a
+#: localization error does not matter to a ground robot's planning.
+WORSE_MARGIN = 0.01
 
 
 def median_ratio_ci(ratios, *, draws: int = 2000, level: float = 0.95, seed: int = 0) -> tuple[float, float]:
@@ -50,16 +54,17 @@ def wilcoxon_p(guided, unguided) -> float:
     return float(wilcoxon(d).pvalue)
 
 
-def worse_beyond_noise(guided_seeds, unguided_seeds) -> float:
+def worse_beyond_noise(guided_seeds, unguided_seeds, margin: float = 0.0) -> float:
     """Share of pairs whose guided mean error exceeds the unguided one by more than
-    twice the standard error of the difference (lists of per-seed errors per pair)."""
+    twice the standard error of the difference and by more than ``margin`` (m)
+    (lists of per-seed errors per pair)."""
     flags = []
     for a, b in zip(guided_seeds, unguided_seeds):
         a, b = np.asarray(a, float), np.asarray(b, float)
         if min(a.size, b.size) < 2:
             return math.nan
         se = math.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size)
-        flags.append(a.mean() - b.mean() > 2.0 * se)
+        flags.append(a.mean() - b.mean() > max(2.0 * se, margin))
     return float(np.mean(flags)) if flags else math.nan
 
 
@@ -79,6 +84,8 @@ def compare(guided, unguided, *, guided_length=None, unguided_length=None, guide
            "share_worse": float(np.mean(ratios > 1.0)) if a.size else math.nan,
            "share_worse_beyond_noise": (worse_beyond_noise(guided_seeds, unguided_seeds)
                                         if guided_seeds is not None else math.nan),
+           "share_worse_beyond_noise_and_margin": (worse_beyond_noise(guided_seeds, unguided_seeds, WORSE_MARGIN)
+                                                   if guided_seeds is not None else math.nan),
            "failure_rate_guided": float(np.mean(a > failure)) if a.size else math.nan,
            "failure_rate_unguided": float(np.mean(b > failure)) if a.size else math.nan,
            "median_error_guided": float(np.median(a)) if a.size else math.nan,

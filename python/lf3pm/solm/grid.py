@@ -54,6 +54,23 @@ class SolmGrid:
     def yaws(self) -> np.ndarray:
         return np.arange(self.yaw_bins) * 2 * math.pi / self.yaw_bins
 
+    def cell(self, x, y, third=None) -> tuple:
+        """Index of the cell nearest to each (x, y[, yaw or z]), clamped to the grid,
+        as an index tuple into a channel's array: (iy, ix) for r2, (k, iy, ix)
+        otherwise (se2: the nearest yaw bin, periodic; r3: the nearest level)."""
+        ix = np.clip(np.floor((np.asarray(x, float) - self.x0) / self.res).astype(int), 0, self.nx - 1)
+        iy = np.clip(np.floor((np.asarray(y, float) - self.y0) / self.res).astype(int), 0, self.ny - 1)
+        if self.space == "r2":
+            return iy, ix
+        if self.space == "se2":
+            step = 2 * math.pi / self.yaw_bins
+            k = np.round(np.mod(np.asarray(0.0 if third is None else third, float), 2 * math.pi) / step)
+            return np.broadcast_to(k.astype(int) % self.yaw_bins, ix.shape), iy, ix
+        levels = np.asarray(self.z_levels, float)
+        z = np.asarray(levels[0] if third is None else third, float)
+        k = np.argmin(np.abs(z[..., None] - levels), axis=-1)
+        return np.broadcast_to(k, ix.shape), iy, ix
+
     def to_dict(self) -> dict:
         d = asdict(self)
         d["z_levels"] = list(self.z_levels)
