@@ -17,11 +17,15 @@ the times each odometry's poses refer to, the best time shift of the truth
 (trajectory_metrics.time_offset), and ms per scan of the odometry alone.
 
     .venv/bin/python bench/compare_odometries.py [--scenes boxes houses gobi tunnel]
+    # one odometry's settings against its defaults, over noisy seeds 0-2:
+    .venv/bin/python bench/compare_odometries.py --sensors mid70 --odometries genz --seeds 3 \
+        --settings '{"mapping": {"voxel_size": 1.0}}'
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -91,18 +95,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", nargs="+", default=["boxes", "houses", "gobi", "tunnel"])
     parser.add_argument("--sensors", nargs="+", default=["vlp16", "mid70"])
+    parser.add_argument("--odometries", nargs="+", default=list(ODOMETRIES), choices=list(ODOMETRIES))
+    parser.add_argument("--seeds", type=int, default=1, help="Noisy runs on seeds 0 .. N-1.")
+    parser.add_argument("--settings", type=json.loads, default=None,
+                        help="Odometry settings (JSON) run beside the defaults, e.g. GenZ-LIO's by section.")
     args = parser.parse_args()
-    header = f"{'scene':10s} {'sensor':7s} {'data':10s}" + "".join(
-        f" | {name + ' APE rmse/max (m)':>26s} {'shift s':>7s} {'ms/scan':>7s}" for name in ODOMETRIES)
-    print(header)
+    variants = [("defaults", {})] + ([("settings", args.settings)] if args.settings else [])
+    columns = [(odometry, label, settings) for odometry in args.odometries for label, settings in variants]
+    print(f"{'scene':10s} {'sensor':7s} {'data':10s}" + "".join(
+        f" | {odometry + (' ' + label if args.settings else '') + ' APE rmse/max (m)':>34s} {'shift s':>7s}"
+        f" {'ms/scan':>7s}" for odometry, label, _ in columns))
     for scene, world, motion in scenarios(args.scenes):
         for sensor in args.sensors:
-            for label, noise in (("noise-free", {"noise": 0.0, "imu_noise": False}), ("noisy", {})):
+            runs = [("noise-free", 0, {"noise": 0.0, "imu_noise": False})]
+            runs += [(f"noisy s{seed}" if args.seeds > 1 else "noisy", seed, {}) for seed in range(args.seeds)]
+            for label, seed, noise in runs:
                 row = f"{scene:10s} {sensor:7s} {label:10s}"
-                for odometry in ODOMETRIES:
-                    result = lf3pm.replay(world, motion, sensor, "lio", seed=0, odometry=odometry, **noise)
+                for odometry, _, settings in columns:
+                    result = lf3pm.replay(world, motion, sensor, "lio", seed=seed, odometry=odometry, **noise,
+                                          **settings)
                     shift = time_offset(result.times, result.estimate, motion.pose)["offset"]
-                    row += (f" | {result.ape['rmse']:12.3f} / {result.ape['max']:9.3f} {shift:+7.3f} "
+                    row += (f" | {result.ape['rmse']:20.3f} / {result.ape['max']:9.3f} {shift:+7.3f} "
                             f"{result.seconds_per_scan['estimate'] * 1e3:7.1f}")
                 print(row, flush=True)
 

@@ -49,3 +49,58 @@ def test_figures_and_exports_into_missing_folders_are_one_line(store, tmp_path):
                    "cannot create the folder")
     one_line_error(CliRunner().invoke(app, ["solm", "view", store, "-o", str(tmp_path)]), "is a directory")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+@pytest.fixture
+def mounted(tmp_path):
+    """mount(options) -> a fresh tmpfs mounted with ``options`` (root only; skips otherwise),
+    unmounted afterwards."""
+    import os
+    import subprocess
+
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    points = []
+
+    def mount(options):
+        point = tmp_path / f"mnt{len(points)}"
+        point.mkdir()
+        done = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(point)], capture_output=True)
+        if done.returncode != 0:
+            pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+        points.append(point)
+        return point
+
+    yield mount
+    for point in points:
+        subprocess.run(["umount", str(point)], check=False)
+
+
+def test_writes_onto_read_only_storage_are_one_line(store, tmp_path, mounted):
+    """A real read-only mount (root can write into chmod 555 folders, so those prove nothing):
+    every writing command says so in one line, exit 2, and leaves nothing."""
+    ro = mounted("ro,size=1m")
+    runner = CliRunner()
+    world = tmp_path / "boxes.npy"
+    np.save(world, lf3pm.build_scene("boxes").points)
+    for args in (["scene", "boxes", "-o", str(ro / "x.pcd")],
+                 ["evaluate", str(world), "--pose", "0", "0", "1", "0", "--save-observations", str(ro / "o.npz")],
+                 ["solm", "view", store, "-o", str(ro / "v.png")]):
+        one_line_error(runner.invoke(app, args), "Read-only file system")
+    one_line_error(plan(store, ro / "t.csv", tmp_path / "p.png"), "Read-only file system")
+    one_line_error(plan(store, tmp_path / "t.csv", ro / "p.png"), "Read-only file system")
+    assert list(ro.iterdir()) == [] and sorted(p.name for p in tmp_path.iterdir()) == ["boxes.npy", "mnt0"]
+
+
+def test_a_full_disk_is_one_line_and_leaves_nothing(store, mounted):
+    full = mounted("size=64k")
+    (full / "filler").write_bytes(b"\0" * 60_000)
+    done = CliRunner().invoke(app, ["scene", "boxes", "-o", str(full / "x.pcd")])
+    one_line_error(done, "No space left on device")
+    assert [p.name for p in full.iterdir()] == ["filler"]
+
+
+def test_a_config_that_is_not_text_is_one_line(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_bytes(np.random.default_rng(0).integers(0, 256, 300, dtype=np.uint8).tobytes())
+    one_line_error(CliRunner().invoke(app, ["config", "--config", str(bad)]), "not UTF-8 text")

@@ -62,12 +62,17 @@ def test_the_threshold_is_relative_to_the_map_median(r2):
     assert not at_risk(AT_RISK_SHARE - 1e-9) and at_risk(AT_RISK_SHARE)
 
 
-def test_se2_uses_the_plans_yaw():
-    """The same place is at risk facing one way and safe facing the other (the nearest yaw bin, periodic)."""
+def test_se2_uses_the_plans_yaw_and_the_best_heading_as_the_maps_median():
+    """The same place is at risk facing one way and safe facing the other (the nearest yaw
+    bin, periodic); on a map where three headings of four are bad everywhere, the map's
+    median is the best heading's, so the bad ones are at risk."""
     grid = SolmGrid("se2", 0.0, 0.0, 1.0, 10, 10, yaw_bins=4)
-    q = np.ones((4, 10, 10))
+    q = np.full((4, 10, 10), RISK_FACTOR * 1.5)
+    q[0] = 1.0
     q[2] = math.inf  # facing -x: degenerate by q_n = inf
     solm = FakeSolm(grid, q, np.zeros((4, 10, 10), bool))
+    assert map_median(solm) == 1.0
+    assert risk_share(solm, Line(3.5, yaw=math.pi / 2)) == 1.0
     assert risk_share(solm, Line(3.5, yaw=math.pi)) == 1.0
     assert risk_share(solm, Line(3.5, yaw=-math.pi + 0.3)) == 1.0
     assert risk_share(solm, Line(3.5, yaw=0.0)) == 0.0

@@ -55,5 +55,8 @@ def check_replaceable(path, error: type[Lf3pmError] = Lf3pmError) -> None:
 
 
 def _remove(path: str) -> None:
-    with suppress(FileNotFoundError):
+    """Removes the temporary file if it is there. On storage that refused to create it
+    (read-only: EROFS even for a missing file) or has vanished there is nothing to
+    remove, and the write's own error is the one to report."""
+    with suppress(OSError):
         os.remove(path)

@@ -136,6 +136,10 @@ def print_evaluation(out: dict) -> None:
     if out["predicted_mde"] is not None:
         lo, hi = out["predicted_mde_interval"]
         table.add_row("predicted MDE", f"{out['predicted_mde']:.3g} [{lo:.2g}, {hi:.2g}]")
+    if out["predicted_localization_error_m"] is not None:
+        lo, hi = out["predicted_localization_error_interval_m"]
+        table.add_row("predicted localization error (m)",
+                      f"{out['predicted_localization_error_m']:.3g} [{lo:.2g}, {hi:.2g}]")
     table.add_row("rows m", str(out["m"]))
     table.add_row("hits / rays", f"{out['hits']} / {out['rays']}")
     table.add_row("degenerate", str(out["degenerate"]))

@@ -278,9 +278,11 @@ def load_config(path: str | Path | None = None, overrides: dict | None = None,
     data: dict = {}
     if path is not None:
         try:
-            text = Path(path).read_text()
+            text = Path(path).read_text(encoding="utf-8")
         except OSError as err:
             raise ConfigError(f"{path}: cannot read the config ({err.strerror or err})") from None
+        except UnicodeDecodeError:
+            raise ConfigError(f"{path}: not a YAML config (not UTF-8 text)") from None
         try:
             loaded = yaml.safe_load(text)
         except yaml.YAMLError as err:

@@ -8,7 +8,8 @@ from dataclasses import asdict, dataclass, field
 
 
 from lf3pm import _core
-from lf3pm.calibration import calibration_applies, packaged_calibration, predict_mde
+from lf3pm.calibration import (LOCALIZATION_PACKAGED, calibration_applies, packaged_calibration, predict_mde,
+                               predict_localization_error)
 from lf3pm.config import MetricConfig, ScanConfig, scan_params, validated
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
@@ -50,6 +51,8 @@ class Evaluation:
     hits: int
     predicted_mde: float | None
     predicted_mde_interval: list | None
+    predicted_localization_error_m: float | None
+    predicted_localization_error_interval_m: list | None
     pose: list
     sensor: str
     params: dict
@@ -94,7 +97,10 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     predicted_mde (with a 10-90 % interval) comes from the packaged calibration
     (see lf3pm.calibration) when the query matches the conditions it was fitted
     under (its sensor, default noise, dof 6, k-NN association, no scan
-    downsampling), else None.
+    downsampling), else None; likewise predicted_localization_error_m (with a
+    10-90 % interval, m): the APE of map localization expected along a trajectory
+    through poses like this one, fitted on the benefit study's plans (its
+    sensors; None at a degenerate pose).
     A pose outside the map's x-y extent or within ``clearance`` m of a map point
     raises PoseError.
     """
@@ -113,11 +119,15 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
     else:
         result = _core.evaluate(map.index, matrix, sensor.directions, params)
     values = result.metric.as_dict()
+    conditions = {"sensor": sensor.name, "dof": metric.dof, "association": metric.association,
+                  "scan_voxel": scan.scan_voxel, "noise_is_default": scan.noise is None, "w1": metric.w1}
     calibration = packaged_calibration()
     prediction = None
-    if calibration_applies(calibration, sensor=sensor.name, dof=metric.dof, association=metric.association,
-                           scan_voxel=scan.scan_voxel, noise_is_default=scan.noise is None, w1=metric.w1):
+    if calibration_applies(calibration, **conditions):
         prediction = predict_mde(calibration, values[calibration["predictor"]])
+    fit = packaged_calibration(LOCALIZATION_PACKAGED)
+    error = (predict_localization_error(fit, values["q_n"])
+             if fit is not None and calibration_applies(fit, **conditions) else None)
     recorded = {"seed": scan.seed, "noise": scan.noise_for(sensor), "dof": metric.dof, "w1": metric.w1,
                 "scan_voxel": scan.scan_voxel, "association": metric.association, "map_sha256": map.sha256,
                 **map.association_params}
@@ -125,4 +135,6 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int 
                       degenerate=values["degenerate"], rays=result.rays, hits=result.hits,
                       predicted_mde=prediction[0] if prediction else None,
                       predicted_mde_interval=list(prediction[1:]) if prediction else None,
+                      predicted_localization_error_m=error[0] if error else None,
+                      predicted_localization_error_interval_m=list(error[1:]) if error else None,
                       pose=matrix.tolist(), sensor=sensor.name, params=recorded, observations=obs)

@@ -35,6 +35,7 @@ import numpy as np
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.guidance import GUIDANCE, LIO_GUIDANCE, UNGUIDED
+from lf3pm.experiments.localization_error import localization_error_fit
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN, compare
 from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays
@@ -105,6 +106,8 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
         step(f"{case.name}: {len(pairs)} pairs planned", len(cases))
     run_replays(tasks, workers, step)
     summary = _summarise(out, cases, guidance, records, seeds, pair_seed, time.perf_counter() - started)
+    summary["localization_error"] = localization_error_fit(out, cases, records, seeds=seeds, pair_seed=pair_seed,
+                                                           step=step)
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())
     with atomic_write(out / "benefit.md") as fp:
@@ -355,6 +358,19 @@ def report(summary: dict) -> str:
                   "|---|---|---|---|---|"]
         lines += [f"| {ch} | {c['plans']} | {c['spearman_pooled']:.2f} | {c['spearman_within_mean']:.2f} | "
                   f"{c['log_log_slope']:.2f} |" for ch, c in cal.items()]
+    fit = summary.get("localization_error")
+    if fit and "a" in fit:
+        lo, hi = (math.exp(fit[k]) for k in ("log_lo", "log_hi"))
+        lines += ["", "## Predicted localization error (lf3pm evaluate's predicted_localization_error_m)", "",
+                  f"log APE = {fit['a']:.2f} + {fit['b']:.2f} log q_n over {fit['samples']} plans without a "
+                  f"degenerate pose (q_n exact, once per second); 10-90 % interval x{lo:.2f} to x{hi:.2f}. "
+                  "Each map left out of the fit in turn and predicted:", "",
+                  "| map left out | plans | inside the interval | Spearman within the map | median factor |",
+                  "|---|---|---|---|---|"]
+        for name, v in fit["validation"].items():
+            rho = "n/a" if v["spearman_within_map"] is None else f"{v['spearman_within_map']:.2f}"
+            lines += [f"| {name} | {v['plans']} | {100 * v['share_inside_interval']:.0f} % | {rho} | "
+                      f"{v['median_factor']:.2f} |"]
     goal = summary["goal"]
     if goal:
         lines += ["", "Goal (issue): " + "; ".join(f"{k.replace('_', ' ')}: {'yes' if v else 'no'}"

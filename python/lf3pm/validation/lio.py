@@ -16,8 +16,8 @@ crashed (docs/lio.md, "Three odometries").
 The default, ``auto``, picks by measurement (docs/lio.md, bench/compare_odometries.py):
 DLIO for a spinning sensor (VLP-16: 1-6 mm APE on every structured drive, noise-free
 or noisy, where GenZ-LIO gave 1-18 cm and lagged the truth by up to 0.15 s), GenZ-LIO
-for a non-repetitive one (Mid-70: 0.4-5 cm where DLIO lost the narrow 0.1 s petals,
-0.1-3 m).
+for a non-repetitive one (Mid-70: 0.4-4 cm on structured drives where DLIO lost
+the narrow 0.1 s scans, 0.1-3 m).
 
 Why GenZ-LIO and not RKO-LIO (PyPI ``rko-lio`` 0.4.0, PRBonn; measured with
 GenZ-LIO's own defaults, before default_settings): both ran on the same simulated data (``bench/compare_lio.py``: 10 Hz motion-distorted scans,
@@ -267,13 +267,16 @@ def default_settings(sensor: Sensor) -> dict:
       estimate lag the truth by 0.15 s (0.155 m RMSE; 0.010 m and no lag without
       them), on a turning Mid-70 drive 0.56 m against 0.010 m (docs/lio.md,
       "The start-of-motion lag").
-    - ``mapping.voxel_size``: 0.5 m for a non-repetitive (Livox) sensor, whose
-      dense, narrow scans fit planes in small voxels (its 0.1 s scans at 1 m
-      voxels jumped 10 cm while the sensor stood still in the gobi town); GenZ-LIO's
-      1 m for a spinning one (VLP-16 there: 1.2-1.3 cm at 1 m, 1.8-2.0 cm at 0.5 m).
+    - ``mapping.voxel_size`` stays GenZ-LIO's 1 m for every sensor. 0.5 m for the
+      Livox Mid-70 held noise-free scans of a still sensor better (its 0.1 s scans at
+      1 m jumped 10 cm in the gobi town before the lag was fixed) but let the filter
+      run away at 1.7-4.4 m/s from the end of the rest with noisy scans and IMU: on the
+      houses street seed 0 17 m RMSE against 0.7 cm at 1 m, on a benefit-study diff
+      plan in the gobi 1.1-9.6 m against 2.6-5.1 cm (0.75 m: still 1.7 m on one of two
+      seeds). The price: in the tunnel scene, degenerate along its axis, 11-27 cm
+      instead of 3-5 cm (bench/compare_odometries.py --settings, docs/lio.md).
     """
-    return {"hybrid_metric": {"enable": False},
-            "mapping": {"voxel_size": 1.0 if spinning_rings(sensor) is not None else 0.5}}
+    return {"hybrid_metric": {"enable": False}}
 
 
 def imu_noise_model(imu) -> dict:
