@@ -348,9 +348,9 @@ def report(summary: dict) -> str:
                       header.replace("| guidance |", "| pairs of |")]
             lines += [row(name, c) for name, c in comps[method]["default_by_map"].items()]
             lines += [row(f"{kind} robot", c) for kind, c in comps[method]["default_by_robot"].items()]
-            lines += [row(f"at risk (SOLM: >= {100 * AT_RISK_SHARE:.0f} % of the unguided plan's poses "
-                          f"degenerate or q_n >= {RISK_FACTOR:g} x the map's median)", comps[method]["default_at_risk"]),
-                      row("no risk", comps[method]["default_no_risk"])]
+            risk = (f"at risk (SOLM: >= {100 * AT_RISK_SHARE:.0f} % of the unguided plan's poses degenerate or "
+                    f"q_n >= {RISK_FACTOR:g} x the map's median)")
+            lines += [row(risk, comps[method]["default_at_risk"]), row("no risk", comps[method]["default_no_risk"])]
     cal = summary.get("calibration", {})
     if cal:
         lines += ["", "## Which channel predicts localization error (every plan's mean along its trajectory)", "",

@@ -109,9 +109,9 @@ class Dlio:
         data = np.empty(len(points), self._DTYPE)
         data["x"], data["y"], data["z"] = points.T
         data["t"] = nanoseconds
-        meta = self.helpers.PointCloudMetadata(stamp=types.Stamp.from_sec(self.EPOCH + begin), width=len(data), height=1,
-                                               point_step=data.itemsize, row_step=data.nbytes, is_bigendian=0,
-                                               is_dense=1)
+        meta = self.helpers.PointCloudMetadata(stamp=types.Stamp.from_sec(self.EPOCH + begin), width=len(data),
+                                               height=1, point_step=data.itemsize, row_step=data.nbytes,
+                                               is_bigendian=0, is_dense=1)
         self.pipeline.add_lidar(self.helpers.pc2_to_evalio(meta, self.fields, data.tobytes()))
         estimates = self.pipeline.saved_estimates()
         unique = np.unique(nanoseconds)

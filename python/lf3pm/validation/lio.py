@@ -20,7 +20,8 @@ for a non-repetitive one (Mid-70: 0.4-4 cm on structured drives where DLIO lost
 the narrow 0.1 s scans, 0.1-3 m).
 
 Why GenZ-LIO and not RKO-LIO (PyPI ``rko-lio`` 0.4.0, PRBonn; measured with
-GenZ-LIO's own defaults, before default_settings): both ran on the same simulated data (``bench/compare_lio.py``: 10 Hz motion-distorted scans,
+GenZ-LIO's own defaults, before default_settings): both ran on the same
+simulated data (``bench/compare_lio.py``: 10 Hz motion-distorted scans,
 200 Hz BMI088 IMU, noise-free / noisy; APE translation RMSE without alignment,
 the estimate anchored at the true first pose; ms per scan of the odometry on
 one thread, on the shared 2-core machine):
