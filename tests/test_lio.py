@@ -61,13 +61,19 @@ def run(room):
     """5.5 s from rest to rest on part of a figure of eight between the boxes (up to 1 m/s)
     while the sensor swings +-0.6 rad about the direction of travel (yaw rate
     up to 3.4 rad/s): VLP-16, noise-free scans and IMU."""
+    motion, sensor, scans, imu, first = figure_of_eight(room, rest=0.5)
+    return motion, sensor, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first)
+
+
+def figure_of_eight(room, rest: float):
+    """Part of a figure of eight between the boxes after ``rest`` s at rest, the sensor
+    swinging about the direction of travel: (motion, VLP-16, noise-free scans, noise-free
+    IMU, the true first pose)."""
     curve = Lissajous((5.5, -0.5, 1.0), (1.2, 0.9, 0.0), (0.5, 1.0, 1.0))
-    motion = CurveMotion(Warp(0.5, 1.0, 2.5, 1.0), curve, TangentHeading(curve, swing=0.6, swing_rate=2.0))
+    motion = CurveMotion(Warp(rest, 1.0, 2.5, 1.0), curve, TangentHeading(curve, swing=0.6, swing_rate=2.0))
     sensor = get_sensor("vlp16")
     scans = scans_along(room, motion, sensor)
-    imu = simulate_imu(motion, noise=False)
-    first = motion.pose(np.array([scans[0].end]))[0]
-    return motion, sensor, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first)
+    return motion, sensor, scans, simulate_imu(motion, noise=False), motion.pose(np.array([scans[0].end]))[0]
 
 
 def errors(motion, estimate):
@@ -259,12 +265,7 @@ def dlio_run(room):
     """The room's figure of eight after 2 s at rest (DLIO calibrates its IMU over the
     first 1 s, lio.DLIO_SETTINGS), noise-free, through DLIO."""
     pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
-    curve = Lissajous((5.5, -0.5, 1.0), (1.2, 0.9, 0.0), (0.5, 1.0, 1.0))
-    motion = CurveMotion(Warp(2.0, 1.0, 2.5, 1.0), curve, TangentHeading(curve, swing=0.6, swing_rate=2.0))
-    sensor = get_sensor("vlp16")
-    scans = scans_along(room, motion, sensor)
-    imu = simulate_imu(motion, noise=False)
-    first = motion.pose(np.array([scans[0].end]))[0]
+    motion, sensor, scans, imu, first = figure_of_eight(room, rest=2.0)
     return motion, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first, odometry="dlio")
 
 
