@@ -63,8 +63,12 @@ def test_bad_comparisons_and_guidance_are_one_line_errors():
 
 def test_quick_study_end_to_end(tmp_path):
     out = tmp_path / "benefit"
-    run = subprocess.run([sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "-o", str(out)],
-                         capture_output=True, text=True)
+    bad = subprocess.run([sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "some",
+                          "-o", str(out)], capture_output=True, text=True)
+    assert bad.returncode == 2 and "lio must be one of all, default" in bad.stderr and not out.exists()
+    # The LIO on the default's and the unguided plans only (the full study replays every plan).
+    command = [sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "default", "-o", str(out)]
+    run = subprocess.run(command, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
     summary = json.loads((out / "summary.json").read_text())
     assert len(summary["pairs"]) == 2 and {p["case"] for p in summary["pairs"]} == {"tunnel", "orientation"}
@@ -73,6 +77,7 @@ def test_quick_study_end_to_end(tmp_path):
         for name, plan in pair["plans"].items():
             assert math.isfinite(plan["localization"]["ape"])
             assert ("lio" in plan) == (name in ("none", "default"))
+    assert summary["lio_guidance"] == ["none", "default"]
     loc = summary["comparisons"]["localization"]
     assert loc["default"]["pairs"] == 2 and set(loc["default_by_map"]) == {"tunnel", "orientation"}
     # In the tunnel the unguided plans drive through the degenerate passage and the guided
@@ -85,6 +90,5 @@ def test_quick_study_end_to_end(tmp_path):
     # A rerun resumes: every replay is on disk, nothing is recomputed.
     replays = sorted((out / "replays").rglob("*.json"))
     stamps = [p.stat().st_mtime_ns for p in replays]
-    again = subprocess.run([sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "-o", str(out)],
-                           capture_output=True, text=True)
+    again = subprocess.run(command, capture_output=True, text=True)
     assert again.returncode == 0 and [p.stat().st_mtime_ns for p in replays] == stamps

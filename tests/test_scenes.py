@@ -19,15 +19,16 @@ from lf3pm.scenes import (SCENES, Scene, Zone, build_scene, describe_scenes, sce
                           scene_zones)
 from lf3pm.scenes.scene import FREE_BAND_HIGH, FREE_BAND_LOW
 
-NAMES = ["houses", "house_meadow", "meadow", "wall", "gobi", "boxes", "tunnel", "orientation"]
+NAMES = ["houses", "house_meadow", "meadow", "wall", "gobi", "boxes", "tunnel", "orientation", "corridor", "field"]
 #: Scenes with planning-study zones, and whether their zones are clear of structure
 #: whatever the layout (boxes may stand in the boxes room's zones).
-ZONED = {"houses": True, "boxes": False, "tunnel": True, "orientation": True}
+ZONED = {"houses": True, "boxes": False, "tunnel": True, "orientation": True, "corridor": True, "field": True}
 #: (fewest, most) points of the default scene: the most is the budget, the fewest
 #: catches a sampler that lost its density.
 POINT_BOUNDS = {"houses": (0.8e6, 2e6), "house_meadow": (1.0e6, 2e6), "meadow": (1.0e6, 2e6),
                 "wall": (1.0e6, 2e6), "gobi": (2.0e6, 4e6), "boxes": (0.08e6, 2e6),
-                "tunnel": (0.4e6, 2e6), "orientation": (0.4e6, 2e6)}
+                "tunnel": (0.4e6, 2e6), "orientation": (0.4e6, 2e6), "corridor": (0.3e6, 2e6),
+                "field": (0.6e6, 2e6)}
 #: Smaller variants for the different-seed check (same code paths, less time).
 SMALL = {"house_meadow": {"extent": 15.0}, "meadow": {"extent": 8.0},
          "gobi": {"length": 150.0, "width": 90.0, "west": 40.0, "warehouse_distance": 80.0}}
@@ -299,6 +300,43 @@ def test_orientation_scene_localizes_facing_the_building_only(built, indexed):
     assert away.degenerate or away.q_n > 10 * back.q_n
     assert away.degenerate or away.sigma1 < back.sigma1 / 10
     assert back.m > 5_000 and not back.degenerate
+
+
+def test_corridor_is_degenerate_along_its_axis_and_the_rooms_are_not(built, indexed):
+    """Mid-corridor the weakest direction of a VLP-16's Gram is x, and a Mid-70 looking
+    down the corridor is degenerate or 4 times worse than one facing a partition in a
+    room (0.35 against 0.065 at the defaults: the corners' plane fits and the mouths'
+    free edges keep it from degenerating); nothing stands in the corridor."""
+    world, p = indexed("corridor"), built["corridor"].params
+    room_y = p["width"] / 2 + 0.2 + p["room_depth"] / 2
+    room_x = p["length"] / p["rooms"] / 2   # the centre of the room east of x = 0
+    corridor = lf3pm.evaluate(world, (0.0, 0.0, 1.0, 0.0), "vlp16", noise=0.0, observations=True)
+    _, vectors = np.linalg.eigh(corridor.observations["A"].T @ corridor.observations["A"])
+    assert abs(vectors[0, 0]) > 0.99
+    along = lf3pm.evaluate(world, (0.0, 0.0, 1.0, 0.0), "mid70", noise=0.0)
+    room = lf3pm.evaluate(world, (room_x, room_y, 1.0, 0.0), "mid70", noise=0.0)
+    assert not room.degenerate and (along.degenerate or along.q_n > 4 * room.q_n)
+    # Nothing stands inside the corridor.
+    pts = built["corridor"].points
+    inside = (np.abs(pts[:, 1]) < p["width"] / 2 - 0.05) & (pts[:, 2] > 0.05) & (pts[:, 2] < p["height"] - 0.05)
+    assert not inside.any()
+
+
+def test_field_localizes_past_the_row_only_facing_back_towards_it(built, indexed):
+    """A Mid-70 in the goal zone (past the row's end) sees only ground facing along
+    the route (x, y and yaw unobservable) and the row facing back towards it; at the
+    start it sees the row ahead."""
+    world, scene = indexed("field"), built["field"]
+    goal, start = scene.zones["goal"], scene.zones["start"]
+    x, y = (goal.xmin + goal.xmax) / 2, (goal.ymin + goal.ymax) / 2
+    ahead = lf3pm.evaluate(world, (x, y, 1.0, 0.0), "mid70", noise=0.0, observations=True)
+    back = lf3pm.evaluate(world, (x, y, 1.0, math.radians(150.0)), "mid70", noise=0.0)
+    assert np.all(np.abs(ahead.observations["points"][:, 2]) < 0.02)
+    assert ahead.degenerate or ahead.q_n > 10 * back.q_n
+    assert not back.degenerate
+    at_start = lf3pm.evaluate(world, ((start.xmin + start.xmax) / 2, 0.0, 1.0, 0.0), "mid70", noise=0.0,
+                              observations=True)
+    assert not at_start.degenerate and np.count_nonzero(at_start.observations["points"][:, 2] > 0.3) > 100
 
 
 def test_cli_writes_a_readable_pcd(tmp_path):

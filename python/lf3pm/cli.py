@@ -345,6 +345,8 @@ def experiment_benefit(
     guidance: Optional[list[str]] = typer.Option(
         None, metavar="NAME=CHANNEL:POWER:WEIGHT",
         help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
+    lio: str = typer.Option("all", help="Plans the LIO replays too: all, or default (the default's and the "
+                                        "unguided one; a shorter run)."),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
@@ -356,7 +358,7 @@ def experiment_benefit(
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
         with progress_bar() as step:
             benefit.run(out, quick=quick, seeds=seeds, workers=workers, pair_seed=pair_seed,
-                        guidance=candidates, progress=step)
+                        guidance=candidates, lio=lio, progress=step)
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
 

@@ -9,7 +9,8 @@ with each guidance of :data:`GUIDANCE` (the SOLM channels q_n, q_min and
 step_norm as they are, and the shipped default: channel, power and weight of
 lf3pm.planner.cost_map). Every plan is replayed with the ``localization`` method
 (registration to the prior map from drifting wheel odometry, docs/replay.md) on
-``seeds`` seeds, and the default and unguided plans also with ``lio``. Per pair,
+``seeds`` seeds, and with ``lio`` too (every plan, or with ``lio="default"`` the
+default and unguided ones only). Per pair,
 a plan's error is its APE rmse (translation, no alignment), the median over
 seeds; paired_stats.py compares each guidance with ``none``.
 
@@ -34,7 +35,7 @@ import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
-from lf3pm.experiments.guidance import GUIDANCE, LIO_GUIDANCE, UNGUIDED
+from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.localization_error import localization_error_fit
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN, compare
@@ -65,7 +66,14 @@ CASES = (
             bounds=(-30.0, -30.0, 30.0, 30.0), zones=_STREET_ZONES, both_ways=True, min_distance=15.0),
     MapCase("room", "indoor_pcl_room_scan1.pcd", "vlp16", "r2", 0.25, 4, ray_stride=4,
             bounds=(-3.0, -2.5, 8.5, 3.5), zones=_ROOM_ZONES, both_ways=True, min_distance=2.5),
+    # Appended, not inserted: a case's pairs are drawn from its index (pair seed, index).
+    MapCase("corridor", "scene:corridor", "mid70", "se2", 0.5, 8, yaw_reuse=True, ray_stride=4, both_ways=True,
+            min_distance=30.0),
+    MapCase("field", "scene:field", "mid70", "se2", 1.0, 8, yaw_reuse=True, ray_stride=4, min_distance=60.0),
 )
+
+#: Which plans the LIO replays too (run's ``lio``): every one, or the default's and the unguided one.
+LIO_ARMS = ("all", "default")
 
 #: `--quick`: two small maps, one pair each, one seed (the test suite's run).
 QUICK = (replace(CASES[0], pairs=1, scene_params={"length": 20.0, "pillars": 8}, min_distance=20.0),
@@ -73,10 +81,11 @@ QUICK = (replace(CASES[0], pairs=1, scene_params={"length": 20.0, "pillars": 8},
 
 
 def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pair_seed: int = 0,
-        cases: tuple | None = None, guidance: tuple | None = None, progress=None) -> dict:
+        cases: tuple | None = None, guidance: tuple | None = None, lio: str = "all", progress=None) -> dict:
     """Runs (or resumes) the study into ``out`` and returns the summary. ``guidance``
-    replaces :data:`GUIDANCE` (candidates to compare, e.g. when choosing the default;
-    only one named ``default`` is also replayed with the LIO)."""
+    replaces :data:`GUIDANCE` (candidates to compare, e.g. when choosing the default).
+    ``lio``: which plans the LIO replays too: ``all``, or ``default`` (the one named
+    default and the unguided one: a shorter run)."""
     out = Path(out)
     if seeds < 1 or workers < 1:
         raise Lf3pmError(f"seeds and workers must be >= 1, got {seeds} and {workers}")
@@ -85,6 +94,9 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
     names = [g.name for g in guidance]
     if len(set(names)) != len(names) or "none" in names:
         raise Lf3pmError(f"guidance names must be distinct and not 'none', got {', '.join(names)}")
+    if lio not in LIO_ARMS:
+        raise Lf3pmError(f"lio must be one of {', '.join(LIO_ARMS)}, got {lio!r}")
+    lio_names = ["none"] + (names if lio == "all" else [n for n in names if n == "default"])
     if quick:
         seeds = 1
     step = progress or (lambda label, total, advance=1, restart=False: None)
@@ -98,14 +110,14 @@ def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pai
         for pair in pairs:
             records.append(pair)
             for name, plan in pair["plans"].items():
-                lio = name in LIO_GUIDANCE and "default" in names
-                for method in ("localization", "lio") if lio else ("localization",):
+                for method in ("localization", "lio") if name in lio_names else ("localization",):
                     for seed in range(seeds):
                         tasks.append((case, str(out / plan["csv"]), method, seed,
                                       replay_path(out, case, pair["pair"], name, method, seed)))
         step(f"{case.name}: {len(pairs)} pairs planned", len(cases))
     run_replays(tasks, workers, step)
-    summary = _summarise(out, cases, guidance, records, seeds, pair_seed, time.perf_counter() - started)
+    summary = _summarise(out, cases, guidance, lio_names[1:], records, seeds, pair_seed,
+                         time.perf_counter() - started)
     summary["localization_error"] = localization_error_fit(out, cases, records, seeds=seeds, pair_seed=pair_seed,
                                                            step=step)
     with atomic_write(out / "summary.json") as fp:
@@ -211,14 +223,14 @@ def replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str,
 
 # --- analysis -------------------------------------------------------------------------
 
-def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pair_seed: int,
+def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list, seeds: int, pair_seed: int,
                seconds: float) -> dict:
     by_name = {case.name: case for case in cases}
     replay_seconds = 0.0
     for pair in records:
         case = by_name[pair["case"]]
         for name, plan in pair["plans"].items():
-            for method in ("localization", "lio"):
+            for method in ("localization", "lio") if name in ["none"] + lio_names else ("localization",):
                 runs = [load_replay(p) for p in
                         (replay_path(out, case, pair["pair"], name, method, s) for s in range(seeds))
                         if p.exists()]
@@ -227,7 +239,7 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
                     plan[method] = {**replay_summary(runs), "scans": runs[0]["scans"]}
     comparisons = {}
     names = [g.name for g in guidance]
-    for method, compared in (("localization", names), ("lio", [n for n in LIO_GUIDANCE if n in names])):
+    for method, compared in (("localization", names), ("lio", lio_names)):
         comparisons[method] = {name: _compare(records, name, method) for name in compared}
         if "default" in names:
             comparisons[method]["default_by_map"] = {
@@ -240,6 +252,7 @@ def _summarise(out: Path, cases, guidance: tuple, records: list, seeds: int, pai
             comparisons[method]["default_no_risk"] = _compare([r for r in records if not r["at_risk"]], "default",
                                                               method)
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
+            "lio_guidance": lio_names,
             "replay_cpu_s": replay_seconds,
             "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
             "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
@@ -340,8 +353,9 @@ def report(summary: dict) -> str:
              "## Localization (registration to the prior map from wheel odometry)", "", header]
     comps = summary["comparisons"]
     lines += [row(g["name"], comps["localization"][g["name"]]) for g in summary["guidance"] if g["name"] != "none"]
-    if "default" in comps["lio"]:
-        lines += ["", "## LIO", "", header, row("default", comps["lio"]["default"])]
+    lio_rows = [row(g["name"], comps["lio"][g["name"]]) for g in summary["guidance"] if g["name"] in comps["lio"]]
+    if lio_rows:
+        lines += ["", "## LIO (odometry auto: DLIO for spinning sensors, GenZ-LIO for Livox)", "", header] + lio_rows
     for method, title in (("localization", "localization"), ("lio", "LIO")):
         if "default_by_map" in comps[method]:
             lines += ["", f"## Default guidance against none, per map, per robot and at risk ({title})", "",

@@ -39,5 +39,3 @@ UNGUIDED = Guidance("none", "none", 1.0, 0.0)
 #: The guidance compared with ``none``: each SOLM channel as it is, then the shipped default.
 GUIDANCE = (Guidance("q_n", "q_n"), Guidance("q_min", "q_min"), Guidance("step_norm", "step_norm"),
             Guidance("default", DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT))
-#: Replayed with the LIO as well as by localization.
-LIO_GUIDANCE = ("none", "default")

@@ -16,10 +16,10 @@ see docs/scenes.md for what each scene holds and its parameters.
 from __future__ import annotations
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.scenes import boxes, gobi, house_meadow, houses, meadow, orientation, tunnel, wall
+from lf3pm.scenes import boxes, corridor, field, gobi, house_meadow, houses, meadow, orientation, tunnel, wall
 from lf3pm.scenes.scene import Scene, Zone, resolve_params
 
-_MODULES = (houses, house_meadow, meadow, wall, gobi, boxes, tunnel, orientation)
+_MODULES = (houses, house_meadow, meadow, wall, gobi, boxes, tunnel, orientation, corridor, field)
 
 #: Scene name -> builder ``build(seed=0, **params) -> Scene``.
 SCENES = {module.NAME: module.build for module in _MODULES}
