@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 import lf3pm
 from lf3pm import _core
 from lf3pm.cli import app
-from lf3pm.config import (DEFAULTS, Config, ConfigError, MapConfig, MetricConfig, ScanConfig, load_config,
+from lf3pm.config import (DEFAULTS, ConfigError, MapConfig, MetricConfig, ScanConfig, load_config,
                           to_yaml)
 from lf3pm.scenes import build_scene
 
@@ -67,9 +67,20 @@ def test_the_shipped_default_config_is_current():
 
 @pytest.mark.parametrize("path", sorted(CONFIG_DIR.glob("*.yaml")), ids=lambda p: p.name)
 def test_every_example_config_loads(path):
+    """Each example loads, every value it writes arrives in the configuration, and
+    everything it leaves out keeps its default."""
     config = load_config(path)
-    assert isinstance(config, Config)
     lf3pm.get_sensor(config.sensor)
+    written = yaml.safe_load(path.read_text())
+    loaded = yaml.safe_load(to_yaml(config))
+    defaults = yaml.safe_load(to_yaml(DEFAULTS))
+    for key, value in loaded.items():
+        if isinstance(value, dict):
+            for name, setting in value.items():
+                expected = written.get(key, {}).get(name, defaults[key][name])
+                assert setting == expected, f"{path.name}: {key}.{name}"
+        else:
+            assert value == written.get(key, defaults[key]), f"{path.name}: {key}"
 
 
 def test_a_file_sets_what_no_flag_gives_and_flags_override_it(boxes, tmp_path):

@@ -3,7 +3,6 @@
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +13,7 @@ from lf3pm.errors import Lf3pmError, MapError, PoseError, SensorError
 from lf3pm.io import write_points
 from analytic_scenes import box_room, grid_plane
 from reference_metric import reference_metric
+from shared_data import shared_file
 
 
 def metric_of_rows(A, b):
@@ -21,7 +21,6 @@ def metric_of_rows(A, b):
     M = np.hstack([A, b[:, None]])
     return _core.metric_from_gram(M.T @ M, len(b)).as_dict()
 
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 REQUIRED = ("sigma1", "xi", "q_min", "q_n", "q_max", "m")
 
 
@@ -148,7 +147,7 @@ def test_api_errors_are_lf3pm_errors(room_file):
 
 
 def test_real_map_indoor_scan():
-    path = SHARED_DATA / "indoor_pcl_room_scan1.pcd"
+    path = shared_file("indoor_pcl_room_scan1.pcd")
     with pytest.warns(UserWarning, match="duplicate"):
         world = lf3pm.load_map(path)
     res = lf3pm.evaluate(world, (2.0, 1.0, 0.0, 0.0), "vlp16", seed=0)

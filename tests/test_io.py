@@ -11,8 +11,8 @@ from pypcd4 import Encoding, PointCloud
 import lf3pm.io.npy
 from lf3pm.errors import MapError
 from lf3pm.io import SUPPORTED_SUFFIXES, load_points, voxel_downsample, write_points
+from shared_data import shared_file
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 FLOAT32_SUFFIXES = (".pcd", ".ply")
 
@@ -514,13 +514,13 @@ def test_load_points_with_voxel(tmp_path):
 # --- real scans ------------------------------------------------------------------------------
 
 def test_real_indoor_scan():
-    points = load_points(DATA / "indoor_pcl_room_scan1.pcd")
+    points = load_points(shared_file("indoor_pcl_room_scan1.pcd"))
     assert points.shape == (112_586, 3) and points.dtype == np.float64 and points.flags.c_contiguous
     assert np.isfinite(points).all()
 
 
 def test_real_outdoor_scan_with_mixed_fields():
-    path = DATA / "outdoor_urban64_2021-10-26-16-21-29-468.pcd"
+    path = shared_file("outdoor_urban64_2021-10-26-16-21-29-468.pcd")
     points = load_points(path)
     assert points.shape == (80_787, 3)
     # Independent decode: x y z intensity (float32), ring (uint16), timestamp (float64).

@@ -56,7 +56,12 @@ def test_a_car_turns_round_at_both_ends(planner):
     assert abs(np.angle(np.exp(1j * (s["yaw"][0] - start[2])))) < 1e-9
     assert abs(np.angle(np.exp(1j * (s["yaw"][-1] - goal[2])))) < 1e-9
     summary = plan.summary()
-    assert summary["path_length_m"] == pytest.approx(plan.path.length) and summary["search_s"] >= 0
+    assert summary["path_length_m"] == pytest.approx(plan.path.length)
+    assert summary["duration_s"] == pytest.approx(plan.trajectory.duration) and summary["iterations"] > 0
+    fine = plan.trajectory.sample(1000.0)   # the summary samples at 100 Hz: the same length within 0.1 %
+    length = np.hypot(np.diff(fine["x"]), np.diff(fine["y"])).sum()
+    assert summary["trajectory_length_m"] == pytest.approx(length, rel=1e-3)
+    assert summary["trajectory_length_m"] >= np.hypot(goal[0] - start[0], goal[1] - start[1])
 
 
 def random_queries(planner, seed: int, count: int):
