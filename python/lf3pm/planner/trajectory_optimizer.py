@@ -43,8 +43,8 @@ class OptimizeResult:
 
     ``status``: L-BFGS's (converged, stalled, max_iterations, line_search_failed) and
     ``reason``, why it stopped, with the numbers that decided it (lbfgs.hpp).
-    ``terms``: the objective's terms at the solution (q, velocity, omega, turn, esdf,
-    heading, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
+    ``terms``: the objective's terms at the solution (q, velocity, omega, acceleration,
+    turn, esdf, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
     max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
     max_omega_ratio, max_a_lon_ratio, max_a_lat_ratio (body-frame acceleration), max_alpha_ratio
     (yaw acceleration, from central differences of the sampled yaw rate) (<= 1 is within
