@@ -69,8 +69,9 @@ def test_hostile_numbers_are_one_line_errors(boxes, tmp_path, command, options, 
 
 def test_a_robot_slower_than_a_millimetre_per_second_is_refused():
     from lf3pm.errors import Lf3pmError
-    from lf3pm.planner.robots import MIN_LIMIT, Robot
+    from lf3pm.config import MIN_LIMIT
+    from lf3pm.planner.robots import Robot
 
-    with pytest.raises(Lf3pmError, match="vmax_lon must be at least"):
+    with pytest.raises(Lf3pmError, match="robot.vmax_lon must be greater than or equal to 0.001"):
         Robot(vmax_lon=1e-9)
     assert Robot(vmax_lon=MIN_LIMIT, vmax_lat=MIN_LIMIT).vmax_norm == MIN_LIMIT

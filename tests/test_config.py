@@ -111,7 +111,7 @@ def test_robot_and_guidance_from_a_file():
     ("bogus: {a: 1}\n", "c.yaml: bogus is not a parameter lf3pm knows"),
     ("solm: {space: r4}\n", "c.yaml: solm.space must be 'r2', 'se2' or 'r3', got 'r4'"),
     ("metric: {dof: 2.5}\n", "c.yaml: metric.dof must be 3 or 6"),
-    ("robot: {vmax_lon: 0}\n", "c.yaml: robot vmax_lon must be a positive number"),
+    ("robot: {vmax_lon: 0}\n", "c.yaml: robot.vmax_lon must be greater than or equal to 0.001"),
     ("robot: {wheels: 4}\n", "c.yaml: robot.wheels is not a parameter lf3pm knows"),
     ("- a\n- b\n", "c.yaml: a config is a mapping of sections, got list"),
     ("scan: [1, 2\n", "c.yaml: not YAML"),

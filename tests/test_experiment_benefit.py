@@ -65,7 +65,7 @@ def test_quick_study_end_to_end(tmp_path):
     out = tmp_path / "benefit"
     bad = subprocess.run([sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "some",
                           "-o", str(out)], capture_output=True, text=True)
-    assert bad.returncode == 2 and "lio must be one of all, default" in bad.stderr and not out.exists()
+    assert bad.returncode == 2 and "--lio must be 'all' or 'default'" in bad.stderr and not out.exists()
     # The LIO on the default's and the unguided plans only (the full study replays every plan).
     command = [sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "default", "-o", str(out)]
     run = subprocess.run(command, capture_output=True, text=True)

@@ -16,7 +16,7 @@ from rich.console import Console
 from rich.table import Table
 
 from lf3pm.atomic import atomic_write, check_replaceable
-from lf3pm.config import Config, StudyConfig, help_with_default, load_config, validated
+from lf3pm.config import Config, help_with_default, load_config
 from lf3pm.errors import Lf3pmError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -53,9 +53,9 @@ def configure(config_file: Path | None, given: dict, paths: dict) -> Config:
     return load_config(config_file, overrides, flags)
 
 
-def study_counts(**given) -> StudyConfig:
-    """The experiment's counts validated (one line naming the flag when one is out of range)."""
-    return validated(StudyConfig, flags={name: "--" + name.replace("_", "-") for name in given}, **given)
+def section_paths(section: str, *names: str) -> dict:
+    """{option: "section.option"} for options named as their config parameters."""
+    return {name: f"{section}.{name}" for name in names}
 
 
 #: Where each option of evaluate and mde lives in the config.
@@ -226,12 +226,12 @@ def scene(
     name: Optional[str] = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="MAP.pcd",
                                           help="Map file to write (format by suffix; .pcd is binary)."),
-    seed: int = typer.Option(0, help="Seed of the scene's randomness (0 to 2^63 - 1)."),
+    seed: Optional[int] = option("scene.seed", help="Seed of the scene's randomness (0 to 2^63 - 1)."),
     list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
 ):
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
     with user_errors():
-        study_counts(seed=seed)
+        seed = configure(None, locals(), {"seed": "scene.seed"}).scene.seed
         from lf3pm.scenes import build_scene, describe_scenes, scene_defaults, scene_names
 
         if list_scenes:
@@ -268,17 +268,17 @@ app.add_typer(experiment_app, name="experiment")
 @experiment_app.command("table1")
 def experiment_table1(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
-    poses: int = typer.Option(8, help="Poses per scene (reference position at 4 yaws, then random)."),
-    trials: int = typer.Option(10, help="MDE trials per pose."),
-    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
+    poses: Optional[int] = option("table1.poses"),
+    trials: Optional[int] = option("table1.trials"),
+    seed: Optional[int] = option("table1.seed"),
 ):
     """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
     with user_errors():
         from lf3pm.experiments import table1
 
-        study_counts(poses=poses, trials=trials, seed=seed)
+        study = configure(None, locals(), section_paths("table1", "poses", "trials", "seed")).table1
         with progress_bar() as step:
-            table1.run(out, poses=poses, trials=trials, seed=seed, progress=step)
+            table1.run(out, poses=study.poses, trials=study.trials, seed=study.seed, progress=step)
         console.print((out / "table1.md").read_text())
         console.print(f"wrote {out / 'summary.json'}, {out / 'table1.md'}, {out / 'table1.png'}")
 
@@ -286,20 +286,22 @@ def experiment_table1(
 @experiment_app.command("correlation")
 def experiment_correlation(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
-    poses_per_map: int = typer.Option(40, help="Random free poses per map (6 scenes + 2 real maps)."),
-    trials: int = typer.Option(5, help="MDE trials per pose."),
-    sensor: str = typer.Option("vlp16", help="Sensor preset name or YAML file."),
-    bootstrap: int = typer.Option(1000, help="Bootstrap resamples for the confidence intervals."),
-    seed: int = typer.Option(0, help="Seed of the scenes, poses, noise and disturbances."),
+    poses_per_map: Optional[int] = option("correlation.poses_per_map"),
+    trials: Optional[int] = option("correlation.trials"),
+    sensor: Optional[str] = option("sensor"),
+    bootstrap: Optional[int] = option("correlation.bootstrap"),
+    seed: Optional[int] = option("correlation.seed"),
 ):
     """Spearman correlation of each predictor with MDE, pooled and within maps."""
     with user_errors():
         from lf3pm.experiments import correlation
 
-        study_counts(poses_per_map=poses_per_map, trials=trials, bootstrap=bootstrap, seed=seed)
+        cfg = configure(None, locals(), {"sensor": "sensor", **section_paths(
+            "correlation", "poses_per_map", "trials", "bootstrap", "seed")})
+        study = cfg.correlation
         with progress_bar() as step:
-            summary = correlation.run(out, poses_per_map=poses_per_map, trials=trials, sensor=sensor,
-                                      seed=seed, bootstrap=bootstrap, progress=step)
+            summary = correlation.run(out, poses_per_map=study.poses_per_map, trials=study.trials, sensor=cfg.sensor,
+                                      seed=study.seed, bootstrap=study.bootstrap, progress=step)
         table = Table(title=f"Spearman rho with MDE ({summary['params']['poses']} poses)")
         for col in ("predictor", "pooled rho", "95% CI", "mean within-map rho", "95% CI"):
             table.add_column(col)
@@ -316,19 +318,19 @@ def experiment_correlation(
 def experiment_gobi(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
-    seeds: Optional[int] = typer.Option(None, help="Replay seeds per plan and method (default: the setup's)."),
-    seed: int = typer.Option(0, help="Seed of the scene, the noise and the disturbances."),
+    seeds: Optional[int] = option("gobi.seeds"),
+    seed: Optional[int] = option("gobi.seed"),
 ):
     """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
     with user_errors():
         from dataclasses import replace
 
-        study_counts(seed=seed, **({} if seeds is None else {"seeds": seeds}))
+        study = configure(None, locals(), section_paths("gobi", "seeds", "seed")).gobi
         from lf3pm.experiments import gobi
 
-        setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=seed)
-        if seeds is not None:
-            setup = replace(setup, replay_seeds=seeds)
+        setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=study.seed)
+        if study.seeds is not None:
+            setup = replace(setup, replay_seeds=study.seeds)
         with progress_bar() as step:
             gobi.run(out, setup, progress=step)
         console.print((out / "gobi.md").read_text())
@@ -339,26 +341,25 @@ def experiment_gobi(
 def experiment_benefit(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
-    seeds: int = typer.Option(3, help="Replay seeds per plan and method."),
-    workers: int = typer.Option(2, help="Replay processes."),
-    pair_seed: int = typer.Option(0, help="Seed of the start/goal pairs."),
+    seeds: Optional[int] = option("benefit.seeds"),
+    workers: Optional[int] = option("benefit.workers"),
+    pair_seed: Optional[int] = option("benefit.pair_seed"),
     guidance: Optional[list[str]] = typer.Option(
         None, metavar="NAME=CHANNEL:POWER:WEIGHT",
         help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
-    lio: str = typer.Option("all", help="Plans the LIO replays too: all, or default (the default's and the "
-                                        "unguided one; a shorter run)."),
+    lio: Optional[str] = option("benefit.lio"),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
         from lf3pm.experiments import benefit
 
-        study_counts(seeds=seeds, workers=workers, pair_seed=pair_seed)
+        study = configure(None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio")).benefit
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
         with progress_bar() as step:
-            benefit.run(out, quick=quick, seeds=seeds, workers=workers, pair_seed=pair_seed,
-                        guidance=candidates, lio=lio, progress=step)
+            benefit.run(out, quick=quick, seeds=study.seeds, workers=study.workers, pair_seed=study.pair_seed,
+                        guidance=candidates, lio=study.lio, progress=step)
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
 
@@ -406,7 +407,9 @@ def plan(
         from lf3pm.planner.plan import Planner
         from lf3pm.solm import Solm
 
-        vehicle, guidance = cfg.robot, cfg.guidance
+        from lf3pm.planner.robots import Robot
+
+        vehicle, guidance = Robot.from_config(cfg.robot), cfg.guidance
         metric = guidance.metric
         solm = Solm.open(solm_path)
         result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=guidance.weight,

@@ -20,7 +20,6 @@ A YAML file holds any subset of the sections (see config/*.yaml)::
 from __future__ import annotations
 
 import math
-from dataclasses import fields
 from pathlib import Path
 from typing import Literal, Optional, Tuple
 
@@ -29,12 +28,11 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.cost_map import COST_CHANNELS, DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
-from lf3pm.planner.robots import Robot
 
 _MAP = _core.MapParams()
 _SCAN = _core.ScanParams()
 _EVAL = _core.EvalParams()
+_LIMITS = _core.RobotLimits()
 
 #: The core's noise streams take 64-bit seeds (Python's and numpy's seed sequences take
 #: any non-negative int; 2^63 - 1 keeps a seed an int64 in JSON and Zarr attributes).
@@ -48,6 +46,13 @@ REPLAY_METHODS = ("localization", "lio", "odometry")
 #: The LiDAR-inertial odometries of the ``lio`` replay (lf3pm.validation.lio.ODOMETRIES);
 #: ``auto`` picks by the sensor (lio.choose_odometry).
 LIO_ODOMETRIES = ("auto", "genz", "dlio")
+
+#: Robot kinds (lf3pm.planner.robots.Robot) and the SOLM channels a plan can be guided by.
+ROBOT_KINDS = ("omni", "diff", "car")
+COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
+#: The smallest speed, yaw rate or acceleration limit a robot takes (m/s, rad/s, m/s^2,
+#: rad/s^2): slower is no robot, and a 10 m plan at 1e-9 m/s would be 300 years of 100 Hz samples.
+MIN_LIMIT = 1e-3
 
 #: Sensor height above the local ground (m) of a ground robot: a LiDAR on a small
 #: wheeled base. SOLM grids and the replay's motion take it by default.
@@ -95,6 +100,8 @@ class ScanConfig(Section):
     scan_voxel: float = Field(_SCAN.scan_voxel, ge=0, le=100.0,
                               description="Scan downsampling voxel (m; FAST-LIO filter_size_surf; 0: off).")
     threads: int = Field(_SCAN.threads, ge=0, le=MAX_THREADS, description="Worker threads (0 = all cores).")
+    clearance: float = Field(0.1, ge=0, le=100, description="Free space a pose needs around the sensor: no map "
+                                                            "point closer (m).")
 
     def noise_for(self, sensor) -> float:
         """The range noise sigma: this section's, else the sensor's."""
@@ -132,6 +139,8 @@ class MdeConfig(Section):
     trials: int = Field(20, ge=1, le=100_000, description="Disturbed registration starts.")
     sigma_t: float = Field(0.1, ge=0, description="Start disturbance, translation sigma per axis (m).")
     sigma_r: float = Field(2.0, ge=0, le=180, description="Start disturbance, rotation sigma per axis (deg).")
+    max_correspondence_distance: float = Field(1.0, gt=0, description="Registration's correspondence cutoff (m).")
+    max_iterations: int = Field(50, ge=1, le=10_000, description="Registration's iteration limit.")
 
 
 class SolmConfig(Section):
@@ -148,19 +157,75 @@ class SolmConfig(Section):
     bounds: Optional[Tuple[float, float, float, float]] = Field(
         None, description="XMIN YMIN XMAX YMAX (m; none: the map's extent).")
     robot_radius: float = Field(0.3, ge=0, le=100, description="Robot radius for the obstacle mask (m).")
+    floor_clearance: float = Field(0.2, ge=0, le=100, description="Height above the ground from which a point "
+                                                                  "blocks a ground robot's cell (m).")
     max_cells: int = Field(10_000_000, ge=1, description="Refuse a grid of more poses than this.")
     crop_above: int = Field(20_000_000, ge=1, description="Build maps of more points than this tile by tile, "
                                                           "each tile on its crop (docs/scale.md).")
 
 
-class GuidanceConfig(Section):
-    """How a SOLM channel guides the planner (docs/benefit.md)."""
+class RobotConfig(Section):
+    """A ground robot's kind and limits (SI units; C++ RobotLimits).
 
-    metric: Literal[COST_CHANNELS] = Field(
-        DEFAULT_CHANNEL, description="SOLM channel guiding the plan (none: shortest path).")
-    weight: float = Field(DEFAULT_WEIGHT, ge=0, le=1e6, description="lambda: an edge through cells of cost c costs "
-                                                                    "length (1 + lambda c); a median cell has c = 1.")
-    power: float = Field(DEFAULT_POWER, gt=0, le=10, description="Exponent applied to the channel (over its median).")
+    ``kind``: ``omni`` (holonomic: body-frame longitudinal and lateral speed limits),
+    ``diff`` (differential drive: no lateral motion) or ``car`` (diff plus a minimum
+    turning radius ``min_turn_radius``, |omega| <= |v_lon| / R). ``vmax_norm`` (omni
+    only) also limits the speed |v| itself, by default to max(vmax_lon, vmax_lat)
+    (``inf``: no such limit): with only the body-frame limits an omni robot is fastest
+    moving diagonally (sqrt(vmax_lon^2 + vmax_lat^2)), which a time-weighted planner
+    exploits by yawing 45 degrees off its path. ``r_safe`` is the clearance the
+    trajectory keeps from obstacles (ESDF >= r_safe) beyond the SOLM's robot radius.
+    ``amax_lon`` and ``amax_lat`` limit the acceleration in the body frame (diff and
+    car: tangential and centripetal), ``alpha_max`` the yaw acceleration, so that a
+    real base can track the trajectory.
+    """
+
+    kind: Literal[ROBOT_KINDS] = Field("omni", description="omni, diff (differential drive) or car.")
+    vmax_lon: float = Field(_LIMITS.vmax_lon, ge=MIN_LIMIT, description="Longitudinal speed limit (m/s).")
+    vmax_lat: float = Field(_LIMITS.vmax_lat, ge=MIN_LIMIT, description="Lateral speed limit (m/s; omni).")
+    wmax: float = Field(_LIMITS.wmax, ge=MIN_LIMIT, description="Yaw rate limit (rad/s).")
+    amax_lon: float = Field(_LIMITS.amax_lon, ge=MIN_LIMIT,
+                            description="Longitudinal (tangential) acceleration limit (m/s^2).")
+    amax_lat: float = Field(_LIMITS.amax_lat, ge=MIN_LIMIT,
+                            description="Lateral (centripetal) acceleration limit (m/s^2).")
+    alpha_max: float = Field(_LIMITS.alpha_max, ge=MIN_LIMIT, description="Yaw acceleration limit (rad/s^2).")
+    min_turn_radius: float = Field(_LIMITS.min_turn_radius, ge=0, description="Minimum turning radius (m; car).")
+    r_safe: float = Field(_LIMITS.r_safe, ge=0, description="Clearance beyond the SOLM's robot radius (m).")
+    vmax_norm: Optional[float] = Field(None, gt=0, allow_inf_nan=True,
+                                       description="Speed-norm limit (m/s; omni; inf: none; default: the larger "
+                                                   "of vmax_lon and vmax_lat).")
+
+    @model_validator(mode="after")
+    def _kind_limits(self):
+        if self.vmax_norm is not None:
+            if math.isnan(self.vmax_norm):
+                raise ValueError("vmax_norm must be a positive number (inf: none), got nan")
+            if self.kind != "omni":
+                raise ValueError(f"a speed-norm limit applies to omni robots only, not {self.kind!r}")
+        elif self.kind == "omni":
+            # A base's wheels limit its speed, not only its body-frame components: with the
+            # box alone a time-weighted plan yaws 45 degrees off its path to go sqrt(2) faster.
+            object.__setattr__(self, "vmax_norm", float(max(self.vmax_lon, self.vmax_lat)))
+        if self.kind != "car" and self.min_turn_radius > 0:
+            raise ValueError(f"a minimum turning radius applies to car robots only, not {self.kind!r}")
+        return self
+
+
+class GuidanceConfig(Section):
+    """How a SOLM channel guides the planner (docs/benefit.md).
+
+    The shipped guidance was chosen by a tuning run of the benefit study on its own maps
+    (pairs disjoint from the reported ones): q_n predicts a plan's localization APE best
+    (Spearman 0.81-0.83 over 240-288 plans) and APE grows as its mean to the power
+    0.93-0.94, so the power 1 makes the cost proportional to the predicted error; of the
+    weights and powers tried, lambda = 3 was worse than no guidance on the fewest at-risk
+    pairs (2 of 21).
+    """
+
+    metric: Literal[COST_CHANNELS] = Field("q_n", description="SOLM channel guiding the plan (none: shortest path).")
+    weight: float = Field(3.0, ge=0, le=1e6, description="lambda: an edge through cells of cost c costs "
+                                                         "length (1 + lambda c); a median cell has c = 1.")
+    power: float = Field(1.0, gt=0, le=10, description="Exponent applied to the channel (over its median).")
 
 
 class ReplayConfig(Section):
@@ -171,22 +236,65 @@ class ReplayConfig(Section):
     seeds: int = Field(1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1.")
     height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the smoothed ground (m).")
     rate: float = Field(10.0, gt=0, le=1000, description="Scans per second.")
+    imu_rate: float = Field(200.0, gt=0, le=100_000, description="The lio method's IMU samples per second.")
+    imu_noise: bool = Field(True, description="The lio method's IMU noise (false: exact samples).")
     odometry: Literal[LIO_ODOMETRIES] = Field(
         "auto", description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio) or auto "
                             "(dlio for a spinning sensor, genz for a non-repetitive one: docs/lio.md).")
 
 
-class StudyConfig(Section):
-    """The counts the experiments take (each study fixes the rest of its setup)."""
+class KissIcpConfig(Section):
+    """The odometry replay's KISS-ICP."""
 
-    seed: int = Field(0, ge=0, le=MAX_SEED, description="Seed of the scenes, poses, noise and disturbances.")
-    pair_seed: int = Field(0, ge=0, le=MAX_SEED, description="Seed of the start/goal pairs.")
-    poses: int = Field(8, ge=1, le=100_000, description="Poses per scene.")
-    poses_per_map: int = Field(40, ge=3, le=100_000, description="Random free poses per map.")
+    voxel_size: float = Field(1.0, gt=0, le=100, description="Local map voxel (m; KISS-ICP's own choice for "
+                                                             "outdoor 100 m LiDARs).")
+    min_points: int = Field(100, ge=1, description="Scans with fewer hits are not given to KISS-ICP.")
+
+
+def _seed(what: str):
+    return Field(0, ge=0, le=MAX_SEED, description=f"Seed of {what}.")
+
+
+class Table1Config(Section):
+    """`lf3pm experiment table1` (the disturbances: the mde section's)."""
+
+    poses: int = Field(8, ge=1, le=100_000, description="Poses per scene (reference position at 4 yaws, "
+                                                        "then random).")
     trials: int = Field(10, ge=1, le=100_000, description="MDE trials per pose.")
-    bootstrap: int = Field(1000, ge=1, le=1_000_000, description="Bootstrap resamples.")
+    seed: int = _seed("the scenes, poses, noise and disturbances")
+
+
+class CorrelationConfig(Section):
+    """`lf3pm experiment correlation`."""
+
+    poses_per_map: int = Field(40, ge=3, le=100_000, description="Random free poses per map (scenes and real maps).")
+    trials: int = Field(5, ge=1, le=100_000, description="MDE trials per pose.")
+    bootstrap: int = Field(1000, ge=1, le=1_000_000, description="Bootstrap resamples for the confidence intervals.")
+    seed: int = _seed("the scenes, poses, noise and disturbances")
+
+
+class BenefitConfig(Section):
+    """`lf3pm experiment benefit`."""
+
     seeds: int = Field(3, ge=1, le=10_000, description="Replay seeds per plan and method.")
     workers: int = Field(2, ge=1, le=MAX_THREADS, description="Replay processes.")
+    pair_seed: int = _seed("the start/goal pairs")
+    lio: Literal["all", "default"] = Field("all", description="Plans the LIO replays too: all, or default (the "
+                                                              "default's and the unguided one; a shorter run).")
+
+
+class GobiConfig(Section):
+    """`lf3pm experiment gobi` (the rest of its setup: experiments/gobi.py)."""
+
+    seed: int = _seed("the scene, the noise and the disturbances")
+    seeds: Optional[int] = Field(None, ge=1, le=10_000, description="Replay seeds per plan and method "
+                                                                    "(none: the setup's).")
+
+
+class SceneConfig(Section):
+    """`lf3pm scene` and lf3pm.build_scene."""
+
+    seed: int = _seed("the scene's randomness")
 
 
 class Config(Section):
@@ -198,21 +306,15 @@ class Config(Section):
     metric: MetricConfig = MetricConfig()
     mde: MdeConfig = MdeConfig()
     solm: SolmConfig = SolmConfig()
-    robot: Robot = Robot()
+    robot: RobotConfig = RobotConfig()
     guidance: GuidanceConfig = GuidanceConfig()
     replay: ReplayConfig = ReplayConfig()
-
-    @model_validator(mode="before")
-    @classmethod
-    def _robot_from_mapping(cls, data):
-        # Robot is a frozen dataclass with positional fields; a YAML mapping builds it.
-        if isinstance(data, dict) and isinstance(data.get("robot"), dict):
-            known = {f.name for f in fields(Robot)}
-            unknown = sorted(set(data["robot"]) - known)
-            if unknown:
-                raise ConfigError(f"robot.{unknown[0]} is not a parameter lf3pm knows")
-            data = {**data, "robot": Robot(**data["robot"])}
-        return data
+    kiss_icp: KissIcpConfig = KissIcpConfig()
+    table1: Table1Config = Table1Config()
+    correlation: CorrelationConfig = CorrelationConfig()
+    benefit: BenefitConfig = BenefitConfig()
+    gobi: GobiConfig = GobiConfig()
+    scene: SceneConfig = SceneConfig()
 
 
 def core_struct(struct, **fields):
@@ -252,6 +354,9 @@ def describe(err: ValidationError, where: str = "", flags: dict | None = None) -
     path = _parameter(first["loc"])
     name = (flags or {}).get(path) or (f"{where}.{path}" if where else path)
     message = first["msg"]
+    if first["type"] == "value_error":   # a check across fields (a model validator's)
+        text = message.removeprefix("Value error, ")
+        return f"{name}: {text}" if name else text
     if first["type"] == "finite_number":
         message = "must be finite"
     elif message.startswith("Input should be "):
@@ -306,8 +411,6 @@ def load_config(path: str | Path | None = None, overrides: dict | None = None,
         if flags and loc in flags and (overrides or {}).get(loc) is not None:
             raise ConfigError(describe(err, flags=flags)) from None
         raise ConfigError((f"{path}: " if path is not None else "") + describe(err)) from None
-    except Lf3pmError as err:  # a Robot's own checks
-        raise ConfigError(f"{path}: {err}" if path is not None else str(err)) from None
 
 
 def to_yaml(config: Config) -> str:

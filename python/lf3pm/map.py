@@ -18,7 +18,7 @@ from functools import cached_property
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import MapConfig, check_threads, validated
+from lf3pm.config import DEFAULTS, MapConfig, check_threads, validated
 from lf3pm.errors import MapError, PoseError
 from lf3pm.io import load_points, voxel_downsample
 
@@ -49,7 +49,7 @@ class Map:
         pts = self.index.points
         return pts.min(axis=0), pts.max(axis=0)
 
-    def check_pose(self, matrix: np.ndarray, clearance: float = 0.1) -> None:
+    def check_pose(self, matrix: np.ndarray, clearance: float = DEFAULTS.scan.clearance) -> None:
         """Raises PoseError when the sensor at ``matrix`` (4 x 4) lies outside the
         map's x-y extent or has a map point closer than ``clearance`` metres."""
         lower, upper = self.bounds
@@ -68,7 +68,7 @@ class Map:
         """The frame of the map's index (in which its crops are indexed)."""
         return self.index.frame
 
-    def crop(self, bounds, margin: float, threads: int = 0) -> "Map":
+    def crop(self, bounds, margin: float, threads: int = DEFAULTS.scan.threads) -> "Map":
         """The points within ``margin`` m (in x, y) of ``bounds`` (xmin, ymin, xmax,
         ymax), indexed in this map's frame: a point whose k nearest neighbours all lie
         in the crop has this map's plane and disc there, and a ray that stays within
@@ -91,7 +91,7 @@ class Map:
 
 
 def crop_points(points: np.ndarray, frame: "_core.MapFrame", association_params: dict, bounds, margin: float, *,
-                source: str, sha256: str, threads: int = 0) -> Map:
+                source: str, sha256: str, threads: int = DEFAULTS.scan.threads) -> Map:
     """The crop (bounds grown by ``margin`` in x and y, every z) of a map's ``points``
     (in its index order), indexed in the map's ``frame`` with its association
     parameters. The crop keeps the points' order, and its grids share the map's
@@ -118,7 +118,7 @@ def _indexed(points, frame, association_params: dict, source: str, sha256: str, 
 
 def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
              knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
-             max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> Map:
+             max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads) -> Map:
     """Reads a map file (or takes an N x 3 array) and indexes it.
 
     ``voxel`` downsamples the map first (one centroid per voxel); ``cell_size``
@@ -151,7 +151,7 @@ class MapPoints:
         """Axis-aligned bounding box (lower, upper) of the points."""
         return self.points.min(axis=0), self.points.max(axis=0)
 
-    def indexed(self, threads: int = 0) -> Map:
+    def indexed(self, threads: int = DEFAULTS.scan.threads) -> Map:
         """The whole map indexed (in its frame: the index :func:`load_map` builds)."""
         whole = _indexed(self.points, self.frame, self.association_params, self.source, self.sha256, threads)
         if whole.index.duplicates_removed:
@@ -159,7 +159,7 @@ class MapPoints:
                           stacklevel=3)
         return whole
 
-    def crop(self, bounds, margin: float, threads: int = 0) -> Map:
+    def crop(self, bounds, margin: float, threads: int = DEFAULTS.scan.threads) -> Map:
         """As :meth:`Map.crop`."""
         return crop_points(self.points, self.frame, self.association_params, bounds, margin,
                            source=self.source, sha256=self.sha256, threads=threads)
@@ -172,7 +172,7 @@ def _sha256(points: np.ndarray) -> str:
 
 def load_map_points(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
                     knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
-                    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = 0) -> MapPoints:
+                    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads) -> MapPoints:
     """Reads a map as :func:`load_map` does, without indexing it whole (:class:`MapPoints`);
     its hash is load_map's, so a SOLM store accepts either."""
     config = validated(MapConfig, "map", voxel=voxel, cell_size=cell_size, knn=knn,

@@ -10,7 +10,7 @@ from dataclasses import asdict, dataclass, field
 from lf3pm import _core
 from lf3pm.calibration import (LOCALIZATION_PACKAGED, calibration_applies, packaged_calibration, predict_mde,
                                predict_localization_error)
-from lf3pm.config import MetricConfig, ScanConfig, scan_params, validated
+from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, scan_params, validated
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor
@@ -78,10 +78,10 @@ def eval_params(min_range: float, max_range: float, *, dof: int = _METRIC.dof,
         scan_params(min_range, max_range, **scan), ray_weight)
 
 
-def evaluate(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, seed: int = _SCAN.seed,
+def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, seed: int = _SCAN.seed,
              noise: float | None = _SCAN.noise, dof: int = _METRIC.dof, w1: float = _METRIC.w1,
              scan_voxel: float = _SCAN.scan_voxel, association: str = _METRIC.association,
-             threads: int = _SCAN.threads, observations: bool = False, clearance: float = 0.1) -> Evaluation:
+             threads: int = _SCAN.threads, observations: bool = False, clearance: float = _SCAN.clearance) -> Evaluation:
     """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric.
 
     pose: (x, y, z, yaw), (x, y, z, qw, qx, qy, qz) or a 4 x 4 sensor-to-world

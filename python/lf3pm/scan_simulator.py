@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import scan_params
+from lf3pm.config import DEFAULTS, scan_params
 from lf3pm.map import Map
 
 
@@ -29,8 +29,8 @@ class SimulatedScan:
 
 
 def simulate_scan(map: Map, pose: np.ndarray, directions: np.ndarray, min_range: float, max_range: float, *,
-                  noise: float = 0.0, seed: int = 0, stream: int = 0, scan_voxel: float = 0.0,
-                  threads: int = 0) -> SimulatedScan:
+                  noise: float = 0.0, seed: int = DEFAULTS.scan.seed, stream: int = 0,
+                  scan_voxel: float = DEFAULTS.scan.scan_voxel, threads: int = DEFAULTS.scan.threads) -> SimulatedScan:
     """The scan of rays ``directions`` (N, 3, sensor frame) from the 4 x 4 sensor-to-world
     ``pose``; range noise sigma ``noise`` from noise stream (``seed``, ``stream``, ray)."""
     raw = _core.simulate_scan(map.index, np.ascontiguousarray(pose, dtype=np.float64),

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
+from lf3pm.config import DEFAULTS, BenefitConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.localization_error import localization_error_fit
@@ -72,30 +73,25 @@ CASES = (
     MapCase("field", "scene:field", "mid70", "se2", 1.0, 8, yaw_reuse=True, ray_stride=4, min_distance=60.0),
 )
 
-#: Which plans the LIO replays too (run's ``lio``): every one, or the default's and the unguided one.
-LIO_ARMS = ("all", "default")
-
 #: `--quick`: two small maps, one pair each, one seed (the test suite's run).
 QUICK = (replace(CASES[0], pairs=1, scene_params={"length": 20.0, "pillars": 8}, min_distance=20.0),
          replace(CASES[1], pairs=1, res=2.0, yaw_bins=12))
 
 
-def run(out: Path, *, quick: bool = False, seeds: int = 3, workers: int = 2, pair_seed: int = 0,
-        cases: tuple | None = None, guidance: tuple | None = None, lio: str = "all", progress=None) -> dict:
+def run(out: Path, *, quick: bool = False, seeds: int = DEFAULTS.benefit.seeds, workers: int = DEFAULTS.benefit.workers,
+        pair_seed: int = DEFAULTS.benefit.pair_seed, cases: tuple | None = None, guidance: tuple | None = None,
+        lio: str = DEFAULTS.benefit.lio, progress=None) -> dict:
     """Runs (or resumes) the study into ``out`` and returns the summary. ``guidance``
     replaces :data:`GUIDANCE` (candidates to compare, e.g. when choosing the default).
     ``lio``: which plans the LIO replays too: ``all``, or ``default`` (the one named
     default and the unguided one: a shorter run)."""
     out = Path(out)
-    if seeds < 1 or workers < 1:
-        raise Lf3pmError(f"seeds and workers must be >= 1, got {seeds} and {workers}")
+    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio)
     cases = cases if cases is not None else (QUICK if quick else CASES)
     guidance = tuple(guidance) if guidance is not None else GUIDANCE
     names = [g.name for g in guidance]
     if len(set(names)) != len(names) or "none" in names:
         raise Lf3pmError(f"guidance names must be distinct and not 'none', got {', '.join(names)}")
-    if lio not in LIO_ARMS:
-        raise Lf3pmError(f"lio must be one of {', '.join(LIO_ARMS)}, got {lio!r}")
     lio_names = ["none"] + (names if lio == "all" else [n for n in names if n == "default"])
     if quick:
         seeds = 1

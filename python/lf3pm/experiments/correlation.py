@@ -29,6 +29,7 @@ from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate
+from lf3pm.config import DEFAULTS
 from lf3pm.scenes import build_scene
 
 #: Predictor -> sign that makes larger mean worse localization (Zhang's factor
@@ -78,8 +79,9 @@ def spearman(x, y) -> float:
     return float(rho) if np.isfinite(rho) else 0.0
 
 
-def run(out: Path, *, poses_per_map: int = 40, trials: int = 5, sensor: str = "vlp16",
-        seed: int = 0, bootstrap: int = 1000, progress=None) -> dict:
+def run(out: Path, *, poses_per_map: int = DEFAULTS.correlation.poses_per_map,
+        trials: int = DEFAULTS.correlation.trials, sensor: str = DEFAULTS.sensor, seed: int = DEFAULTS.correlation.seed,
+        bootstrap: int = DEFAULTS.correlation.bootstrap, progress=None) -> dict:
     """Runs the study and writes its files to ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x434F52]))

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS
 from lf3pm.atomic import atomic_write
 from lf3pm.validation import RegistrationTarget
 from lf3pm.validation.trajectory import sample_trajectory
@@ -44,7 +45,7 @@ class GobiSetup:
 
     scene_params: dict
     solm_res: float = 1.0
-    yaw_bins: int = 36
+    yaw_bins: int = DEFAULTS.solm.yaw_bins
     ray_stride: int = 2
     margin: float = 15.0           # m of SOLM west of the town centre and each side of the route
     half_width: float = 30.0       # m of SOLM north and south of the route
@@ -53,7 +54,7 @@ class GobiSetup:
     mde_trials: int = 5
     replay_seeds: int = 3          # per plan and method
     workers: int = 2               # replay processes
-    seed: int = 0
+    seed: int = DEFAULTS.gobi.seed
 
 
 FULL = GobiSetup(scene_params={})
@@ -117,7 +118,7 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
             result[method] = {**replay_summary(runs), "times": runs[0]["times_every_second"],
                               "errors": runs[0]["errors_every_second"]}
     summary = {"experiment": "gobi", "setup": asdict(setup), "start": start, "goal": goal, "sensor": "mid70",
-               "robot": asdict(robot), "map_points": world.size, "map_sha256": world.sha256, "paper": PAPER,
+               "robot": robot.model_dump(), "map_points": world.size, "map_sha256": world.sha256, "paper": PAPER,
                "results": results, "finding": _finding(results)}
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())

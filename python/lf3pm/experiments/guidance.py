@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.cost_map import COST_CHANNELS, DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT
+from lf3pm.config import COST_CHANNELS, DEFAULTS
 
 
 @dataclass(frozen=True)
@@ -38,4 +38,4 @@ def parse_guidance(text: str) -> Guidance:
 UNGUIDED = Guidance("none", "none", 1.0, 0.0)
 #: The guidance compared with ``none``: each SOLM channel as it is, then the shipped default.
 GUIDANCE = (Guidance("q_n", "q_n"), Guidance("q_min", "q_min"), Guidance("step_norm", "step_norm"),
-            Guidance("default", DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT))
+            Guidance("default", DEFAULTS.guidance.metric, DEFAULTS.guidance.power, DEFAULTS.guidance.weight))

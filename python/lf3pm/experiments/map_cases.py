@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 
 
@@ -25,9 +26,9 @@ class MapCase:
     res: float
     pairs: int = 0
     robots: tuple = ("omni", "diff")
-    yaw_bins: int = 36
-    yaw_reuse: bool = False
-    ray_stride: int = 1
+    yaw_bins: int = DEFAULTS.solm.yaw_bins
+    yaw_reuse: bool = DEFAULTS.solm.yaw_reuse
+    ray_stride: int = DEFAULTS.solm.ray_stride
     scene_params: dict = field(default_factory=dict)
     scene_seed: int = 0
     bounds: tuple | None = None

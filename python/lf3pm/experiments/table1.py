@@ -21,6 +21,7 @@ from lf3pm.experiments.poses import poses_around_reference
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate
 from lf3pm.scenes import build_scene
+from lf3pm.config import DEFAULTS
 from lf3pm.sensors import get_sensor
 
 SCENES = ("houses", "house_meadow", "meadow", "wall")
@@ -33,8 +34,9 @@ PAPER_FINDING = ("paper: only q_n ranks the scenes as MDE does "
                  "houses, house_meadow and meadow")
 
 
-def run(out: Path, *, poses: int = 8, trials: int = 10, sigma_t: float = 0.1,
-        sigma_r_deg: float = 2.0, seed: int = 0, progress=None) -> dict:
+def run(out: Path, *, poses: int = DEFAULTS.table1.poses, trials: int = DEFAULTS.table1.trials,
+        sigma_t: float = DEFAULTS.mde.sigma_t, sigma_r_deg: float = DEFAULTS.mde.sigma_r,
+        seed: int = DEFAULTS.table1.seed, progress=None) -> dict:
     """Runs the experiment and writes its files to ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     summary, rows = {}, []

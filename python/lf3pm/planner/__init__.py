@@ -10,24 +10,11 @@
 - Both: :class:`Planner` (:mod:`~lf3pm.planner.plan`), used by ``lf3pm plan``.
 """
 
-from importlib import import_module
+from lf3pm.planner.grid_field import GridField
+from lf3pm.planner.plan import Plan, Planner
+from lf3pm.planner.robots import Robot
+from lf3pm.planner.trajectory import Trajectory
+from lf3pm.planner.trajectory_optimizer import OptimizeResult, make_problem, optimize_trajectory
 
-# Imported lazily, as lf3pm's top level is: lf3pm.config reads Robot from
-# lf3pm.planner.robots without loading the planner (which reads the config).
-_LAZY = {
-    "GridField": "lf3pm.planner.grid_field",
-    "OptimizeResult": "lf3pm.planner.trajectory_optimizer",
-    "make_problem": "lf3pm.planner.trajectory_optimizer",
-    "optimize_trajectory": "lf3pm.planner.trajectory_optimizer",
-    "Plan": "lf3pm.planner.plan",
-    "Planner": "lf3pm.planner.plan",
-    "Robot": "lf3pm.planner.robots",
-    "Trajectory": "lf3pm.planner.trajectory",
-}
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    if name not in _LAZY:
-        raise AttributeError(f"module 'lf3pm.planner' has no attribute {name!r}")
-    return getattr(import_module(_LAZY[name]), name)
+__all__ = ["GridField", "OptimizeResult", "Plan", "Planner", "Robot", "Trajectory", "make_problem",
+           "optimize_trajectory"]

@@ -29,20 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import libm
+from lf3pm.config import COST_CHANNELS, DEFAULTS
 from lf3pm.errors import Lf3pmError
 
-COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
-
-#: The shipped guidance: channel, power and weight lambda, chosen by a tuning run of the
-#: benefit study on its own maps (pairs disjoint from the reported ones; docs/benefit.md):
-#: q_n predicts a plan's localization APE best (Spearman 0.81-0.83 over 240-288 plans) and
-#: APE grows as its mean to the power 0.93-0.94, so the power 1 makes the cost
-#: proportional to the predicted error; of the weights and powers tried, lambda = 3 was
-#: worse than no guidance on the fewest at-risk pairs (2 of 21). `lf3pm plan`,
-#: Planner.plan and the experiments default to these.
-DEFAULT_CHANNEL = "q_n"
-DEFAULT_POWER = 1.0
-DEFAULT_WEIGHT = 3.0
 
 
 @dataclass(frozen=True)
@@ -58,7 +47,8 @@ class CostLayer:
     cap: float
 
 
-def cost_from_values(values, channel: str = "q_n", *, degenerate=None, power: float = 1.0,
+def cost_from_values(values, channel: str = DEFAULTS.guidance.metric, *, degenerate=None,
+                     power: float = DEFAULTS.guidance.power,
                      cap_percentile: float = 99.0) -> CostLayer:
     """The cost layer of one channel's array (NaN: not evaluated, +inf: degenerate);
     ``degenerate`` optionally flags more cells to cap; ``power``: the exponent applied
@@ -92,7 +82,8 @@ def cost_from_values(values, channel: str = "q_n", *, degenerate=None, power: fl
     return CostLayer(channel, cost, np.where(np.isnan(cost), cap, cost), scale, cap)
 
 
-def cost_from_solm(solm, channel: str = "q_n", *, power: float = 1.0, cap_percentile: float = 99.0) -> CostLayer:
+def cost_from_solm(solm, channel: str = DEFAULTS.guidance.metric, *, power: float = DEFAULTS.guidance.power,
+                   cap_percentile: float = 99.0) -> CostLayer:
     """The cost layer of ``solm``'s ``channel`` (shape (ny, nx) for r2, (yaw_bins,
     ny, nx) for se2), raised to ``power``, with the SOLM's degenerate mask capped."""
     if solm.grid_spec.space not in ("r2", "se2"):

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.cost_map import DEFAULT_CHANNEL, DEFAULT_POWER, DEFAULT_WEIGHT, CostLayer, cost_from_solm
+from lf3pm.config import DEFAULTS
+from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
 from lf3pm.planner.grid_field import GridField
@@ -28,7 +29,7 @@ from lf3pm.planner.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, opti
 from lf3pm.planner.poses import as_pose
 from lf3pm.planner.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
-from lf3pm.planner.trajectory import Trajectory
+from lf3pm.planner.trajectory import CSV_RATE, Trajectory
 from lf3pm.solm.reader import Solm
 
 METRICS = ("q_n", "q_min", "step_norm", "none")
@@ -51,7 +52,7 @@ class Plan:
 
     def summary(self) -> dict:
         """Plain numbers for reports: lengths, duration, timings, worst constraint values."""
-        samples = self.trajectory.sample(100.0)
+        samples = self.trajectory.sample(CSV_RATE)
         length = float(np.hypot(np.diff(samples["x"]), np.diff(samples["y"])).sum())
         return {"metric": self.metric, "robot": self.robot.kind, "path_length_m": self.path.length,
                 "trajectory_length_m": length, "duration_s": float(self.trajectory.duration),
@@ -72,7 +73,7 @@ class Planner:
         self._esdf_field = self.esdf.grid_field()
         self._layers: dict[tuple, CostLayer] = {}
 
-    def cost_layer(self, metric: str, power: float = 1.0) -> CostLayer:
+    def cost_layer(self, metric: str, power: float = DEFAULTS.guidance.power) -> CostLayer:
         """The cost layer of a SOLM channel raised to ``power`` (cost_map.py), computed once."""
         if metric not in METRICS:
             raise Lf3pmError(f"metric must be one of {', '.join(METRICS)}, got {metric!r}")
@@ -81,8 +82,8 @@ class Planner:
             self._layers[key] = cost_from_solm(self.solm, metric, power=power)
         return self._layers[key]
 
-    def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = DEFAULT_CHANNEL,
-             weight: float = DEFAULT_WEIGHT, power: float = DEFAULT_POWER, rho_T: float = 1.0,
+    def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = DEFAULTS.guidance.metric,
+             weight: float = DEFAULTS.guidance.weight, power: float = DEFAULTS.guidance.power, rho_T: float = 1.0,
              heuristic: bool = True) -> Plan:
         """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
         (``none``: shortest and fastest only) raised to ``power``, with trade-off ``weight``

@@ -13,7 +13,7 @@ from lf3pm.errors import Lf3pmError
 
 CSV_COLUMNS = ("t", "x", "y", "yaw", "vx", "vy", "omega")
 #: Samples per second of a trajectory CSV (and of a Trajectory replayed directly, so that
-#: both replay the same motion).
+#: both replay the same motion), of a plan's summary and of the limit checks.
 CSV_RATE = 100.0
 #: The most samples :meth:`Trajectory.sample` returns: 10 M at 100 Hz is 28 h of motion.
 MAX_SAMPLES = 10_000_000

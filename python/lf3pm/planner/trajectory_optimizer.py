@@ -29,7 +29,7 @@ from lf3pm import _core, libm
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.grid_field import GridField
 from lf3pm.planner.robots import Robot
-from lf3pm.planner.trajectory import Trajectory
+from lf3pm.planner.trajectory import CSV_RATE, Trajectory
 
 #: The objective's weights as the C++ core defines them (trajectory_cost.hpp CostWeights):
 #: the penalty weight W, K samples per piece and the clearance margin, read once from there.
@@ -193,7 +193,7 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
                         esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
                         corners: bool = False,
                         g_epsilon: float = _LBFGS.g_epsilon, rel_cost_tol: float = _LBFGS.delta,
-                        max_iterations: int = _LBFGS.max_iterations, check_rate: float = 100.0) -> OptimizeResult:
+                        max_iterations: int = _LBFGS.max_iterations, check_rate: float = CSV_RATE) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
     ``cost``: the localisability cost (a SOLM channel; None to leave it out), weighted
@@ -225,7 +225,7 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
                           dict(out["terms"]), check_limits(trajectory, robot, esdf, check_rate), wall)
 
 
-def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = 100.0) -> dict:
+def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = CSV_RATE) -> dict:
     """Worst constraint values on samples at ``rate`` Hz (see :class:`OptimizeResult`)."""
     s = trajectory.sample(rate)
     c, si = np.cos(s["yaw"]), np.sin(s["yaw"])

@@ -15,6 +15,7 @@ see docs/scenes.md for what each scene holds and its parameters.
 
 from __future__ import annotations
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.errors import Lf3pmError
 from lf3pm.scenes import boxes, corridor, field, gobi, house_meadow, houses, meadow, orientation, tunnel, wall
 from lf3pm.scenes.scene import Scene, Zone, resolve_params
@@ -53,7 +54,7 @@ def scene_zones(name: str, **params) -> dict:
     return zones(resolve_params(module.NAME, module.DEFAULTS, params)) if zones else {}
 
 
-def build_scene(name: str, seed: int = 0, **params) -> Scene:
+def build_scene(name: str, seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds scene ``name`` with ``seed``; ``params`` override its defaults.
 
     Raises Lf3pmError (one line) for an unknown name, an unknown parameter or

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import Opening, wall
 from lf3pm.scenes.geometry import box, rectangle, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
@@ -46,7 +47,7 @@ def zones(params: dict) -> dict:
             "goal": Zone(x1 - 2.2, y0 + 0.7, x1 - 0.7, y1 - 0.7)}
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the boxes scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import Opening, wall
 from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, rectangle, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
@@ -64,7 +65,7 @@ def zones(params: dict) -> dict:
             "goal": Zone(half + 5.0, -w / 2, half + 9.0, y_hi)}
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the corridor scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import facade_openings, footprint_sides, wall
 from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, place, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
@@ -56,7 +57,7 @@ def zones(params: dict) -> dict:
     return {"start": Zone(-half + 8.0, -5.0, -half + 14.0, 5.0), "goal": Zone(half - 14.0, -5.0, half - 8.0, 5.0)}
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the field scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

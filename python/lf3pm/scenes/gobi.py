@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm import libm
 from lf3pm.scenes.buildings import Opening, flat_building, house
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, stack, stone
@@ -50,7 +51,7 @@ DEFAULTS = {
 _WAREHOUSE = (40.0, 24.0, 9.0)
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the gobi scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import house
 from lf3pm.scenes.geometry import heightfield_points, stack
 from lf3pm.scenes.meadow import meadow_terrain
@@ -44,7 +45,7 @@ DEFAULTS = {
 }
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the house_meadow scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

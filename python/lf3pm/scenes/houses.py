@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import house
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
@@ -41,7 +42,7 @@ def zones(params: dict) -> dict:
     return {"start": Zone(-25.0, -half, -15.0, half), "goal": Zone(5.0, -half, 15.0, half)}
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the houses scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

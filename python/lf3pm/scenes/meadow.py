@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, stack
 from lf3pm.scenes.scene import Scene, check_seed, finish, mow, require, resolve_params
 from lf3pm.scenes.vegetation import BUSH_REACH, meadow_cover
@@ -42,7 +43,7 @@ def meadow_terrain(rng: np.random.Generator, relief: float, pads) -> Heightfield
     return terrain.shifted_to_zero_at(0.0, 0.0)
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the meadow scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import Opening, facade_openings, wall
 from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
@@ -54,7 +55,7 @@ def zones(params: dict) -> dict:
     return {"start": Zone(-2.0, -6.0, 2.0, 6.0), "goal": Zone(24.0, -8.0, 34.0, 8.0)}
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the orientation scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

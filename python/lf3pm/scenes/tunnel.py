@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import Opening, wall
 from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, rectangle, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
@@ -68,7 +69,7 @@ def zones(params: dict) -> dict:
             "goal": Zone(half + 6.0, -1.5, half + 10.0, 1.5)}
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the tunnel scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

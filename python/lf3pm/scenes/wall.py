@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, rectangle, stack
 from lf3pm.scenes.scene import Scene, check_seed, finish, require, resolve_params
 
@@ -32,7 +33,7 @@ DEFAULTS = {
 }
 
 
-def build(seed: int = 0, **params) -> Scene:
+def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     """Builds the wall scene (see the module docstring); ``params`` override DEFAULTS."""
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm import __version__
-from lf3pm.config import MetricConfig, ScanConfig, SolmConfig, validated
+from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, SolmConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, MapPoints
 from lf3pm.sensors import Sensor, get_sensor
@@ -27,7 +27,7 @@ ENGINES = ("local", "ray")
 
 def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = _SCAN.seed,
                noise: float | None = _SCAN.noise, robot_radius: float = _SOLM.robot_radius,
-               floor_clearance: float = 0.2, association: str = _METRIC.association, w1: float = _METRIC.w1,
+               floor_clearance: float = DEFAULTS.solm.floor_clearance, association: str = _METRIC.association, w1: float = _METRIC.w1,
                threads: int = _SCAN.threads, yaw_reuse: bool = _SOLM.yaw_reuse, ray_stride: int = _SOLM.ray_stride,
                tile: int = TILE, max_tiles: int | None = None, crop: bool = False, engine: str = "local",
                address: str | None = None, progress=None) -> dict:

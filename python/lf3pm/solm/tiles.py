@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import MetricConfig, scan_params
+from lf3pm.config import DEFAULTS, MetricConfig, scan_params
 from lf3pm.map import Map, MapPoints
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.ray_thinning import thin_rays
@@ -69,9 +69,10 @@ class TileJob:
         return float(cx[0]), float(cy[0]), float(cx[-1]), float(cy[-1])
 
 
-def make_job(sensor, grid: SolmGrid, *, tile: int, noise: float, seed: int = 0,
-             metric: MetricConfig = MetricConfig(), robot_radius: float = 0.3, floor_clearance: float = 0.2,
-             yaw_reuse: bool = False, ray_stride: int = 1) -> TileJob:
+def make_job(sensor, grid: SolmGrid, *, tile: int, noise: float, seed: int = DEFAULTS.scan.seed,
+             metric: MetricConfig = DEFAULTS.metric, robot_radius: float = DEFAULTS.solm.robot_radius,
+             floor_clearance: float = DEFAULTS.solm.floor_clearance, yaw_reuse: bool = DEFAULTS.solm.yaw_reuse,
+             ray_stride: int = DEFAULTS.solm.ray_stride) -> TileJob:
     """The job of a build (values as given: build_solm validates them): the sensor's rays,
     thinned by ``ray_stride`` and, under ``yaw_reuse``, laid out in yaw sectors."""
     sectors = sector_layout(sensor, grid.yaw_bins) if yaw_reuse else None

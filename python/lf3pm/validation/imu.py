@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 
 #: Magnitude of gravity, m/s^2: g_world = (0, 0, -GRAVITY).
@@ -146,8 +147,8 @@ def sample_times(t0: float, t1: float, rate: float) -> np.ndarray:
     return t0 + np.arange(count) / rate
 
 
-def simulate_imu(motion, *, rate: float = 200.0, preset: str | ImuPreset = DEFAULT_PRESET, seed: int = 0,
-                 noise: bool = True) -> ImuSamples:
+def simulate_imu(motion, *, rate: float = DEFAULTS.replay.imu_rate, preset: str | ImuPreset = DEFAULT_PRESET,
+                 seed: int = DEFAULTS.scan.seed, noise: bool = DEFAULTS.replay.imu_noise) -> ImuSamples:
     """IMU samples every 1/``rate`` s over [motion.t0, motion.t1] (module
     docstring for the model). ``motion`` needs t0, t1, acceleration(t),
     yaw_rate(t) and pose(t) (lf3pm.validation's Motion). ``noise`` False:

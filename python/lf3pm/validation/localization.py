@@ -54,6 +54,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.validation.mde import RegistrationTarget
 from lf3pm.validation.replay_result import Estimate
 from lf3pm.pose import se3_exp, se3_log
+from lf3pm.config import DEFAULTS
 from lf3pm.sensors import Sensor
 
 #: Scan voxel (m): a few thousand points from a VLP-16 scan, the order FAST-LIO's
@@ -188,7 +189,7 @@ def degeneracy(H: np.ndarray, points: np.ndarray, sigma: float, bound: float) ->
 
 
 def localize(scans, target: RegistrationTarget, sensor: Sensor, *, odometry: WheelOdometry = WheelOdometry(),
-             seed: int = 0, scan_voxel: float = SCAN_VOXEL, degenerate_std: float = DEGENERATE_STD,
+             seed: int = DEFAULTS.scan.seed, scan_voxel: float = SCAN_VOXEL, degenerate_std: float = DEGENERATE_STD,
              remap: bool = True, max_correspondence_distance: float = MAX_CORRESPONDENCE_DISTANCE,
              max_iterations: int = MAX_ITERATIONS, min_points: int = MIN_POINTS, threads: int = 1,
              progress=None) -> Estimate:

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lf3pm.config import MdeConfig, ScanConfig, validated
+from lf3pm.config import DEFAULTS, MdeConfig, ScanConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
@@ -23,13 +23,12 @@ from lf3pm.scan_simulator import simulate_scan
 from lf3pm.sensors import Sensor, get_sensor
 
 
-_MDE = MdeConfig()
 
 
 class RegistrationTarget:
     """The map prepared once for small_gicp: points with normals and a k-d tree."""
 
-    def __init__(self, map: Map, normal_neighbors: int = 10, threads: int = 0):
+    def __init__(self, map: Map, normal_neighbors: int = 10, threads: int = DEFAULTS.scan.threads):
         import small_gicp
 
         self.map_sha256 = map.sha256
@@ -65,11 +64,13 @@ class MdeResult:
         return asdict(self)
 
 
-def mde(map: Map | str, pose, sensor: Sensor | str = "vlp16", *, trials: int = _MDE.trials,
-        sigma_t: float = _MDE.sigma_t, sigma_r_deg: float = _MDE.sigma_r, noise: float | None = None,
-        seed: int = 0, scan_voxel: float = 0.0, max_correspondence_distance: float = 1.0,
-        max_iterations: int = 50, target: RegistrationTarget | None = None,
-        threads: int = 0, clearance: float = 0.1) -> MdeResult:
+def mde(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, trials: int = DEFAULTS.mde.trials,
+        sigma_t: float = DEFAULTS.mde.sigma_t, sigma_r_deg: float = DEFAULTS.mde.sigma_r,
+        noise: float | None = DEFAULTS.scan.noise, seed: int = DEFAULTS.scan.seed,
+        scan_voxel: float = DEFAULTS.scan.scan_voxel,
+        max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
+        max_iterations: int = DEFAULTS.mde.max_iterations, target: RegistrationTarget | None = None,
+        threads: int = DEFAULTS.scan.threads, clearance: float = DEFAULTS.scan.clearance) -> MdeResult:
     """MDE of point-to-plane registration at ``pose`` (see module docstring).
 
     The scan is simulated with range noise ``noise`` (default: the sensor's) from

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import scan_params
+from lf3pm.config import DEFAULTS, scan_params
 from lf3pm.errors import Lf3pmError
 
 
@@ -69,8 +69,8 @@ def firing_fractions(count: int) -> np.ndarray:
 
 
 def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: float, directions,
-                         min_range: float, max_range: float, *, noise: float = 0.0, seed: int = 0,
-                         stream: int = 0, threads: int = 0) -> MovingScan:
+                         min_range: float, max_range: float, *, noise: float = 0.0, seed: int = DEFAULTS.scan.seed,
+                         stream: int = 0, threads: int = DEFAULTS.scan.threads) -> MovingScan:
     """The scan whose rays (``directions`` (K, 3), emission order) fire over
     (end - period, end] while the sensor follows ``motion`` (anything with
     ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:

@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versions
 from lf3pm.validation.scans import ScanStream
@@ -28,7 +29,8 @@ from lf3pm.map import Map, load_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, get_sensor
 
-def kiss_icp_config(sensor: Sensor, *, voxel_size: float = 1.0, deskew: bool = False, threads: int = 0):
+def kiss_icp_config(sensor: Sensor, *, voxel_size: float = DEFAULTS.kiss_icp.voxel_size, deskew: bool = False,
+                    threads: int = DEFAULTS.scan.threads):
     """KISS-ICP configuration for ``sensor``: its range limits, ``deskew`` (on
     for motion-distorted scans with per-point timestamps), ``voxel_size`` for
     the local map (KISS-ICP's own choice for outdoor 100 m LiDARs is 1 m;
@@ -41,8 +43,8 @@ def kiss_icp_config(sensor: Sensor, *, voxel_size: float = 1.0, deskew: bool = F
                       registration=RegistrationConfig(max_num_threads=int(threads)))
 
 
-def run_kiss_icp(scans, sensor: Sensor, initial_pose, *, voxel_size: float = 1.0, deskew: bool = True,
-                 min_points: int = 100, threads: int = 0, progress=None) -> Estimate:
+def run_kiss_icp(scans, sensor: Sensor, initial_pose, *, voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
+                 deskew: bool = True, min_points: int = DEFAULTS.kiss_icp.min_points, threads: int = DEFAULTS.scan.threads, progress=None) -> Estimate:
     """KISS-ICP over ``scans`` (MovingScan objects, e.g. a ScanStream), anchored
     at ``initial_pose`` (4 x 4, the true pose of the first scan). A scan with
     fewer than ``min_points`` hits is not given to KISS-ICP (its estimate stays
@@ -75,10 +77,11 @@ def run_kiss_icp(scans, sensor: Sensor, initial_pose, *, voxel_size: float = 1.0
     return Estimate(poses=estimate, hits=hits, skipped=skipped, seconds=seconds)
 
 
-def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = "vlp16", *, rate: float = 10.0,
-                    seed: int = 0, noise: float | None = None, voxel_size: float = 1.0,
-                    min_points: int = 100, motion_distortion: bool = True, deskew: bool | None = None,
-                    threads: int = 0, progress=None) -> ReplayResult:
+def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = DEFAULTS.sensor, *,
+                    rate: float = DEFAULTS.replay.rate, seed: int = DEFAULTS.scan.seed,
+                    noise: float | None = DEFAULTS.scan.noise, voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
+                    min_points: int = DEFAULTS.kiss_icp.min_points, motion_distortion: bool = True,
+                    deskew: bool | None = None, threads: int = DEFAULTS.scan.threads, progress=None) -> ReplayResult:
     """Replays the trajectory (t (N,), poses (N, 4) of x y z yaw, z absolute,
     interpolated linearly) on ``map`` with simulated ``sensor`` scans at
     ``rate`` Hz through KISS-ICP.

@@ -29,7 +29,7 @@ from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versi
 from lf3pm.validation.scans import ScanStream
 from lf3pm.map import Map, load_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
-from lf3pm.config import REPLAY_METHODS, ReplayConfig, ScanConfig, validated
+from lf3pm.config import DEFAULTS, REPLAY_METHODS, ReplayConfig, ScanConfig, validated
 
 METHODS = REPLAY_METHODS
 
@@ -46,10 +46,10 @@ METHOD_PARAMS = {
                      "scan_voxel": SCAN_VOXEL, "degenerate_std": DEGENERATE_STD, "remap": True,
                      "max_correspondence_distance": MAX_CORRESPONDENCE_DISTANCE,
                      "max_iterations": MAX_ITERATIONS, "min_points": MIN_POINTS, "registration_threads": 1},
-    "odometry": {"voxel_size": 1.0, "min_points": 100, "deskew": True},
-    "lio": {"imu_rate": 200.0, "imu_preset": None, "imu_noise": True, "rest": LIO_REST},
+    "odometry": {"voxel_size": DEFAULTS.kiss_icp.voxel_size, "min_points": DEFAULTS.kiss_icp.min_points, "deskew": True},
+    "lio": {"imu_rate": DEFAULTS.replay.imu_rate, "imu_preset": None, "imu_noise": DEFAULTS.replay.imu_noise,
+            "rest": LIO_REST},
 }
-_REPLAY = ReplayConfig()
 
 
 def resolve_sensor(sensor: Sensor | str, rate: float) -> Sensor:
@@ -78,9 +78,10 @@ def check_method(method: str, params: dict) -> dict:
     return {**defaults, **params}
 
 
-def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = "vlp16", method: str = "localization",
-           seed: int = 0, *, rate: float = _REPLAY.rate, height: float = _REPLAY.height, noise: float | None = None,
-           target: RegistrationTarget | None = None, threads: int = 0, progress=None, **params) -> ReplayResult:
+def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor, method: str = DEFAULTS.replay.method,
+           seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate, height: float = DEFAULTS.replay.height,
+           noise: float | None = DEFAULTS.scan.noise, target: RegistrationTarget | None = None,
+           threads: int = DEFAULTS.scan.threads, progress=None, **params) -> ReplayResult:
     """Replays a trajectory with ``method`` (module docstring) and scores it.
 
     ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion`, the

@@ -22,6 +22,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.validation.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
 from lf3pm.map import Map
 from lf3pm.scan_simulator import simulate_scan
+from lf3pm.config import DEFAULTS
 from lf3pm.sensors import Sensor
 
 #: Most scans one replay simulates: beyond this a typo in a rate or a time
@@ -38,8 +39,9 @@ class ScanStream(Sequence):
     scan's end, ``times`` (M,) the ends; ``seconds`` the simulation time so far
     and ``hits`` (M,) the returns of each scan simulated so far (-1: not yet)."""
 
-    def __init__(self, map: Map, motion, sensor: Sensor, *, rate: float = 10.0, seed: int = 0,
-                 noise: float | None = None, distortion: bool = True, threads: int = 0):
+    def __init__(self, map: Map, motion, sensor: Sensor, *, rate: float = DEFAULTS.replay.rate,
+                 seed: int = DEFAULTS.scan.seed, noise: float | None = DEFAULTS.scan.noise, distortion: bool = True,
+                 threads: int = DEFAULTS.scan.threads):
         if not (math.isfinite(rate) and rate > 0):
             raise Lf3pmError(f"the scan rate must be > 0 Hz, got {rate}")
         self.noise = sensor.range_noise_sigma if noise is None else float(noise)

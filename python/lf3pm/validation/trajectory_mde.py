@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.mde import RegistrationTarget, mde
 from lf3pm.map import Map, load_map
@@ -62,11 +63,13 @@ class TrajectoryMde:
         return {k: clean(v) for k, v in asdict(self).items()}
 
 
-def mde_along(map: Map | str, poses, sensor: Sensor | str = "vlp16", *, trials: int = 20,
-              sigma_t: float = 0.1, sigma_r_deg: float = 2.0, seed: int = 0,
-              noise: float | None = None, scan_voxel: float = 0.0,
-              max_correspondence_distance: float = 1.0, max_iterations: int = 50,
-              clearance: float = 0.1, target: RegistrationTarget | None = None, threads: int = 0,
+def mde_along(map: Map | str, poses, sensor: Sensor | str = DEFAULTS.sensor, *, trials: int = DEFAULTS.mde.trials,
+              sigma_t: float = DEFAULTS.mde.sigma_t, sigma_r_deg: float = DEFAULTS.mde.sigma_r,
+              seed: int = DEFAULTS.scan.seed, noise: float | None = DEFAULTS.scan.noise,
+              scan_voxel: float = DEFAULTS.scan.scan_voxel,
+              max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
+              max_iterations: int = DEFAULTS.mde.max_iterations, clearance: float = DEFAULTS.scan.clearance,
+              target: RegistrationTarget | None = None, threads: int = DEFAULTS.scan.threads,
               progress=None) -> TrajectoryMde:
     """MDE (see :func:`lf3pm.validation.mde`) at each of ``poses`` ((N, 4) x y z
     yaw, sampled by the caller at a constant time interval) and S, their sum.

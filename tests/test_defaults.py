@@ -1,0 +1,141 @@
+"""Each default is written once, in the configuration (lf3pm.config): every keyword
+default of the public API that names a configuration parameter equals it, every CLI
+option that sets one takes its default from it, and the robot is the config's."""
+
+import inspect
+
+import pytest
+import typer
+
+import lf3pm
+import lf3pm.validation as validation
+from lf3pm.cli import app
+from lf3pm.config import DEFAULTS
+from lf3pm.experiments import benefit, correlation, table1
+from lf3pm.planner import Planner, Robot
+from lf3pm.scenes import build_scene
+
+#: A function's parameter named otherwise than its configuration parameter.
+ALIASES = {"sigma_r_deg": "sigma_r"}
+
+#: The public API and, for each function, the sections whose parameters it takes
+#: ("" is the top level: the sensor).
+API = [
+    (lf3pm.load_map, ["map", "scan"]),
+    (lf3pm.evaluate, ["", "scan", "metric"]),
+    (validation.mde, ["", "scan", "mde"]),
+    (validation.mde_along, ["", "scan", "mde"]),
+    (validation.replay, ["", "replay", "scan"]),
+    (validation.replay_odometry, ["", "replay", "scan", "kiss_icp"]),
+    (lf3pm.make_grid, ["solm"]),
+    (lf3pm.build_solm, ["solm", "scan", "metric"]),
+    (build_scene, ["scene"]),
+    (Planner.plan, ["guidance"]),
+    (table1.run, ["table1", "mde"]),
+    (correlation.run, ["", "correlation"]),
+    (benefit.run, ["benefit"]),
+]
+
+
+def configured(sections, name):
+    """(found, value) of parameter ``name`` in the first of ``sections`` that has it."""
+    for section in sections:
+        owner = DEFAULTS if section == "" else getattr(DEFAULTS, section)
+        if name in type(owner).model_fields:
+            return True, getattr(owner, name)
+    return False, None
+
+
+@pytest.mark.parametrize("function, sections", API, ids=lambda f: getattr(f, "__qualname__", ""))
+def test_public_defaults_are_the_configuration(function, sections):
+    checked = 0
+    for parameter in inspect.signature(function).parameters.values():
+        if parameter.default is inspect.Parameter.empty:
+            continue
+        found, value = configured(sections, ALIASES.get(parameter.name, parameter.name))
+        if found:
+            checked += 1
+            assert parameter.default == value, f"{function.__qualname__}({parameter.name}=...)"
+    assert checked, f"{function.__qualname__}: no parameter of {sections} checked"
+
+
+def test_the_default_robot_is_the_configuration():
+    assert Robot().model_dump() == DEFAULTS.robot.model_dump()
+
+
+def config_names() -> set[str]:
+    names = {"sensor"}
+    for section in type(DEFAULTS).model_fields:
+        owner = getattr(DEFAULTS, section)
+        names.update(getattr(type(owner), "model_fields", {}))
+    return names
+
+
+def commands(group, prefix=()):
+    for name, command in group.commands.items():
+        if hasattr(command, "commands"):
+            yield from commands(command, prefix + (name,))
+        else:
+            yield " ".join(prefix + (name,)), command
+
+
+def test_cli_options_take_their_defaults_from_the_configuration():
+    """An option that sets a configuration parameter has no default of its own (None:
+    the configuration's applies, --config FILE.yaml first); its help names that default."""
+    names = config_names()
+    seen = 0
+    for name, command in commands(typer.main.get_command(app)):
+        for param in command.params:
+            if param.param_type_name == "option" and param.name in names | set(ALIASES):
+                seen += 1
+                assert param.default is None, f"lf3pm {name} --{param.name.replace('_', '-')}"
+    assert seen > 40
+
+
+#: Parameters named as a configuration parameter that mean something else, with a
+#: literal default of their own: (module, function, parameter) and why.
+OTHER_MEANINGS = {
+    ("experiments/free_poses.py", "random_free_poses", "clearance"): "free-pose sampling keeps 0.5 m, not a pose check",
+    ("experiments/paired_stats.py", "median_ratio_ci", "seed"): "the bootstrap's own stream",
+    ("experiments/paired_stats.py", "compare", "seed"): "the bootstrap's own stream",
+    ("planner/esdf.py", "traversable", "r_safe"): "0: no clearance beyond the robot radius",
+    ("planner/esdf.py", "blocked_reason", "r_safe"): "0: no clearance beyond the robot radius",
+    ("planner/graph_search.py", "search_path", "r_safe"): "the bare search: 0, no clearance; Planner passes the robot's",
+    ("planner/graph_search.py", "search_path", "weight"): "the bare search's lambda; Planner passes the guidance's",
+    ("planner/shortcut.py", "shortcut_path", "weight"): "0: geometry only; Planner passes the guidance's",
+    ("scan_simulator.py", "simulate_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
+    ("validation/moving_scan.py", "simulate_moving_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
+    ("validation/lio.py", "run_lio", "threads"): "the odometry's own thread count, not the scan simulator's",
+    ("validation/localization.py", "localize", "threads"): "one registration thread (METHOD_PARAMS)",
+}
+
+
+def literal_defaults():
+    """(module, function, parameter, value) of every literal default in lf3pm (config.py aside)
+    given to a parameter named as a configuration parameter."""
+    import ast
+    from pathlib import Path
+
+    names = config_names() | set(ALIASES)
+    root = Path(__file__).resolve().parents[1] / "python" / "lf3pm"
+    for path in sorted(root.rglob("*.py")):
+        if path.name == "config.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            args = node.args
+            positional = args.posonlyargs + args.args
+            pairs = list(zip(positional[len(positional) - len(args.defaults):], args.defaults))
+            pairs += [(a, d) for a, d in zip(args.kwonlyargs, args.kw_defaults) if d is not None]
+            for arg, default in pairs:
+                if arg.arg in names and isinstance(default, ast.Constant) and default.value is not None:
+                    yield path.relative_to(root).as_posix(), node.name, arg.arg, default.value
+
+
+def test_no_configuration_default_is_written_twice():
+    """No function writes a configuration parameter's default as a literal of its own:
+    it reads lf3pm.config.DEFAULTS (or the parameter means something else, listed above)."""
+    found = [f"{module}: {function}({name}={value!r})" for module, function, name, value in literal_defaults()
+             if (module, function, name) not in OTHER_MEANINGS]
+    assert not found, "defaults written outside lf3pm.config: " + "; ".join(found)
