@@ -26,6 +26,8 @@ API = [
     (validation.mde, ["", "scan", "mde"]),
     (validation.mde_along, ["", "scan", "mde"]),
     (validation.replay, ["", "replay", "scan"]),
+    (validation.replay_seeds, ["", "replay", "scan"]),
+    (validation.replay_bag, ["", "replay", "scan"]),
     (validation.replay_odometry, ["", "replay", "scan", "kiss_icp"]),
     (lf3pm.make_grid, ["solm"]),
     (lf3pm.build_solm, ["solm", "scan", "metric"]),

@@ -53,7 +53,7 @@ def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
 @pytest.mark.parametrize("args, needle", [
     (("--start", 50, 50, 0, "--goal", 6.2, 2.2, 0), "outside"),
     (("--start", -4.0, -4.0, 0, "--goal", 6.2, 2.2, 0), "obstacle"),
-    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "tank"), "robot kind"),
+    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "tank"), "--robot must be"),
     (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--metric", "q_best"), "metric"),
     (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "diff", "--vmax-norm", 1), "omni robots only"),
 ])

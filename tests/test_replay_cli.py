@@ -9,6 +9,7 @@ import pytest
 from scipy.interpolate import CubicSpline
 from typer.testing import CliRunner
 
+import lf3pm
 from lf3pm.cli import app
 from lf3pm.planner.trajectory import Trajectory
 from lf3pm.scenes import build_scene
@@ -43,6 +44,11 @@ def test_json_with_two_seeds_and_a_png(files, tmp_path):
     assert run["scans"] == 21 and run["ape"]["rmse"] < 0.02 and run["params"]["rate"] == 10.0
     assert out["median"]["ape_rmse"] == pytest.approx(np.median([r["ape"]["rmse"] for r in out["runs"]]))
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # A script gets what the CLI gets: lf3pm.replay_seeds on the same input, the same figures.
+    series = lf3pm.replay_seeds(str(files / "boxes.npy"), str(files / "traj.csv"), seeds=2, seed=3)
+    assert [r.seed for r in series.results] == [3, 4]
+    assert series.median == pytest.approx(out["median"])
+    assert [r.ape["rmse"] for r in series.results] == pytest.approx([r["ape"]["rmse"] for r in out["runs"]])
 
 
 def test_table_for_odometry(files):

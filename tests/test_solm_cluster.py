@@ -88,8 +88,11 @@ def test_a_map_not_indexed_whole_builds_the_same_store(town, whole, tmp_path):
     points = load_map_points(lf3pm.build_scene("houses").points)
     assert points.sha256 == world.sha256 and points.frame == world.frame
     assert points.frame == _core.map_frame(points.points, _core.MapParams())
-    build_solm(points, sensor, grid, tmp_path / "p.zarr", tile=8, threads=2)  # tile by tile, on crops
+    # MapPoints above crop_above are built tile by tile on crops; below it, indexed whole.
+    assert build_solm(points, sensor, grid, tmp_path / "p.zarr", tile=8, threads=2, crop_above=1000)["on_crops"]
     assert_same_store(whole, tmp_path / "p.zarr")
+    assert not build_solm(points, sensor, grid, tmp_path / "q.zarr", tile=8, threads=2)["on_crops"]
+    assert_same_store(whole, tmp_path / "q.zarr")
 
 
 def test_the_cli_builds_a_map_above_crop_above_tile_by_tile(tmp_path):
@@ -100,7 +103,7 @@ def test_the_cli_builds_a_map_above_crop_above_tile_by_tile(tmp_path):
         done = run_cli("solm", "build", path, "-o", tmp_path / f"{name}.zarr", "--res", "1", *extra)
         assert done.returncode == 0, done.stderr
         stores[name] = tmp_path / f"{name}.zarr"
-    assert "building tile by tile on crops" in done.stderr
+    assert "built tile by tile on crops" in done.stderr
     assert_same_store(stores["whole"], stores["crops"])
 
 

@@ -10,7 +10,8 @@ Top-level API (docs/api.md; imported lazily so that light modules such as
   Static Observation Loss Map over a grid, then open, read and query it.
 - :class:`lf3pm.Planner`, :class:`lf3pm.Robot` -- plan trajectories on a SOLM.
 - :func:`lf3pm.replay` -- replay a trajectory through localization, a LIO or an
-  odometry on simulated scans and score it (:class:`lf3pm.ReplayResult`).
+  odometry on simulated scans and score it (:class:`lf3pm.ReplayResult`);
+  :func:`lf3pm.replay_seeds` on consecutive seeds with the medians (``lf3pm replay``).
 - :func:`lf3pm.build_scene` -- procedural test maps.
 """
 
@@ -34,6 +35,7 @@ _LAZY = {
     "Plan": "lf3pm.planner.plan",
     "Robot": "lf3pm.planner.robots",
     "replay": "lf3pm.validation.replay",
+    "replay_seeds": "lf3pm.validation.replay",
     "ReplayResult": "lf3pm.validation.replay_result",
     "build_scene": "lf3pm.scenes",
     "Lf3pmError": "lf3pm.errors",

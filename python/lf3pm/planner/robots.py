@@ -17,9 +17,13 @@ class Robot(RobotConfig):
     """A ground robot's kind and limits (SI units; :class:`lf3pm.config.RobotConfig` says
     what each means). ``Robot("diff", vmax_lon=0.5)``; a bad value raises Lf3pmError in one line."""
 
-    def __init__(self, kind: str = RobotConfig.model_fields["kind"].default, /, **limits):
+    def __init__(self, kind: str | None = None, /, **limits):
+        if kind is not None:
+            if "kind" in limits:
+                raise Lf3pmError("robot kind given twice")
+            limits["kind"] = kind
         try:
-            super().__init__(kind=kind, **limits)
+            super().__init__(**limits)
         except ValidationError as err:
             raise Lf3pmError(describe(err, "robot")) from None
 

@@ -29,8 +29,9 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
                noise: float | None = _SCAN.noise, robot_radius: float = _SOLM.robot_radius,
                floor_clearance: float = DEFAULTS.solm.floor_clearance, association: str = _METRIC.association, w1: float = _METRIC.w1,
                threads: int = _SCAN.threads, yaw_reuse: bool = _SOLM.yaw_reuse, ray_stride: int = _SOLM.ray_stride,
-               tile: int = TILE, max_tiles: int | None = None, crop: bool = False, engine: str = "local",
-               address: str | None = None, progress=None) -> dict:
+               tile: int = TILE, max_tiles: int | None = None, crop: bool = False,
+               crop_above: int = _SOLM.crop_above, engine: str = "local", address: str | None = None,
+               progress=None) -> dict:
     """Builds (or resumes) the SOLM of ``world`` (a Map, or MapPoints: a map not indexed
     whole, built on crops) for ``sensor`` (a Sensor or a preset name) on ``grid`` into the
     Zarr store ``out``. Cell c (linear index over the
@@ -41,14 +42,17 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     the Gram up (ray_thinning.py): about K times faster, approximate.
     ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
     after that many tiles (for tests of resumption). ``crop``: compute each tile on
-    its own crop of the map (tiles.py; the store is bitwise the same). ``engine``:
+    its own crop of the map (tiles.py; the store is bitwise the same); MapPoints of at
+    most ``crop_above`` points are indexed whole instead, unless ``crop``, and larger
+    ones are built on crops. ``engine``:
     "local" (this process, ``threads`` workers) or "ray" (one Ray task per tile on the
     cluster at ``address``, None: a local one; each task indexes only its tile's crop;
     cluster.py). The parameters are validated by lf3pm.config's ScanConfig,
     MetricConfig and SolmConfig."""
     scan = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
     metric = validated(MetricConfig, "metric", association=association, w1=w1)
-    layout = validated(SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride)
+    layout = validated(SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride,
+                       crop_above=crop_above)
     if engine not in ENGINES:
         raise Lf3pmError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     if isinstance(sensor, str):
@@ -98,11 +102,13 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
 
         build_tiles(world, job, todo, ground, Path(out), finished)
     else:
+        if isinstance(world, MapPoints) and not crop and world.size <= layout.crop_above:
+            world = world.indexed(scan.threads)   # small enough to index whole: faster than crops
         crop = crop or isinstance(world, MapPoints)
         margin = crop_margin(job, world) if crop else None
         for ty, tx in todo:
             where = world.crop(job.bounds(ty, tx), margin, scan.threads) if crop else world
             arrays = compute_tile(where, job, ty, tx, job.ground(ground, ty, tx), scan.threads)
             finished(ty, tx, write_tile(group, job, ty, tx, arrays))
-    return {"tiles": ty_n * tx_n, "built_now": len(todo),
-            "complete": bool(group["done"][...].all())}
+    return {"tiles": ty_n * tx_n, "built_now": len(todo), "complete": bool(group["done"][...].all()),
+            "on_crops": engine == "ray" or bool(crop)}

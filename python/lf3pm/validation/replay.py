@@ -25,7 +25,7 @@ from lf3pm.validation.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DI
 from lf3pm.validation.mde import RegistrationTarget
 from lf3pm.validation.motion import Motion, RestFirst
 from lf3pm.validation.odometry import kiss_icp_params, run_kiss_icp
-from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.validation.replay_result import Estimate, ReplayResult, ReplaySeries, library_versions, median_figures
 from lf3pm.validation.scans import ScanStream
 from lf3pm.map import Map, load_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
@@ -138,6 +138,46 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor
     return ReplayResult.from_run(run, method=method, sensor=sensor.name, seed=int(seed), scans=scans, first=first,
                                  params={**common, method: method_params}, map_sha256=map.sha256,
                                  versions=versions)
+
+
+def replay_seeds(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor,
+                 method: str = DEFAULTS.replay.method, seeds: int = DEFAULTS.replay.seeds,
+                 seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate,
+                 height: float = DEFAULTS.replay.height, noise: float | None = DEFAULTS.scan.noise,
+                 threads: int = DEFAULTS.scan.threads, progress=None, **params) -> ReplaySeries:
+    """:func:`replay` on seeds ``seed`` .. ``seed + seeds - 1`` (what ``lf3pm replay
+    --seeds`` runs): the map, the motion and the registration target prepared once, and
+    the median of each reported figure. ``progress(seed, done, total)`` after each scan."""
+    run = validated(ReplayConfig, "replay", method=method, seeds=seeds, rate=rate, height=height)
+    validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
+    if not isinstance(map, Map):
+        map = load_map(map, threads=threads)
+    motion = _motion(motion_or_csv, map, run.height)
+    target = RegistrationTarget(map, threads=threads) if method == "localization" else None
+    results = []
+    for s in range(seed, seed + run.seeds):
+        tick = None if progress is None else (lambda done, total, s=s: progress(s, done, total))
+        results.append(replay(map, motion, sensor, method, s, rate=run.rate, height=run.height, noise=noise,
+                              target=target, threads=threads, progress=tick, **params))
+    return ReplaySeries(results=results, median=median_figures(results))
+
+
+def replay_bag(path, map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor, *,
+               seed: int = DEFAULTS.scan.seed, rate: float = DEFAULTS.replay.rate,
+               height: float = DEFAULTS.replay.height, noise: float | None = DEFAULTS.scan.noise,
+               threads: int = DEFAULTS.scan.threads, progress=None) -> dict:
+    """Writes the stream a replay of seed ``seed`` simulates (scans, the IMU of the lio
+    method, the truth) as a ROS 2 bag at ``path`` (bag.py); returns what write_bag says."""
+    from lf3pm.validation.bag import write_bag
+
+    lio_modules("a bag (it carries the simulated IMU)")
+    if not isinstance(map, Map):
+        map = load_map(map, threads=threads)
+    motion = _motion(motion_or_csv, map, height)
+    scans = ScanStream(map, motion, resolve_sensor(sensor, rate), rate=rate, seed=seed, noise=noise,
+                       threads=threads)
+    imu = simulated_imu(motion, seed, METHOD_PARAMS["lio"])
+    return write_bag(path, scans, imu, progress=progress)
 
 
 def _motion(source, map: Map, height: float) -> Motion:

@@ -173,3 +173,41 @@ def _clean(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+#: (key, table header, value) of each figure a replay reports per seed: the CLI's table
+#: and JSON, and lf3pm.replay_seeds's medians.
+FIGURES = (("ape_rmse", "APE", lambda r: r.ape["rmse"]), ("ape_max", "APE max", lambda r: r.ape["max"]),
+           ("ape_aligned_rmse", "aligned", lambda r: r.ape_aligned["rmse"]),
+           ("rpe_scan_rmse", "RPE scan", lambda r: r.rpe_frame["translation"]["rmse"]),
+           ("rpe_scan_deg_rmse", "RPE deg", lambda r: r.rpe_frame["rotation_deg"]["rmse"]),
+           ("rpe_metre_rmse", "RPE 1 m", lambda r: r.rpe_metre["translation"]["rmse"]),
+           ("degenerate_scans", "degen", lambda r: int(r.degenerate.sum())),
+           ("skipped_scans", "skip", lambda r: len(r.skipped)),
+           ("scans_per_second", "scans/s", lambda r: r.scans_per_second["total"]))
+#: The FIGURES in metres.
+METRE_FIGURES = {"ape_rmse", "ape_max", "ape_aligned_rmse", "rpe_scan_rmse", "rpe_metre_rmse"}
+
+
+def median_figures(results) -> dict:
+    """Median over seeds of each of FIGURES (None where no seed has it)."""
+    out = {}
+    for key, _, get in FIGURES:
+        values = np.array([get(r) for r in results], dtype=float)
+        values = values[np.isfinite(values)]
+        out[key] = float(np.median(values)) if len(values) else None
+    return out
+
+
+@dataclass(frozen=True)
+class ReplaySeries:
+    """Replays of one trajectory on consecutive seeds: ``results`` (one ReplayResult per
+    seed) and ``median``, each of FIGURES' median over them."""
+
+    results: list
+    median: dict
+
+    def to_dict(self) -> dict:
+        return {"seeds": [r.seed for r in self.results], "runs": [r.to_dict() for r in self.results],
+                "median": self.median}
+

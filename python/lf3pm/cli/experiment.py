@@ -1,0 +1,114 @@
+"""`lf3pm experiment ...`: the reproducible studies (tables, figures, summary.json)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.table import Table
+
+from lf3pm.cli._common import app, configure, console, option, progress_bar, section_paths, user_errors
+
+experiment_app = typer.Typer(help="Reproducible experiments (tables, figures, summary.json).",
+                              no_args_is_help=True)
+app.add_typer(experiment_app, name="experiment")
+
+
+@experiment_app.command("table1")
+def experiment_table1(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+    poses: Optional[int] = option("table1.poses"),
+    trials: Optional[int] = option("table1.trials"),
+    seed: Optional[int] = option("table1.seed"),
+):
+    """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
+    with user_errors():
+        from lf3pm.experiments import table1
+
+        study = configure(None, locals(), section_paths("table1", "poses", "trials", "seed")).table1
+        with progress_bar() as step:
+            table1.run(out, poses=study.poses, trials=study.trials, seed=study.seed, progress=step)
+        console.print((out / "table1.md").read_text())
+        console.print(f"wrote {out / 'summary.json'}, {out / 'table1.md'}, {out / 'table1.png'}")
+
+
+@experiment_app.command("correlation")
+def experiment_correlation(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+    poses_per_map: Optional[int] = option("correlation.poses_per_map"),
+    trials: Optional[int] = option("correlation.trials"),
+    sensor: Optional[str] = option("sensor"),
+    bootstrap: Optional[int] = option("correlation.bootstrap"),
+    seed: Optional[int] = option("correlation.seed"),
+):
+    """Spearman correlation of each predictor with MDE, pooled and within maps."""
+    with user_errors():
+        from lf3pm.experiments import correlation
+
+        cfg = configure(None, locals(), {"sensor": "sensor", **section_paths(
+            "correlation", "poses_per_map", "trials", "bootstrap", "seed")})
+        study = cfg.correlation
+        with progress_bar() as step:
+            summary = correlation.run(out, poses_per_map=study.poses_per_map, trials=study.trials, sensor=cfg.sensor,
+                                      seed=study.seed, bootstrap=study.bootstrap, progress=step)
+        table = Table(title=f"Spearman rho with MDE ({summary['params']['poses']} poses)")
+        for col in ("predictor", "pooled rho", "95% CI", "mean within-map rho", "95% CI"):
+            table.add_column(col)
+        for name, p in summary["predictors"].items():
+            table.add_row(name, f"{p['rho']:.2f}", f"[{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]",
+                          f"{p['within_mean_rho']:.2f}",
+                          f"[{p['within_mean_ci'][0]:.2f}, {p['within_mean_ci'][1]:.2f}]")
+        console.print(table)
+        console.print(f"best within maps: {summary['best_within_map']}; best pooled: "
+                      f"{summary['best_pooled']}; wrote {out}/summary.json, poses.csv, scatter.png")
+
+
+@experiment_app.command("gobi")
+def experiment_gobi(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
+    reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
+    seeds: Optional[int] = option("gobi.seeds"),
+    seed: Optional[int] = option("gobi.seed"),
+):
+    """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
+    with user_errors():
+        from dataclasses import replace
+
+        study = configure(None, locals(), section_paths("gobi", "seeds", "seed")).gobi
+        from lf3pm.experiments import gobi
+
+        setup = replace(gobi.REDUCED if reduced else gobi.FULL, seed=study.seed)
+        if study.seeds is not None:
+            setup = replace(setup, replay_seeds=study.seeds)
+        with progress_bar() as step:
+            gobi.run(out, setup, progress=step)
+        console.print((out / "gobi.md").read_text())
+        console.print(f"wrote {out}/summary.json, gobi.md, trajectories.png, along.png, trajectories/")
+
+
+@experiment_app.command("benefit")
+def experiment_benefit(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
+    quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
+    seeds: Optional[int] = option("benefit.seeds"),
+    workers: Optional[int] = option("benefit.workers"),
+    pair_seed: Optional[int] = option("benefit.pair_seed"),
+    guidance: Optional[list[str]] = typer.Option(
+        None, metavar="NAME=CHANNEL:POWER:WEIGHT",
+        help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
+    lio: Optional[str] = option("benefit.lio"),
+):
+    """Guided against unguided plans on several maps, judged by localization and LIO replays."""
+    with user_errors():
+        from lf3pm.experiments import benefit
+
+        study = configure(None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio")).benefit
+        from lf3pm.experiments.guidance import parse_guidance
+
+        candidates = [parse_guidance(g) for g in guidance] if guidance else None
+        with progress_bar() as step:
+            benefit.run(out, quick=quick, seeds=study.seeds, workers=study.workers, pair_seed=study.pair_seed,
+                        guidance=candidates, lio=study.lio, progress=step)
+        console.print((out / "benefit.md").read_text())
+        console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")

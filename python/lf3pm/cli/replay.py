@@ -1,0 +1,122 @@
+"""`lf3pm replay`: a planned trajectory replayed through a state estimator on simulated
+sensors (lf3pm.replay_seeds), its figures per seed, a PNG and a ROS 2 bag."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich import box
+from rich.table import Table
+
+from lf3pm.atomic import check_replaceable
+from lf3pm.cli._common import CONFIG_OPTION, app, configure, console, option, progress_bar, user_errors
+from lf3pm.errors import Lf3pmError
+
+#: Where each option of replay lives in the config.
+REPLAY_PATHS = {"sensor": "sensor", "method": "replay.method", "odometry": "replay.odometry", "seeds": "replay.seeds",
+                "seed": "scan.seed", "height": "replay.height", "rate": "replay.rate", "noise": "scan.noise",
+                "threads": "scan.threads"}
+
+
+@app.command("replay")
+def replay_command(
+    trajectory: Path = typer.Argument(..., metavar="TRAJ.csv", help="Trajectory CSV as `lf3pm plan` writes it."),
+    map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
+    config: Optional[Path] = CONFIG_OPTION,
+    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
+    method: Optional[str] = option("replay.method"),
+    odometry: Optional[str] = option("replay.odometry"),
+    seeds: Optional[int] = option("replay.seeds", help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seed: Optional[int] = option("scan.seed", help="First seed (range noise, odometry and IMU noise)."),
+    height: Optional[float] = option("replay.height"),
+    rate: Optional[float] = option("replay.rate"),
+    noise: Optional[float] = option("scan.noise"),
+    threads: Optional[int] = option("scan.threads", help="Scan simulation threads (0 = all cores)."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
+    bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
+                                       help="ROS 2 bag (directory) of the first seed's simulated stream."),
+):
+    """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
+    with user_errors():
+        cfg = configure(config, locals(), REPLAY_PATHS)
+        from lf3pm.map import load_map
+        from lf3pm.validation.motion import Motion
+        from lf3pm.validation.replay import lio_modules, replay_bag, replay_seeds, resolve_sensor
+
+        run, scan = cfg.replay, cfg.scan
+        lidar = resolve_sensor(cfg.sensor, run.rate)
+        if png is not None:
+            check_replaceable(png)
+        if bag is not None and os.path.lexists(bag):
+            raise Lf3pmError(f"{bag} exists: a bag is a new directory and lf3pm replaces nothing there")
+        if bag is not None:
+            lio_modules("--bag (it carries the simulated IMU)")
+        if run.method == "lio":
+            lio_modules()
+        elif odometry is not None:
+            raise Lf3pmError(f"--odometry applies to --method lio, not {run.method}")
+        options = {"odometry": run.odometry} if run.method == "lio" else {}
+        world = load_map(map_path, threads=scan.threads)
+        motion = Motion.from_csv(trajectory, world, height=run.height)
+        common = {"rate": run.rate, "height": run.height, "noise": scan.noise, "threads": scan.threads}
+        with progress_bar() as step:
+            series = replay_seeds(world, motion, lidar, run.method, run.seeds, scan.seed, **common, **options,
+                                  progress=lambda s, done, total: step(f"{run.method} replay, seed {s}", total,
+                                                                       restart=done == 1))
+            bag_info = None if bag is None else replay_bag(
+                bag, world, motion, lidar, seed=scan.seed, **common,
+                progress=lambda done, total: step(f"writing {bag}", total, restart=done == 1))
+        results = series.results
+        if png is not None:
+            from lf3pm.validation.replay_figures import replay_figure
+
+            replay_figure(results, png, map_points=world.points,
+                          title=f"lf3pm replay {trajectory.name}: {run.method}"
+                          + (f" ({results[0].report.get('odometry')})" if options else "")
+                          + f", {lidar.name}, {run.rate:g} Hz")
+        if as_json:
+            print(json.dumps({"trajectory": str(trajectory), "map": str(map_path), "method": run.method, **options,
+                              "sensor": lidar.name, **series.to_dict(),
+                              "png": None if png is None else str(png), "bag": bag_info}))
+            return
+        print_series(series)
+        if png is not None:
+            console.print(f"wrote {png}", highlight=False)
+        if bag_info is not None:
+            counts = ", ".join(f"{topic} {n}" for topic, n in bag_info["topics"].items())
+            console.print(f"wrote {bag} (ROS 2 bag, sqlite3, {bag_info['point_layout']} points): {counts}",
+                          highlight=False)
+
+
+def print_series(series) -> None:
+    """The figures of each seed and their medians, translations in mm (in metres eleven
+    columns of 0.00xxx do not fit 80 characters)."""
+    from lf3pm.validation.replay_result import FIGURES, METRE_FIGURES
+
+    first = series.results[0]
+    odometry = first.report.get("odometry") if first.method == "lio" else None
+    method = f"{first.method} ({odometry})" if odometry else first.method
+    table = Table(title=f"replay: {method}, {first.sensor}, {first.scans} scans at "
+                        f"{first.params['rate']:g} Hz (rmse in mm; RPE deg per scan)", box=box.SIMPLE_HEAD,
+                  collapse_padding=True, pad_edge=False)
+    table.add_column("seed")
+    for _, header, _ in FIGURES:
+        table.add_column(header, justify="right")
+
+    def show(key, value):
+        if value is None or (isinstance(value, float) and not math.isfinite(value)):
+            return "-"
+        value = value * 1000.0 if key in METRE_FIGURES else value
+        return str(value) if isinstance(value, int) else f"{value:.3g}"
+
+    for r in series.results:
+        table.add_row(str(r.seed), *(show(key, get(r)) for key, _, get in FIGURES))
+    if len(series.results) > 1:
+        table.add_row("median", *(show(key, series.median[key]) for key, _, _ in FIGURES))
+    console.print(table)
