@@ -74,7 +74,7 @@ def child(level: str, repeat: int) -> None:
     from lf3pm.config import scan_params
     from lf3pm.experiments.free_poses import random_free_poses
     from lf3pm.metric import eval_params
-    from lf3pm.planner import Robot, make_problem
+    from lf3pm.trajectory import Robot, make_problem
     from lf3pm.solm.tiles import pose_matrices
 
     assert _core.ARCH == level, _core.ARCH

@@ -26,9 +26,9 @@ import numpy as np
 import lf3pm
 from lf3pm import _core
 from lf3pm.config import scan_params
-from lf3pm.validation.moving_scan import simulate_moving_scan
-from lf3pm.validation.odometry import replay_odometry
-from lf3pm.validation.trajectory import LinearMotion, interpolate_poses
+from lf3pm.scan.moving_scan import simulate_moving_scan
+from lf3pm.replays.odometry import replay_odometry
+from lf3pm.trajectory.sampling import LinearMotion, interpolate_poses
 from lf3pm.experiments.free_poses import GroundGrid
 from lf3pm.pose import pose_matrix
 from lf3pm.scenes import build_scene

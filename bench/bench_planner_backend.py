@@ -27,7 +27,8 @@ from scipy import ndimage  # noqa: E402
 from scipy.optimize import minimize  # noqa: E402
 
 from lf3pm import _core  # noqa: E402
-from lf3pm.planner import GridField, Robot, make_problem  # noqa: E402
+from lf3pm.grid_field import GridField  # noqa: E402
+from lf3pm.trajectory import Robot, make_problem  # noqa: E402
 
 
 def scenario(seed: int = 0):

@@ -28,7 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from kinematics import kinematic_checks  # noqa: E402
 
 from lf3pm.errors import Lf3pmError  # noqa: E402
-from lf3pm.planner import Planner, Robot  # noqa: E402
+from lf3pm.planner import Planner  # noqa: E402
+from lf3pm.trajectory import Robot  # noqa: E402
 from lf3pm.solm.reader import Solm  # noqa: E402
 
 

@@ -25,11 +25,11 @@ import numpy as np
 import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.mde import RegistrationTarget
-from lf3pm.validation.motion import Motion
-from lf3pm.validation.replay import METHODS, replay
-from lf3pm.validation.scans import ScanStream
+from lf3pm.replays.motion import Motion
+from lf3pm.replays.replay import METHODS, replay
+from lf3pm.scan.scans import ScanStream
 from lf3pm.planner.plan import Planner
-from lf3pm.planner.robots import Robot
+from lf3pm.trajectory.robots import Robot
 from lf3pm.scenes import build_scene
 from lf3pm.solm import Solm, build_solm, make_grid
 

@@ -1,4 +1,4 @@
-"""Comparison behind lf3pm.validation.lio's choice: GenZ-LIO 0.1.1 (through
+"""Comparison behind lf3pm.replays.lio's choice: GenZ-LIO 0.1.1 (through
 run_lio, as the replay uses it) and RKO-LIO 0.4.0 (an adapter below) on the
 same simulated scans and IMU samples.
 
@@ -39,11 +39,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp  # noqa: E402
 
 import lf3pm  # noqa: E402
-from lf3pm.validation.imu import simulate_imu  # noqa: E402
-from lf3pm.validation.lio import run_lio  # noqa: E402
-from lf3pm.validation.moving_scan import simulate_moving_scan  # noqa: E402
-from lf3pm.validation.trajectory import LinearMotion  # noqa: E402
-from lf3pm.validation.trajectory_metrics import ape_translation  # noqa: E402
+from lf3pm.replays.imu import simulate_imu  # noqa: E402
+from lf3pm.replays.lio import run_lio  # noqa: E402
+from lf3pm.scan.moving_scan import simulate_moving_scan  # noqa: E402
+from lf3pm.trajectory.sampling import LinearMotion  # noqa: E402
+from lf3pm.replays.trajectory_metrics import ape_translation  # noqa: E402
 from lf3pm.experiments.free_poses import GroundGrid  # noqa: E402
 from lf3pm.scenes import build_scene  # noqa: E402
 from lf3pm.sensors import get_sensor  # noqa: E402

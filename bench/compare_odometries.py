@@ -37,9 +37,9 @@ from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp  # noqa
 import lf3pm  # noqa: E402
 from lf3pm.experiments.gobi import REDUCED  # noqa: E402
 from lf3pm.scenes import build_scene  # noqa: E402
-from lf3pm.validation.lio import ODOMETRIES  # noqa: E402
-from lf3pm.validation.motion import Motion  # noqa: E402
-from lf3pm.validation.trajectory_metrics import time_offset  # noqa: E402
+from lf3pm.replays.lio import ODOMETRIES  # noqa: E402
+from lf3pm.replays.motion import Motion  # noqa: E402
+from lf3pm.replays.trajectory_metrics import time_offset  # noqa: E402
 
 RATE = 100.0  # motion samples per second, as a plan's CSV
 

@@ -23,9 +23,9 @@ import numpy as np
 import lf3pm
 from lf3pm.experiments.benefit import CASES as STUDY_MAPS
 from lf3pm.experiments.map_cases import load_case_map
-from lf3pm.planner.trajectory import read_csv
-from lf3pm.validation.imu import simulate_imu
-from lf3pm.validation.motion import Motion
+from lf3pm.trajectory.trajectory import read_csv
+from lf3pm.replays.imu import simulate_imu
+from lf3pm.replays.motion import Motion
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_imu import strapdown  # noqa: E402  (the suite's float64 reference)

@@ -17,8 +17,8 @@ import numpy as np
 import lf3pm
 from lf3pm.experiments.gobi import FULL, map_case
 from lf3pm.experiments.map_cases import load_case_map
-from lf3pm.planner.trajectory import read_csv
-from lf3pm.validation.motion import Motion
+from lf3pm.trajectory.trajectory import read_csv
+from lf3pm.replays.motion import Motion
 
 SEEDS = 3
 

@@ -11,9 +11,9 @@ from rosbags.typesys import Stores, get_typestore
 import lf3pm
 from analytic_scenes import grid_plane
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.bag import cloud_dtype, write_bag
-from lf3pm.validation.motion import Motion
-from lf3pm.validation.scans import ScanStream
+from lf3pm.replays.bag import cloud_dtype, write_bag
+from lf3pm.replays.motion import Motion
+from lf3pm.scan.scans import ScanStream
 from lf3pm.sensors import get_sensor, spinning_rings
 
 TYPES = get_typestore(Stores.ROS2_HUMBLE)

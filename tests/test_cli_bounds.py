@@ -70,7 +70,7 @@ def test_hostile_numbers_are_one_line_errors(boxes, tmp_path, command, options, 
 def test_a_robot_slower_than_a_millimetre_per_second_is_refused():
     from lf3pm.errors import Lf3pmError
     from lf3pm.config import MIN_LIMIT
-    from lf3pm.planner.robots import Robot
+    from lf3pm.trajectory.robots import Robot
 
     with pytest.raises(Lf3pmError, match="robot.vmax_lon must be greater than or equal to 0.001"):
         Robot(vmax_lon=1e-9)

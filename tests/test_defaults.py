@@ -8,11 +8,13 @@ import pytest
 import typer
 
 import lf3pm
+import lf3pm.replays as replays
 import lf3pm.validation as validation
 from lf3pm.cli import app
 from lf3pm.config import DEFAULTS
 from lf3pm.experiments import benefit, correlation, table1
-from lf3pm.planner import Planner, Robot
+from lf3pm.planner import Planner
+from lf3pm.trajectory import Robot
 from lf3pm.scenes import build_scene
 
 #: A function's parameter named otherwise than its configuration parameter.
@@ -25,10 +27,10 @@ API = [
     (lf3pm.evaluate, ["", "scan", "metric"]),
     (validation.mde, ["", "scan", "mde"]),
     (validation.mde_along, ["", "scan", "mde"]),
-    (validation.replay, ["", "replay", "scan"]),
-    (validation.replay_seeds, ["", "replay", "scan"]),
-    (validation.replay_bag, ["", "replay", "scan"]),
-    (validation.replay_odometry, ["", "replay", "scan", "kiss_icp"]),
+    (replays.replay, ["", "replay", "scan"]),
+    (replays.replay_seeds, ["", "replay", "scan"]),
+    (replays.replay_bag, ["", "replay", "scan"]),
+    (replays.replay_odometry, ["", "replay", "scan", "kiss_icp"]),
     (lf3pm.make_grid, ["solm"]),
     (lf3pm.build_solm, ["solm", "scan", "metric"]),
     (build_scene, ["scene"]),
@@ -105,10 +107,10 @@ OTHER_MEANINGS = {
     ("planner/graph_search.py", "search_path", "r_safe"): "the bare search: 0, no clearance; Planner passes the robot's",
     ("planner/graph_search.py", "search_path", "weight"): "the bare search's lambda; Planner passes the guidance's",
     ("planner/shortcut.py", "shortcut_path", "weight"): "0: geometry only; Planner passes the guidance's",
-    ("scan_simulator.py", "simulate_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
-    ("validation/moving_scan.py", "simulate_moving_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
-    ("validation/lio.py", "run_lio", "threads"): "the odometry's own thread count, not the scan simulator's",
-    ("validation/localization.py", "localize", "threads"): "one registration thread (METHOD_PARAMS)",
+    ("scan/scan_simulator.py", "simulate_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
+    ("scan/moving_scan.py", "simulate_moving_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
+    ("replays/lio.py", "run_lio", "threads"): "the odometry's own thread count, not the scan simulator's",
+    ("replays/localization.py", "localize", "threads"): "one registration thread (METHOD_PARAMS)",
 }
 
 

@@ -7,7 +7,7 @@ import pytest
 
 import lf3pm.planner.esdf as esdf_module
 from lf3pm.planner.esdf import Esdf
-from lf3pm.planner.grid_field import GridField
+from lf3pm.grid_field import GridField
 
 
 def box_distance(cells, x0, y0, res, px, py):

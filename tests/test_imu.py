@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.imu import GRAVITY, ImuPreset, get_imu_preset, simulate_imu
+from lf3pm.replays.imu import GRAVITY, ImuPreset, get_imu_preset, simulate_imu
 
 
 def figure_eight(cruise=25.0, swing=0.6):

@@ -96,3 +96,24 @@ def test_the_cycle_finder_finds_a_cycle():
 def test_no_import_cycle_between_packages():
     found = cycles(unit_graph())
     assert not found, "import cycles between lf3pm's packages: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_the_cli_is_thin():
+    """Each command module stays a few lines over the library."""
+    for path in (PACKAGE / "cli").glob("*.py"):
+        lines = len(path.read_text().splitlines())
+        assert lines <= 250, f"{path.name}: {lines} lines"
+
+
+def test_the_readme_layout_names_every_package_and_module():
+    """README's layout row for python/lf3pm/ names each subpackage (as `name/`) and each
+    public top-level module (as `name`)."""
+    readme = (PACKAGE.parents[1] / "README.md").read_text()
+    row = next(line for line in readme.splitlines() if line.startswith("| `python/lf3pm/`"))
+    for entry in sorted(PACKAGE.iterdir()):
+        if entry.name.startswith(("_", ".")) or entry.name == "py.typed":
+            continue
+        if entry.is_dir() and entry.name != "__pycache__":
+            assert f"`{entry.name}/`" in row, entry.name
+        elif entry.suffix == ".py":
+            assert f"`{entry.stem}`" in row, entry.stem

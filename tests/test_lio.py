@@ -1,4 +1,4 @@
-"""The LIO (GenZ-LIO through lf3pm.validation.lio): conventions checked by a
+"""The LIO (GenZ-LIO through lf3pm.replays.lio): conventions checked by a
 noise-free run in the boxes room while the sensor moves and yaws fast (and by
 runs with deliberately wrong IMU timing and firing order, which must be far
 worse), anchoring, determinism, statuses and errors."""
@@ -13,15 +13,15 @@ import pytest
 from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.imu import simulate_imu
-from lf3pm.validation.moving_scan import simulate_moving_scan
-from lf3pm.validation.trajectory import LinearMotion
-from lf3pm.validation.trajectory_metrics import ape_translation
+from lf3pm.replays.imu import simulate_imu
+from lf3pm.scan.moving_scan import simulate_moving_scan
+from lf3pm.trajectory.sampling import LinearMotion
+from lf3pm.replays.trajectory_metrics import ape_translation
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import get_sensor
 
 pytest.importorskip("genz_lio", reason="genz-lio has wheels for Python 3.8-3.12 only")
-from lf3pm.validation import lio  # noqa: E402
+from lf3pm.replays import lio  # noqa: E402
 
 #: GenZ-LIO's conventions are what most tests here check: they name it (the default,
 #: "auto", would run DLIO for the VLP-16); DLIO's tests pass odometry="dlio".
@@ -170,7 +170,7 @@ def test_unknown_settings_and_bad_input_raise_one_line(run):
 def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
     """The worker dying (here by SIGSEGV, as a segfault in the odometry would)
     becomes an Lf3pmError naming where, not a dead caller."""
-    import lf3pm.validation.lio as lio
+    import lf3pm.replays.lio as lio
 
     worker = tmp_path / "crash.py"
     worker.write_text("import os, signal\nprint('about to crash', flush=True)\nos.kill(os.getpid(), signal.SIGSEGV)\n")
@@ -181,8 +181,8 @@ def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
 
 
 def test_the_filter_is_told_the_imu_preset_noise(run):
-    from lf3pm.validation.imu import ImuPreset
-    from lf3pm.validation.lio import NOISE_INFLATION, imu_noise_model
+    from lf3pm.replays.imu import ImuPreset
+    from lf3pm.replays.lio import NOISE_INFLATION, imu_noise_model
 
     imu = run[3]
     sigma = imu.preset.sigmas(200.0)
@@ -199,7 +199,7 @@ def town_drive(world, turn_rate: float, seconds: float = 8.0):
     """An omni drive out of the reduced gobi's town square from rest: the speed ramps
     (C2) to 1 m/s over 2 s, as a plan starts; the yaw turns at up to ``turn_rate``
     rad/s with the same ramp (the yaw is the heading). 100 Hz samples, as a CSV."""
-    from lf3pm.validation.motion import Motion
+    from lf3pm.replays.motion import Motion
 
     t = np.arange(0.0, seconds + 1e-9, 0.01)
     s = np.clip(t / 2.0, 0.0, 1.0)
@@ -229,7 +229,7 @@ def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, 
     at negative times, which evalio's unsigned stamps once wrapped (DLIO diverged to
     1e26 m)."""
     import lf3pm
-    from lf3pm.validation.trajectory_metrics import time_offset
+    from lf3pm.replays.trajectory_metrics import time_offset
 
     if odometry == "dlio":
         pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
@@ -243,9 +243,9 @@ def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, 
 def test_a_lidar_clock_50ms_late_is_detected(town):
     """The same drive with every scan stamped 50 ms after it was taken (the IMU on time):
     the estimate is where the sensor was 50 ms before its stamp."""
-    from lf3pm.validation.motion import RestFirst
-    from lf3pm.validation.scans import ScanStream
-    from lf3pm.validation.trajectory_metrics import time_offset
+    from lf3pm.replays.motion import RestFirst
+    from lf3pm.scan.scans import ScanStream
+    from lf3pm.replays.trajectory_metrics import time_offset
 
     motion = RestFirst(town_drive(town, 0.0), 2.0)
     sensor = get_sensor("vlp16")
@@ -274,7 +274,7 @@ def test_dlio_tracks_the_figure_of_eight_at_its_median_return_times(dlio_run):
     not to the scan's end: scored there, noise-free, within 2 cm with no better time
     shift; scored at the ends instead (what a replay assuming GenZ-LIO's convention
     would do) the truth must be shifted back about half a scan to fit."""
-    from lf3pm.validation.trajectory_metrics import time_offset
+    from lf3pm.replays.trajectory_metrics import time_offset
 
     motion, scans, _, _, estimate = dlio_run
     ends = np.array([s.end for s in scans])

@@ -11,10 +11,10 @@ import pytest
 import lf3pm
 from analytic_scenes import grid_plane, spinning_directions
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.localization import Degeneracy, WheelOdometry, deskew, planar_exp, planar_log, planar_matrix
+from lf3pm.replays.localization import Degeneracy, WheelOdometry, deskew, planar_exp, planar_log, planar_matrix
 from lf3pm.validation.mde import RegistrationTarget
-from lf3pm.validation.motion import Motion
-from lf3pm.validation.replay import replay
+from lf3pm.replays.motion import Motion
+from lf3pm.replays.replay import replay
 from lf3pm.pose import pose_matrix, se3_exp
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import Sensor
@@ -95,7 +95,7 @@ def test_remapping_keeps_the_prior_only_along_degenerate_directions():
                        degenerate=np.array([False, False, False, True, False, False]))
     correction = np.array([0.01, -0.02, 0.03, 0.5, -0.1, 0.2])
     np.testing.assert_allclose(found.remap(correction), [0.01, -0.02, 0.03, 0.0, -0.1, 0.2])
-    from lf3pm.validation.localization import degeneracy
+    from lf3pm.replays.localization import degeneracy
 
     d = degeneracy(H, np.array([[2.0, 0, 0], [0, 2.0, 0]]), sigma=0.01, bound=0.01)
     assert d.scale == pytest.approx(2.0) and d.count == 1

@@ -8,9 +8,9 @@ from scipy.interpolate import CubicSpline
 import lf3pm
 from analytic_scenes import grid_plane
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.ground import smooth_ground
-from lf3pm.validation.motion import Motion
-from lf3pm.planner.trajectory import Trajectory, read_csv
+from lf3pm.replays.ground import smooth_ground
+from lf3pm.replays.motion import Motion
+from lf3pm.trajectory.trajectory import Trajectory, read_csv
 from lf3pm.config import DEFAULT_HEIGHT
 from lf3pm.terrain import body_blocked
 

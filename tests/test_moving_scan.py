@@ -11,8 +11,8 @@ from analytic_scenes import grid_plane
 from lf3pm import _core
 from lf3pm.config import scan_params
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.moving_scan import firing_fractions, simulate_moving_scan
-from lf3pm.validation.trajectory import LinearMotion
+from lf3pm.scan.moving_scan import firing_fractions, simulate_moving_scan
+from lf3pm.trajectory.sampling import LinearMotion
 from lf3pm.pose import pose_matrices, pose_matrix
 from lf3pm.sensors import get_sensor
 

@@ -7,8 +7,8 @@ import pytest
 
 import lf3pm
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.odometry import replay_odometry
-from lf3pm.validation.trajectory import interpolate_poses, sample_trajectory
+from lf3pm.replays.odometry import replay_odometry
+from lf3pm.trajectory.sampling import interpolate_poses, sample_trajectory
 from lf3pm.scenes import build_scene
 
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner import Planner, Robot
+from lf3pm.planner import Planner
+from lf3pm.trajectory import Robot
 from lf3pm.solm.reader import Solm
 
 from kinematics import assert_kinematics_hold, body_speeds

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner import Planner, Robot
-from lf3pm.planner.grid_field import GridField
+from lf3pm.planner import Planner
+from lf3pm.trajectory import Robot
+from lf3pm.grid_field import GridField
 from lf3pm.planner.shortcut import shortcut_path
 from lf3pm.solm.grid import SolmGrid
 

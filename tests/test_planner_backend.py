@@ -7,7 +7,8 @@ import pytest
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner import GridField, Robot, Trajectory, make_problem, optimize_trajectory
+from lf3pm.grid_field import GridField
+from lf3pm.trajectory import Robot, Trajectory, make_problem, optimize_trajectory
 
 from kinematics import assert_kinematics_hold
 

@@ -178,7 +178,7 @@ def queries(count=8):
 
 
 def trapezoid_cost(poses, esdf, cost, weight):
-    from lf3pm.planner.grid_field import GridField
+    from lf3pm.grid_field import GridField
     c = GridField(cost, esdf.x0, esdf.y0, esdf.res).sample(poses[:, 0], poses[:, 1])[0]
     ds = np.linalg.norm(np.diff(poses[:, :2], axis=0), axis=1)
     return float(np.sum(ds * (1 + weight * 0.5 * (c[1:] + c[:-1]))))

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.planner.trajectory import Trajectory
+from lf3pm.trajectory.trajectory import Trajectory
 from lf3pm.scenes import build_scene
 
 runner = CliRunner()
@@ -101,7 +101,7 @@ def test_outputs_replace_only_regular_files(files, tmp_path):
     assert done.exit_code == 2 and "exists" in done.stderr
 
 
-@pytest.mark.skipif(importlib.util.find_spec("lf3pm.validation.lio") is not None, reason="the LIO is installed")
+@pytest.mark.skipif(importlib.util.find_spec("lf3pm.replays.lio") is not None, reason="the LIO is installed")
 def test_lio_unavailable_is_one_line(files):
     done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio")
     assert done.exit_code == 2 and "method lio is not available" in done.stderr

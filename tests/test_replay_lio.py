@@ -1,5 +1,5 @@
 """The replay's LIO dispatch and the CLI's --bag, against stand-in imu and lio
-modules (the real ones are lf3pm.validation.imu / lio): what they are given,
+modules (the real ones are lf3pm.replays.imu / lio): what they are given,
 what the result keeps, and the bag they feed."""
 
 import json
@@ -14,8 +14,8 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.validation.motion import Motion
-from lf3pm.validation.replay import LIO_REST, replay
+from lf3pm.replays.motion import Motion
+from lf3pm.replays.replay import LIO_REST, replay
 from lf3pm.scenes import build_scene
 
 
@@ -76,17 +76,17 @@ def run_lio(scans, imu, sensor, *, initial_pose, **params):
 
 @pytest.fixture
 def fake_lio(monkeypatch):
-    imu = types.ModuleType("lf3pm.validation.imu")
+    imu = types.ModuleType("lf3pm.replays.imu")
     imu.simulate_imu = simulate_imu
-    lio = types.ModuleType("lf3pm.validation.lio")
+    lio = types.ModuleType("lf3pm.replays.lio")
     lio.run_lio = run_lio
-    monkeypatch.setitem(sys.modules, "lf3pm.validation.imu", imu)
-    monkeypatch.setitem(sys.modules, "lf3pm.validation.lio", lio)
+    monkeypatch.setitem(sys.modules, "lf3pm.replays.imu", imu)
+    monkeypatch.setitem(sys.modules, "lf3pm.replays.lio", lio)
     calls.clear()
     # Simulating a scan takes SIMULATE_S on the stand-in clock, which the stream and the
     # replay read.
-    replay_module = sys.modules["lf3pm.validation.replay"]   # the package's `replay` is the function
-    scans_module = sys.modules["lf3pm.validation.scans"]
+    replay_module = sys.modules["lf3pm.replays.replay"]   # the package's `replay` is the function
+    scans_module = sys.modules["lf3pm.scan.scans"]
     for module in (scans_module, replay_module):
         monkeypatch.setattr(module, "time", Clock)
     for name in ("simulate_moving_scan", "simulate_scan"):

@@ -144,7 +144,7 @@ def test_rigid_motion_of_map_and_pose_leaves_the_metric_unchanged():
 def test_the_python_wrapper_returns_the_core_scan():
     import lf3pm
     from lf3pm.pose import pose_matrix
-    from lf3pm.scan_simulator import simulate_scan
+    from lf3pm.scan.scan_simulator import simulate_scan
     from lf3pm.scenes import build_scene
 
     world = lf3pm.load_map(build_scene("boxes").points)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.trajectory_metrics import ape_translation, error_stats, rpe
+from lf3pm.replays.trajectory_metrics import ape_translation, error_stats, rpe
 from lf3pm.pose import pose_matrix
 
 

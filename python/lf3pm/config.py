@@ -43,11 +43,11 @@ MAX_THREADS = 1024
 #: The SOLM's state spaces (lf3pm.solm.grid) and the replay's state estimators.
 SPACES = ("r2", "se2", "r3")
 REPLAY_METHODS = ("localization", "lio", "odometry")
-#: The LiDAR-inertial odometries of the ``lio`` replay (lf3pm.validation.lio.ODOMETRIES);
+#: The LiDAR-inertial odometries of the ``lio`` replay (lf3pm.replays.lio.ODOMETRIES);
 #: ``auto`` picks by the sensor (lio.choose_odometry).
 LIO_ODOMETRIES = ("auto", "genz", "dlio")
 
-#: Robot kinds (lf3pm.planner.robots.Robot) and the SOLM channels a plan can be guided by.
+#: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
 COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
 #: The smallest speed, yaw rate or acceleration limit a robot takes (m/s, rad/s, m/s^2,

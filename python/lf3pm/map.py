@@ -116,6 +116,12 @@ def _indexed(points, frame, association_params: dict, source: str, sha256: str, 
     return Map(index=index, source=source, sha256=sha256, association_params=dict(association_params))
 
 
+def as_map(map, threads: int = DEFAULTS.scan.threads) -> "Map":
+    """``map`` itself when it is a Map, else the map :func:`load_map` reads from it (a
+    file, or an N x 3 array): what every entry point taking "a Map or a map file" does."""
+    return map if isinstance(map, Map) else load_map(map, threads=threads)
+
+
 def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
              knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
              max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads) -> Map:

@@ -11,9 +11,9 @@ from lf3pm import _core
 from lf3pm.calibration import (LOCALIZATION_PACKAGED, calibration_applies, packaged_calibration, predict_mde,
                                predict_localization_error)
 from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, scan_params, validated
-from lf3pm.map import Map, load_map
+from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
-from lf3pm.sensors import Sensor, get_sensor
+from lf3pm.sensors import Sensor, as_sensor
 
 _SCAN = ScanConfig()
 _METRIC = MetricConfig()
@@ -73,7 +73,7 @@ def eval_params(min_range: float, max_range: float, *, dof: int = _METRIC.dof,
                 association: str = _METRIC.association, w1: float = _METRIC.w1, ray_weight: float = 1.0,
                 **scan) -> _core.EvalParams:
     """The core's EvalParams (values as given: lf3pm.config validates what users set);
-    ``scan``: :func:`lf3pm.scan_simulator.scan_params`'s keywords."""
+    ``scan``: :func:`lf3pm.scan.scan_simulator.scan_params`'s keywords."""
     return MetricConfig.model_construct(dof=dof, association=association, w1=w1).core(
         scan_params(min_range, max_range, **scan), ray_weight)
 
@@ -106,10 +106,7 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, se
     """
     scan = validated(ScanConfig, "scan", noise=noise, seed=seed, scan_voxel=scan_voxel, threads=threads)
     metric = validated(MetricConfig, "metric", dof=dof, association=association, w1=w1)
-    if not isinstance(map, Map):
-        map = load_map(map)
-    if not isinstance(sensor, Sensor):
-        sensor = get_sensor(sensor)
+    map, sensor = as_map(map), as_sensor(sensor)
     matrix = pose_matrix(pose)
     map.check_pose(matrix, clearance)
     params = metric.core(scan.core(sensor))

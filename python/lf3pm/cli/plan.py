@@ -56,7 +56,7 @@ def plan(
         from lf3pm.planner.plan import Planner
         from lf3pm.solm import Solm
 
-        from lf3pm.planner.robots import Robot
+        from lf3pm.trajectory.robots import Robot
 
         vehicle, guidance = Robot.from_config(cfg.robot), cfg.guidance
         metric = guidance.metric

@@ -46,8 +46,8 @@ def replay_command(
     with user_errors():
         cfg = configure(config, locals(), REPLAY_PATHS)
         from lf3pm.map import load_map
-        from lf3pm.validation.motion import Motion
-        from lf3pm.validation.replay import lio_modules, replay_bag, replay_seeds, resolve_sensor
+        from lf3pm.replays.motion import Motion
+        from lf3pm.replays.replay import lio_modules, replay_bag, replay_seeds, resolve_sensor
 
         run, scan = cfg.replay, cfg.scan
         lidar = resolve_sensor(cfg.sensor, run.rate)
@@ -74,7 +74,7 @@ def replay_command(
                 progress=lambda done, total: step(f"writing {bag}", total, restart=done == 1))
         results = series.results
         if png is not None:
-            from lf3pm.validation.replay_figures import replay_figure
+            from lf3pm.replays.replay_figures import replay_figure
 
             replay_figure(results, png, map_points=world.points,
                           title=f"lf3pm replay {trajectory.name}: {run.method}"
@@ -97,7 +97,7 @@ def replay_command(
 def print_series(series) -> None:
     """The figures of each seed and their medians, translations in mm (in metres eleven
     columns of 0.00xxx do not fit 80 characters)."""
-    from lf3pm.validation.replay_result import FIGURES, METRE_FIGURES
+    from lf3pm.replays.replay_result import FIGURES, METRE_FIGURES
 
     first = series.results[0]
     odometry = first.report.get("odometry") if first.method == "lio" else None

@@ -36,6 +36,7 @@ import numpy as np
 from lf3pm.atomic import atomic_write
 from lf3pm.config import DEFAULTS, BenefitConfig, validated
 from lf3pm.errors import Lf3pmError
+from lf3pm.planner.poses import grid_cell
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.localization_error import localization_error_fit
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
@@ -137,7 +138,7 @@ def _plan_pairs(case: MapCase, solm_path: Path, out: Path, seed: np.random.SeedS
     """``case.pairs`` seeded pairs, each planned with every guidance (a draw that some
     guidance cannot plan is replaced), trajectories written as CSV."""
     from lf3pm.planner.plan import Planner
-    from lf3pm.planner.robots import Robot
+    from lf3pm.trajectory.robots import Robot
     from lf3pm.solm import Solm
 
     _, zones = load_case_map(case)
@@ -185,7 +186,7 @@ CHANNELS = ("q_n", "q_min", "step_norm")
 def _solm_means(planner, plan) -> dict:
     """Each channel's time mean along the trajectory (at 10 Hz, interpolated, at the
     trajectory's yaw), in the channel's own units (degenerate cells at its cap)."""
-    from lf3pm.planner.grid_field import GridField
+    from lf3pm.grid_field import GridField
 
     s = plan.trajectory.sample(10.0)
     out = {}
@@ -204,9 +205,9 @@ def _draw(planner, zone, robot, rng, tries: int = 200):
     xmin, ymin, xmax, ymax = zone
     for _ in range(tries):
         x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
-        ix, iy = int((x - g.x0) // g.res), int((y - g.y0) // g.res)
-        if 0 <= ix < g.nx and 0 <= iy < g.ny and free[iy, ix]:
-            return g.x0 + (ix + 0.5) * g.res, g.y0 + (iy + 0.5) * g.res
+        cell = grid_cell(g, x, y)
+        if cell is not None and free[cell[1], cell[0]]:
+            return g.x0 + (cell[0] + 0.5) * g.res, g.y0 + (cell[1] + 0.5) * g.res
     return None
 
 

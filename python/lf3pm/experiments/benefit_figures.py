@@ -96,7 +96,7 @@ def example_figures(cases, summary: dict, out: Path) -> None:
     their localization error along the way."""
     from lf3pm.experiments.benefit import replay_path
     from lf3pm.experiments.replay_tasks import load_replay
-    from lf3pm.planner.trajectory import read_csv
+    from lf3pm.trajectory.trajectory import read_csv
     from lf3pm.solm import Solm
     from lf3pm.solm.figures import draw_heat_map
 

@@ -25,13 +25,13 @@ import numpy as np
 from lf3pm.config import DEFAULTS
 from lf3pm.atomic import atomic_write
 from lf3pm.validation import RegistrationTarget
-from lf3pm.validation.trajectory import sample_trajectory
+from lf3pm.trajectory.sampling import sample_trajectory
 from lf3pm.validation.trajectory_mde import mde_along
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays
 from lf3pm.planner.plan import Planner
-from lf3pm.planner.robots import Robot
+from lf3pm.trajectory.robots import Robot
 from lf3pm.sensors import get_sensor
 from lf3pm.solm import Solm
 
@@ -130,9 +130,7 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
 
 def _ground_under(ground: np.ndarray, solm: Solm, x, y) -> np.ndarray:
     """Ground height of the SOLM cell under each (x, y) (column minimum of the map)."""
-    g = solm.grid_spec
-    ix = np.clip(((np.asarray(x) - g.x0) / g.res).astype(int), 0, g.nx - 1)
-    iy = np.clip(((np.asarray(y) - g.y0) / g.res).astype(int), 0, g.ny - 1)
+    iy, ix = solm.grid_spec.cell(x, y)[-2:]
     z = ground[iy, ix].astype(np.float64)
     return np.where(np.isfinite(z), z, np.nanmedian(ground))
 

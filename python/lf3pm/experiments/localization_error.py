@@ -35,7 +35,7 @@ def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: f
     """q_n at the trajectory CSV's poses every 1/``rate`` s: its time mean over the
     non-degenerate poses, the share of degenerate ones and the count."""
     from lf3pm.metric import evaluate
-    from lf3pm.validation.motion import Motion
+    from lf3pm.replays.motion import Motion
 
     motion = Motion.from_csv(csv, world, height=height)
     poses = motion.pose(np.arange(motion.t0, motion.t1 + 1e-9, 1.0 / rate))

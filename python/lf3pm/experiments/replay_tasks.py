@@ -58,7 +58,7 @@ def replay_task(task) -> None:
     """One replay: APE (rmse, median, max), scans, the share of degenerate scans,
     seconds, and the error once per second, written atomically as JSON."""
     from lf3pm.validation.mde import RegistrationTarget
-    from lf3pm.validation.replay import replay
+    from lf3pm.replays.replay import replay
 
     case, csv, method, seed, path = task
     if case.name not in _MAPS:

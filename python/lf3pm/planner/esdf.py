@@ -79,7 +79,7 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.grid_field import GridField
+from lf3pm.grid_field import GridField
 
 _FAR = 1.0e3  # metres: the clamp of +-inf values in grid_field()
 

@@ -30,7 +30,7 @@ from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
-from lf3pm.planner.poses import format_pose
+from lf3pm.planner.poses import cell_on_grid, format_pose
 
 #: Default turn radius (m): a yaw step costs the arc a point this far from the rotation
 #: axis travels.
@@ -132,10 +132,7 @@ def _locate(name, pose, g, layers, step):
     if len(pose) != 3 or not all(math.isfinite(v) for v in pose):
         raise Lf3pmError(f"{name} must be three finite numbers x, y, yaw, got {pose}")
     x, y, yaw = pose
-    ix, iy = math.floor((x - g.x0) / g.res), math.floor((y - g.y0) / g.res)
-    if not (0 <= ix < g.nx and 0 <= iy < g.ny):
-        raise Lf3pmError(f"{name} {format_pose(pose)} lies outside the grid x [{g.x0:.2f}, "
-                         f"{g.x0 + g.nx * g.res:.2f}], y [{g.y0:.2f}, {g.y0 + g.ny * g.res:.2f}]")
+    ix, iy = cell_on_grid(g, name, pose)
     return ix, iy, round(yaw / step) % layers
 
 

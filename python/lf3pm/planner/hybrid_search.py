@@ -23,8 +23,8 @@ from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
-from lf3pm.planner.grid_field import GridField
-from lf3pm.planner.poses import as_pose, format_pose
+from lf3pm.grid_field import GridField
+from lf3pm.planner.poses import as_pose, cell_on_grid, format_pose
 
 
 @dataclass(frozen=True)
@@ -167,11 +167,7 @@ def _cost_field(cost, esdf: Esdf) -> GridField | None:
 
 def _check_end(name: str, pose, esdf: Esdf, field: GridField, clearance: float) -> None:
     x, y = float(pose[0]), float(pose[1])
-    ix, iy = math.floor((x - esdf.x0) / esdf.res), math.floor((y - esdf.y0) / esdf.res)
-    if not (0 <= ix < esdf.nx and 0 <= iy < esdf.ny):
-        raise Lf3pmError(f"{name} {format_pose(pose)} lies outside the grid x [{esdf.x0:.2f}, "
-                         f"{esdf.x0 + esdf.nx * esdf.res:.2f}], y [{esdf.y0:.2f}, "
-                         f"{esdf.y0 + esdf.ny * esdf.res:.2f}]")
+    ix, iy = cell_on_grid(esdf, name, pose)
     d = float(field.sample(x, y)[0])
     if d < clearance:
         reason = esdf.blocked_reason(ix, iy) or (f"{d:.2f} m from an obstacle or unknown ground, closer than "

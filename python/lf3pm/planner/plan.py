@@ -23,13 +23,13 @@ from lf3pm.config import DEFAULTS
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
-from lf3pm.planner.grid_field import GridField
+from lf3pm.grid_field import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
-from lf3pm.planner.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, optimize_trajectory
+from lf3pm.trajectory.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, optimize_trajectory
 from lf3pm.planner.poses import as_pose
-from lf3pm.planner.robots import Robot
+from lf3pm.trajectory.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
-from lf3pm.planner.trajectory import CSV_RATE, Trajectory
+from lf3pm.trajectory.trajectory import CSV_RATE, Trajectory
 from lf3pm.solm.reader import Solm
 
 METRICS = ("q_n", "q_min", "step_norm", "none")

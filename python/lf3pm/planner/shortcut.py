@@ -15,7 +15,7 @@ planner/graph_search.py). The yaw along a path is what the trajectory will have:
 
 - ``yaw="interpolate"`` (omni robots on an SE(2) SOLM): the front end chose a
   yaw per cell, and the back end starts from the kept waypoints' yaws,
-  interpolated linearly between them (planner/trajectory_optimizer.py); a segment is costed
+  interpolated linearly between them (trajectory/trajectory_optimizer.py); a segment is costed
   at those interpolated yaws and the run at its cells' own;
 - ``yaw="travel"`` (diff and car robots, and any robot on an R2 SOLM): the yaw is
   the direction of travel of each segment, and turns cost nothing extra.
@@ -27,7 +27,7 @@ import numpy as np
 
 from lf3pm import libm
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.grid_field import GridField
+from lf3pm.grid_field import GridField
 
 YAW_MODES = ("travel", "interpolate")
 

@@ -76,7 +76,7 @@ from ._model import Sensor, spinning_rings
 from ._presets import DEFAULT_INTEGRATION_TIME, PRESET_NAMES, find_preset, presets
 from ._yaml import load_sensor_yaml
 
-__all__ = ["Sensor", "SensorError", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES", "spinning_rings",
+__all__ = ["Sensor", "SensorError", "as_sensor", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES", "spinning_rings",
            "DEFAULT_INTEGRATION_TIME"]
 
 
@@ -104,6 +104,12 @@ def get_sensor(name_or_path, *, integration_time: float | None = None) -> Sensor
         return load_sensor_yaml(text, integration_time=integration_time)
     raise SensorError(f"unknown sensor '{name_or_path}'; known sensors: {_known()} "
                       "(or a path to a .yaml sensor file)")
+
+
+def as_sensor(sensor) -> Sensor:
+    """``sensor`` itself when it is a Sensor, else :func:`get_sensor` of it (a preset name
+    or a YAML path)."""
+    return sensor if isinstance(sensor, Sensor) else get_sensor(sensor)
 
 
 def list_sensors() -> list[Sensor]:

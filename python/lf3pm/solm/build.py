@@ -12,7 +12,7 @@ from lf3pm import __version__
 from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, SolmConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, MapPoints
-from lf3pm.sensors import Sensor, get_sensor
+from lf3pm.sensors import Sensor, as_sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, TILE, check_new_store, open_or_create, tiles_shape
 from lf3pm.solm.tiles import compute_tile, crop_margin, make_job, write_tile
@@ -55,8 +55,7 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
                        crop_above=crop_above)
     if engine not in ENGINES:
         raise Lf3pmError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
-    if isinstance(sensor, str):
-        sensor = get_sensor(sensor)
+    sensor = as_sensor(sensor)
     if not (math.isfinite(floor_clearance) and floor_clearance >= 0):
         raise Lf3pmError(f"floor clearance must be a number >= 0 m, got {floor_clearance}")
     if tile < 1:

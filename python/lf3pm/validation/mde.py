@@ -17,10 +17,10 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS, MdeConfig, ScanConfig, validated
 from lf3pm.errors import Lf3pmError
-from lf3pm.map import Map, load_map
+from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
-from lf3pm.scan_simulator import simulate_scan
-from lf3pm.sensors import Sensor, get_sensor
+from lf3pm.scan.scan_simulator import simulate_scan
+from lf3pm.sensors import Sensor, as_sensor
 
 
 
@@ -37,6 +37,17 @@ class RegistrationTarget:
         self.tree = small_gicp.KdTree(self.cloud, num_threads=workers)
         small_gicp.estimate_normals(self.cloud, self.tree, num_neighbors=normal_neighbors,
                                     num_threads=workers)
+
+    @classmethod
+    def for_map(cls, map: Map, target: "RegistrationTarget | None" = None,
+                threads: int = DEFAULTS.scan.threads) -> "RegistrationTarget":
+        """``target`` checked to be ``map``'s (Lf3pmError if it was prepared from another
+        map), or a new one when None."""
+        if target is None:
+            return cls(map, threads=threads)
+        if target.map_sha256 != map.sha256:
+            raise Lf3pmError("the registration target was prepared from another map")
+        return target
 
 
 def _default_threads() -> int:
@@ -82,10 +93,7 @@ def mde(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, trials:
     disturbance = validated(MdeConfig, "mde", trials=trials, sigma_t=sigma_t, sigma_r=sigma_r_deg)
     scan_config = validated(ScanConfig, "scan", noise=noise, seed=seed, scan_voxel=scan_voxel, threads=threads)
     trials, sigma_t, sigma_r_deg = disturbance.trials, disturbance.sigma_t, disturbance.sigma_r
-    if not isinstance(map, Map):
-        map = load_map(map)
-    if not isinstance(sensor, Sensor):
-        sensor = get_sensor(sensor)
+    map, sensor = as_map(map), as_sensor(sensor)
     # A start disturbed by more than the map is across is no registration problem, and
     # small_gicp would grind through it for minutes.
     extent = max(float(np.max(map.bounds[1] - map.bounds[0])), 1.0)
@@ -95,10 +103,7 @@ def mde(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, trials:
     sigma, scan_voxel = scan_config.noise_for(sensor), scan_config.scan_voxel
     truth = pose_matrix(pose)
     map.check_pose(truth, clearance)
-    if target is None:
-        target = RegistrationTarget(map, threads=threads)
-    elif target.map_sha256 != map.sha256:
-        raise Lf3pmError("the registration target was prepared from another map")
+    target = RegistrationTarget.for_map(map, target, threads)
 
     scan = simulate_scan(map, truth, sensor.directions, sensor.min_range, sensor.max_range, noise=sigma,
                          seed=seed, scan_voxel=scan_voxel, threads=threads)

@@ -1,6 +1,6 @@
 """MDE along a trajectory and its sum S, the paper's figure of merit for a
 planned path: S = sum_i MDE(pose_i) over poses sampled at a constant time
-interval (see :func:`lf3pm.validation.trajectory.sample_trajectory`).
+interval (see :func:`lf3pm.trajectory.sampling.sample_trajectory`).
 
 Pose i uses the seed :func:`pose_seed` (seed, i) for both its scan noise and its
 disturbances, so each per-pose MDE equals ``mde(map, pose_i, seed=pose_seed(seed, i))``
@@ -17,8 +17,8 @@ import numpy as np
 from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.mde import RegistrationTarget, mde
-from lf3pm.map import Map, load_map
-from lf3pm.sensors import Sensor, get_sensor
+from lf3pm.map import Map, as_map
+from lf3pm.sensors import Sensor, as_sensor
 
 
 def pose_seed(seed: int, index: int) -> int:
@@ -79,10 +79,7 @@ def mde_along(map: Map | str, poses, sensor: Sensor | str = DEFAULTS.sensor, *, 
     evaluated are reported in ``refused``, never dropped silently. ``progress``,
     if given, is called as progress(done, total) after each pose.
     """
-    if not isinstance(map, Map):
-        map = load_map(map)
-    if not isinstance(sensor, Sensor):
-        sensor = get_sensor(sensor)
+    map, sensor = as_map(map), as_sensor(sensor)
     poses = np.asarray(poses, dtype=np.float64)
     if poses.ndim != 2 or poses.shape[1] != 4 or len(poses) < 1:
         raise Lf3pmError(f"poses must be an (N, 4) array of x y z yaw with N >= 1, got shape {poses.shape}")
@@ -95,10 +92,7 @@ def mde_along(map: Map | str, poses, sensor: Sensor | str = DEFAULTS.sensor, *, 
         raise Lf3pmError("disturbance sigmas must be >= 0")
     if noise is not None and noise < 0:
         raise Lf3pmError(f"range noise must be >= 0, got {noise}")
-    if target is None:
-        target = RegistrationTarget(map, threads=threads)
-    elif target.map_sha256 != map.sha256:
-        raise Lf3pmError("the registration target was prepared from another map")
+    target = RegistrationTarget.for_map(map, target, threads)
 
     values, seeds, refused, t_med, converged, hits = [], [], [], [], [], []
     for i, pose in enumerate(poses):

@@ -20,14 +20,14 @@ import os
 import time
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
+from lf3pm.replays.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
                                            MIN_POINTS, SCAN_VOXEL, WheelOdometry, localization_params, localize)
 from lf3pm.validation.mde import RegistrationTarget
-from lf3pm.validation.motion import Motion, RestFirst
-from lf3pm.validation.odometry import kiss_icp_params, run_kiss_icp
-from lf3pm.validation.replay_result import Estimate, ReplayResult, ReplaySeries, library_versions, median_figures
-from lf3pm.validation.scans import ScanStream
-from lf3pm.map import Map, load_map
+from lf3pm.replays.motion import Motion, RestFirst
+from lf3pm.replays.odometry import kiss_icp_params, run_kiss_icp
+from lf3pm.replays.replay_result import Estimate, ReplayResult, ReplaySeries, library_versions, median_figures
+from lf3pm.scan.scans import ScanStream
+from lf3pm.map import Map, as_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
 from lf3pm.config import DEFAULTS, REPLAY_METHODS, ReplayConfig, ScanConfig, validated
 
@@ -100,8 +100,7 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor
     run = validated(ReplayConfig, "replay", method=method, rate=rate, height=height)
     rate, height = run.rate, run.height
     noise = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads).noise
-    if not isinstance(map, Map):
-        map = load_map(map)
+    map = as_map(map)
     sensor = resolve_sensor(sensor, rate)
     motion = _motion(motion_or_csv, map, height)
     first = 0
@@ -115,10 +114,7 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor
                                                   "max_step": motion.ground.max_step},
               "span_s": [motion.t0, motion.t1]}
     if method == "localization":
-        if target is None:
-            target = RegistrationTarget(map, threads=threads)
-        elif target.map_sha256 != map.sha256:
-            raise Lf3pmError("the registration target was prepared from another map")
+        target = RegistrationTarget.for_map(map, target, threads)
         odometry = WheelOdometry(params["scale_error"], params["yaw_noise"])
         settings = {k: params[k] for k in ("scan_voxel", "degenerate_std", "remap",
                                            "max_correspondence_distance", "max_iterations", "min_points")}
@@ -150,8 +146,7 @@ def replay_seeds(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.
     the median of each reported figure. ``progress(seed, done, total)`` after each scan."""
     run = validated(ReplayConfig, "replay", method=method, seeds=seeds, rate=rate, height=height)
     validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
-    if not isinstance(map, Map):
-        map = load_map(map, threads=threads)
+    map = as_map(map, threads)
     motion = _motion(motion_or_csv, map, run.height)
     target = RegistrationTarget(map, threads=threads) if method == "localization" else None
     results = []
@@ -168,11 +163,10 @@ def replay_bag(path, map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAU
                threads: int = DEFAULTS.scan.threads, progress=None) -> dict:
     """Writes the stream a replay of seed ``seed`` simulates (scans, the IMU of the lio
     method, the truth) as a ROS 2 bag at ``path`` (bag.py); returns what write_bag says."""
-    from lf3pm.validation.bag import write_bag
+    from lf3pm.replays.bag import write_bag
 
     lio_modules("a bag (it carries the simulated IMU)")
-    if not isinstance(map, Map):
-        map = load_map(map, threads=threads)
+    map = as_map(map, threads)
     motion = _motion(motion_or_csv, map, height)
     scans = ScanStream(map, motion, resolve_sensor(sensor, rate), rate=rate, seed=seed, noise=noise,
                        threads=threads)
@@ -200,8 +194,8 @@ def lio_modules(needed_by: str = "method lio"):
     """(simulate_imu, run_lio), or Lf3pmError (naming what ``needed_by`` them)
     when the IMU simulation or the LIO is not available."""
     try:
-        from lf3pm.validation.imu import simulate_imu
-        from lf3pm.validation.lio import run_lio
+        from lf3pm.replays.imu import simulate_imu
+        from lf3pm.replays.lio import run_lio
     except ImportError as err:
         raise Lf3pmError(f"{needed_by} is not available: {err}") from None
     return simulate_imu, run_lio

@@ -74,8 +74,8 @@ def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: floa
     """The scan whose rays (``directions`` (K, 3), emission order) fire over
     (end - period, end] while the sensor follows ``motion`` (anything with
     ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:
-    lf3pm.validation.motion.Motion, lf3pm.validation.trajectory.LinearMotion).
-    Noise as :func:`lf3pm.scan_simulator.simulate_scan`'s: ray k gets the same range noise under
+    lf3pm.replays.motion.Motion, lf3pm.trajectory.sampling.LinearMotion).
+    Noise as :func:`lf3pm.scan.scan_simulator.simulate_scan`'s: ray k gets the same range noise under
     the same seed and stream whatever the motion.
     """
     if not (np.isfinite(period) and period > 0):

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lf3pm.validation.trajectory_metrics import ape_translation, rpe
+from lf3pm.replays.trajectory_metrics import ape_translation, rpe
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The scan simulator (cpp/lf3pm/scan/scan_simulator.hpp): a sensor's rays cast from one
 pose on a map's surfels, with seeded range noise. (A moving sensor, one pose per ray:
-lf3pm.validation.moving_scan.)"""
+lf3pm.scan.moving_scan.)"""
 
 from __future__ import annotations
 

@@ -19,9 +19,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
+from lf3pm.scan.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
 from lf3pm.map import Map
-from lf3pm.scan_simulator import simulate_scan
+from lf3pm.scan.scan_simulator import simulate_scan
 from lf3pm.config import DEFAULTS
 from lf3pm.sensors import Sensor
 

@@ -22,12 +22,12 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.replay_result import Estimate, ReplayResult, library_versions
-from lf3pm.validation.scans import ScanStream
-from lf3pm.validation.trajectory import LinearMotion
-from lf3pm.map import Map, load_map
+from lf3pm.replays.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.scan.scans import ScanStream
+from lf3pm.trajectory.sampling import LinearMotion
+from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
-from lf3pm.sensors import Sensor, get_sensor
+from lf3pm.sensors import Sensor, as_sensor
 
 def kiss_icp_config(sensor: Sensor, *, voxel_size: float = DEFAULTS.kiss_icp.voxel_size, deskew: bool = False,
                     threads: int = DEFAULTS.scan.threads):
@@ -95,10 +95,7 @@ def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = DEFAULTS.se
     Raises Lf3pmError for a malformed trajectory, a pose outside the map's x-y
     extent or bad parameters.
     """
-    if not isinstance(map, Map):
-        map = load_map(map)
-    if not isinstance(sensor, Sensor):
-        sensor = get_sensor(sensor)
+    map, sensor = as_map(map), as_sensor(sensor)
     motion = LinearMotion(t, poses)
     # The map's x-y box is convex, so checking the given poses covers the interpolated ones.
     for pose in motion.poses:

@@ -77,7 +77,7 @@ class LinearMotion:
     """Poses between samples (t (N,), poses (N, 4) of x y z yaw) by
     :func:`interpolate_poses`, held at the end poses outside [t0, t1]: the
     sampled trajectories ``mde_along`` and ``replay_odometry`` take, with the
-    ``t0``, ``t1`` and ``pose(times)`` of :class:`lf3pm.validation.motion.Motion`."""
+    ``t0``, ``t1`` and ``pose(times)`` of :class:`lf3pm.replays.motion.Motion`."""
 
     def __init__(self, t, poses):
         self.samples, self.poses = check_trajectory(t, poses)

@@ -26,8 +26,8 @@ from __future__ import annotations
 import numpy as np
 
 from lf3pm.errors import Lf3pmError, PoseError
-from lf3pm.validation.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
-from lf3pm.validation.trajectory import check_trajectory
+from lf3pm.replays.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
+from lf3pm.trajectory.sampling import check_trajectory
 from lf3pm.map import Map
 from lf3pm.pose import pose_matrices
 from lf3pm.config import DEFAULT_HEIGHT
@@ -116,7 +116,7 @@ class Motion:
         """The motion of the CSV ``lf3pm plan`` writes (t,x,y,yaw,vx,vy,omega), as
         :meth:`from_arrays`. Raises Lf3pmError for a file that cannot be read or
         is malformed."""
-        from lf3pm.planner.trajectory import read_csv
+        from lf3pm.trajectory.trajectory import read_csv
 
         s = read_csv(path)
         return cls.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map,

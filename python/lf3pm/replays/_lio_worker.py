@@ -1,4 +1,4 @@
-"""Child process of lf3pm.validation.lio: runs one LiDAR-inertial odometry (GenZ-LIO,
+"""Child process of lf3pm.replays.lio: runs one LiDAR-inertial odometry (GenZ-LIO,
 or DLIO from evalio) on the scans the parent streams to it, so that the odometry's
 OpenMP runtime, its console output and a crash stay out of the caller's process.
 

@@ -95,9 +95,9 @@ import numpy as np
 
 from lf3pm.config import ReplayConfig
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.imu import ImuPreset
+from lf3pm.replays.imu import ImuPreset
 from lf3pm.pose import pose_matrix
-from lf3pm.sensors import Sensor, get_sensor, spinning_rings
+from lf3pm.sensors import Sensor, as_sensor, spinning_rings
 
 
 
@@ -189,8 +189,7 @@ def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = D
     Raises Lf3pmError for malformed input, an unknown odometry or setting, a
     missing or other version of the odometry's package, or its crash.
     """
-    if not isinstance(sensor, Sensor):
-        sensor = get_sensor(sensor)
+    sensor = as_sensor(sensor)
     odometry = choose_odometry(odometry, sensor)
     origin = pose_matrix(initial_pose)
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:

@@ -52,7 +52,7 @@ import numpy as np
 
 from lf3pm.errors import Lf3pmError
 from lf3pm.validation.mde import RegistrationTarget
-from lf3pm.validation.replay_result import Estimate
+from lf3pm.replays.replay_result import Estimate
 from lf3pm.pose import se3_exp, se3_log
 from lf3pm.config import DEFAULTS
 from lf3pm.sensors import Sensor

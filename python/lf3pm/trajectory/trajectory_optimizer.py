@@ -27,9 +27,9 @@ import numpy as np
 
 from lf3pm import _core, libm
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner.grid_field import GridField
-from lf3pm.planner.robots import Robot
-from lf3pm.planner.trajectory import CSV_RATE, Trajectory
+from lf3pm.grid_field import GridField
+from lf3pm.trajectory.robots import Robot
+from lf3pm.trajectory.trajectory import CSV_RATE, Trajectory
 
 #: The objective's weights as the C++ core defines them (trajectory_cost.hpp CostWeights):
 #: the penalty weight W, K samples per piece and the clearance margin, read once from there.
@@ -75,7 +75,7 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
     if not np.isfinite(wp).all():
         raise Lf3pmError("waypoints must be finite")
     if not isinstance(robot, Robot):
-        raise Lf3pmError("robot must be an lf3pm.planner.Robot")
+        raise Lf3pmError("robot must be an lf3pm.Robot")
     for name, field in (("cost", cost), ("esdf", esdf)):
         if field is not None and not isinstance(field, GridField):
             raise Lf3pmError(f"{name} must be a GridField or None")
