@@ -47,7 +47,9 @@ def test_json_with_two_seeds_and_a_png(files, tmp_path):
     # A script gets what the CLI gets: lf3pm.replay_seeds on the same input, the same figures.
     series = lf3pm.replay_seeds(str(files / "boxes.npy"), str(files / "traj.csv"), seeds=2, seed=3)
     assert [r.seed for r in series.results] == [3, 4]
-    assert series.median == pytest.approx(out["median"])
+    timing = "scans_per_second"   # wall time: differs from run to run
+    assert {k: v for k, v in series.median.items() if k != timing} == pytest.approx(
+        {k: v for k, v in out["median"].items() if k != timing})
     assert [r.ape["rmse"] for r in series.results] == pytest.approx([r["ape"]["rmse"] for r in out["runs"]])
 
 

@@ -249,7 +249,7 @@ def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list
             comparisons[method]["default_no_risk"] = _compare([r for r in records if not r["at_risk"]], "default",
                                                               method)
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
-            "lio_guidance": lio_names,
+            "lio_guidance": ["none"] + lio_names,
             "replay_cpu_s": replay_seconds,
             "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
             "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
