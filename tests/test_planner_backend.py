@@ -371,3 +371,19 @@ def test_trajectory_sample_rate_must_be_positive():
     traj = Trajectory(np.zeros((1, 4, 3)), np.ones(1))
     with pytest.raises(Lf3pmError):
         traj.sample(0.0)
+
+
+def test_the_numpy_interpolation_is_the_cores():
+    """lf3pm.grid_field.bilinear (Esdf.distance, Solm.query: fields with NaN the core does
+    not take) and the core's GridField interpolate alike, values and gradients, inside the
+    grid and clamped beyond it."""
+    from lf3pm.grid_field import bilinear
+
+    rng = np.random.default_rng(5)
+    values = rng.normal(size=(7, 9))
+    field = GridField(values, -1.0, 2.0, 0.5)
+    x, y = rng.uniform(-2.0, 4.5, 500), rng.uniform(1.0, 6.5, 500)
+    core_value, core_grad = field.sample(x, y)
+    value, ddx, ddy = bilinear(values, x, y, -1.0, 2.0, 0.5)
+    np.testing.assert_allclose(value, core_value, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.stack([ddx, ddy], -1), core_grad[:, :2], rtol=0, atol=1e-12)

@@ -79,7 +79,7 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.grid_field import GridField
+from lf3pm.grid_field import GridField, bilinear
 
 _FAR = 1.0e3  # metres: the clamp of +-inf values in grid_field()
 
@@ -154,13 +154,7 @@ class Esdf:
         if not np.isfinite(v[0, 0]):  # no free or no blocked cell: a constant field
             shape = np.broadcast(x, y).shape
             return np.full(shape, v[0, 0]), np.zeros(shape + (2,))
-        inx, ix, tx = _axis(x, self.x0, self.res, self.nx)
-        iny, iy, ty = _axis(y, self.y0, self.res, self.ny)
-        ix1, iy1 = np.minimum(ix + 1, self.nx - 1), np.minimum(iy + 1, self.ny - 1)
-        v00, v01, v10, v11 = v[iy, ix], v[iy, ix1], v[iy1, ix], v[iy1, ix1]
-        value = (1 - ty) * ((1 - tx) * v00 + tx * v01) + ty * ((1 - tx) * v10 + tx * v11)
-        ddx = ((1 - ty) * (v01 - v00) + ty * (v11 - v10)) / self.res * inx
-        ddy = ((1 - tx) * (v10 - v00) + tx * (v11 - v01)) / self.res * iny
+        value, ddx, ddy = bilinear(v, x, y, self.x0, self.y0, self.res)
         return value, np.stack([ddx, ddy], axis=-1)
 
     def grid_field(self) -> GridField:
@@ -186,16 +180,6 @@ class Esdf:
             return (f"{self.values[iy, ix]:.2f} m from an obstacle or unknown ground, "
                     f"closer than r_safe = {r_safe:g} m")
         return None
-
-
-def _axis(v, origin: float, res: float, n: int):
-    """Lower cell index, weight of the upper one, and 1 inside / 0 where clamped,
-    for linear interpolation between the centres of n cells along one axis."""
-    f = (v - origin) / res - 0.5
-    inside = ((f >= 0) & (f <= n - 1)).astype(np.float64) if n > 1 else np.zeros_like(f)
-    f = np.clip(f, 0.0, max(n - 1, 0))
-    i = np.floor(f).astype(np.int64)
-    return inside, np.minimum(i, max(n - 1, 0)), f - i
 
 
 def _conservative_values(blocked: np.ndarray) -> np.ndarray:

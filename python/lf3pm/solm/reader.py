@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid_field import axis_weights, bilinear
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, MASKS
 
@@ -68,12 +69,10 @@ class Solm:
         g = self.grid_spec
         data = self.channel(channel).astype(np.float64)
         x, y = np.asarray(x, float), np.asarray(y, float)
-        fx, ix, tx = _frac(x, g.x0, g.res, g.nx)
-        fy, iy, ty = _frac(y, g.y0, g.res, g.ny)
         if g.space == "r2":
-            data = data[None]  # one layer: the same bilinear code, no third axis
-            k0 = k1 = np.zeros_like(ix)
-            tk, step, fk = np.zeros_like(tx), 1.0, 0.0
+            data = data[None]  # one layer: the same code, no third axis
+            k0 = k1 = np.zeros(np.broadcast(x, y).shape, dtype=np.int64)
+            tk, step, fk = 0.0, 1.0, 0.0
         elif g.space == "se2":
             step = 2 * math.pi / g.yaw_bins
             f = np.mod(np.asarray(yaw, float), 2 * math.pi) / step
@@ -85,31 +84,14 @@ class Solm:
             levels = np.asarray(g.z_levels)
             zz = np.asarray(z if z is not None else levels[0], float)
             dz = levels[1] - levels[0] if len(levels) > 1 else 1.0
-            fz, k0, tk = _frac(zz, levels[0] - 0.5 * dz, dz, len(levels))
-            k1 = k0 + 1
-            step, fk = dz, fz
+            fk, k0, k1, tk = axis_weights(zz, levels[0] - 0.5 * dz, dz, len(levels))
+            step = dz
 
         def plane(k):
-            v00, v01 = data[k, iy, ix], data[k, iy, ix + 1]
-            v10, v11 = data[k, iy + 1, ix], data[k, iy + 1, ix + 1]
-            val = (1 - ty) * ((1 - tx) * v00 + tx * v01) + ty * ((1 - tx) * v10 + tx * v11)
-            ddx = ((1 - ty) * (v01 - v00) + ty * (v11 - v10)) / g.res * fx
-            ddy = ((1 - tx) * (v10 - v00) + tx * (v11 - v01)) / g.res * fy
-            return val, ddx, ddy
+            return bilinear(data, x, y, g.x0, g.y0, g.res, layer=k)
 
         a, ax, ay = plane(k0)
         b, bx, by = plane(k1)
         value = (1 - tk) * a + tk * b
         grad = np.stack([(1 - tk) * ax + tk * bx, (1 - tk) * ay + tk * by, (b - a) / step * fk], axis=-1)
         return value, (grad[..., :2] if g.space == "r2" else grad)
-
-
-def _frac(v, origin, res, n):
-    """Lower cell index, weight of the upper one, and 1/0 for inside/clamped, for
-    linear interpolation between cell centres along one axis of n cells."""
-    f = (v - origin) / res - 0.5
-    inside = ((f >= 0) & (f <= n - 1)).astype(float) if n > 1 else np.zeros_like(f)
-    f = np.clip(f, 0, max(n - 1, 0))
-    i = np.minimum(np.floor(f).astype(int), max(n - 2, 0))
-    t = f - i if n > 1 else np.zeros_like(f)
-    return inside, i if n > 1 else np.zeros_like(i), t
