@@ -49,6 +49,12 @@ void bind_map(nb::module_& m) {
       })
       .def("__eq__", [frame_state](const MapFrame& a, const MapFrame& b) { return frame_state(a) == frame_state(b); });
 
+  m.def("largest_disc",
+        [](const MapFrame& frame, const MapParams& params) {
+          return largest_disc(frame.cell_size, frame.median_spacing, params);
+        },
+        nb::arg("frame"), nb::arg("params"),
+        "The widest disc (m) an index of this frame makes with these parameters' neighbour gate.");
   m.def("map_frame",
         [](PointsIn pts, const MapParams& params) {
           const double* data = pts.data();

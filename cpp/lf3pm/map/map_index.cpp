@@ -91,12 +91,6 @@ std::vector<Eigen::Vector3d> read_points(const double* xyz, std::size_t count) {
   return input;
 }
 
-// The widest disc an index of this frame makes: three cells or the neighbour gate,
-// never narrower than the smallest disc (0.75 of the median spacing).
-double largest_disc(double cell_size, double median_spacing, const MapParams& params) {
-  return std::max(0.75 * median_spacing, std::min(3.0 * cell_size, params.max_neighbor_distance));
-}
-
 // The frame of `count` finite points (x, y, z rows), read in place: nothing of the
 // map's size is allocated, so a map too large to index whole has its frame computed.
 MapFrame frame_of(const double* xyz, std::size_t count, const MapParams& params) {
@@ -118,6 +112,10 @@ MapFrame frame_of(const double* xyz, std::size_t count, const MapParams& params)
 }
 
 }  // namespace
+
+double largest_disc(double cell_size, double median_spacing, const MapParams& params) {
+  return std::max(0.75 * median_spacing, std::min(3.0 * cell_size, params.max_neighbor_distance));
+}
 
 MapFrame map_frame(const double* xyz, std::size_t count, const MapParams& params) {
   check_params(params, count);

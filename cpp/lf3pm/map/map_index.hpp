@@ -38,6 +38,12 @@ struct MapFrame {
 /// too large to index whole is built tile by tile in it). Throws as MapIndex does.
 MapFrame map_frame(const double* xyz, std::size_t count, const MapParams& params);
 
+/// The widest disc an index of a frame with this cell size and median spacing makes
+/// (m): three cells or the neighbour gate, never narrower than the smallest disc (0.75
+/// of the median spacing). A crop of the map reaching this far beyond a tile's rays
+/// holds every disc they can hit (python/lf3pm/solm/tiles.py).
+double largest_disc(double cell_size, double median_spacing, const MapParams& params);
+
 class MapIndex {
  public:
   /// Builds the index of `points` (N x 3, finite, N >= knn), in its own frame or, given

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import DEFAULTS, MetricConfig, scan_params
+from lf3pm.config import DEFAULTS, MetricConfig, core_struct, scan_params
 from lf3pm.map import Map, MapPoints
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.ray_thinning import thin_rays
@@ -86,10 +86,7 @@ def make_job(sensor, grid: SolmGrid, *, tile: int, noise: float, seed: int = DEF
 def crop_margin(job: TileJob, world: Map | MapPoints) -> float:
     """How far (x, y) beyond a tile's poses its crop must reach to be exact (module docstring)."""
     neighbour = float(world.association_params["max_neighbor_distance"])
-    # The widest disc the index makes (map_index.cpp): three cells or the neighbour gate,
-    # never narrower than 0.75 of the median point spacing.
-    frame = world.frame
-    disc = max(min(3.0 * frame.cell_size, neighbour), 0.75 * frame.median_spacing)
+    disc = _core.largest_disc(world.frame, core_struct(_core.MapParams(), max_neighbor_distance=neighbour))
     return job.max_range + disc + neighbour
 
 
