@@ -58,11 +58,11 @@ _FURNITURE = np.array([[1.6, 0.8, 0.75], [0.9, 0.45, 2.0], [1.2, 0.4, 1.8], [1.2
 
 def zones(params: dict) -> dict:
     """The study's zones: ``start`` in the west courtyard, ``goal`` in the east one, 5-9 m
-    out from the end walls, across the corridor and the suite's doorway."""
+    out from the end walls, in front of the corridor's mouths (within half its width of
+    its axis), so that the shortest way between them is the corridor."""
     half, w = params["length"] / 2, params["width"]
-    y_hi = w / 2 + SEPARATING_WALL + params["room_depth"]
-    return {"start": Zone(-half - 9.0, -w / 2, -half - 5.0, y_hi),
-            "goal": Zone(half + 5.0, -w / 2, half + 9.0, y_hi)}
+    return {"start": Zone(-half - 9.0, -w / 2, -half - 5.0, w / 2),
+            "goal": Zone(half + 5.0, -w / 2, half + 9.0, w / 2)}
 
 
 def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
