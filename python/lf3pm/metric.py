@@ -15,8 +15,6 @@ from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, as_sensor
 
-_SCAN = ScanConfig()
-_METRIC = MetricConfig()
 
 #: Metric fields, in the order tables print them.
 METRIC_FIELDS = ("sigma1", "xi", "q_min", "q_n", "q_max", "zhang", "condition_number", "cov_trace",
@@ -69,8 +67,8 @@ def _json_number(value):
     return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
-def eval_params(min_range: float, max_range: float, *, dof: int = _METRIC.dof,
-                association: str = _METRIC.association, w1: float = _METRIC.w1, ray_weight: float = 1.0,
+def eval_params(min_range: float, max_range: float, *, dof: int = DEFAULTS.metric.dof,
+                association: str = DEFAULTS.metric.association, w1: float = DEFAULTS.metric.w1, ray_weight: float = 1.0,
                 **scan) -> _core.EvalParams:
     """The core's EvalParams (values as given: lf3pm.config validates what users set);
     ``scan``: :func:`lf3pm.scan.scan_simulator.scan_params`'s keywords."""
@@ -78,10 +76,11 @@ def eval_params(min_range: float, max_range: float, *, dof: int = _METRIC.dof,
         scan_params(min_range, max_range, **scan), ray_weight)
 
 
-def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, seed: int = _SCAN.seed,
-             noise: float | None = _SCAN.noise, dof: int = _METRIC.dof, w1: float = _METRIC.w1,
-             scan_voxel: float = _SCAN.scan_voxel, association: str = _METRIC.association,
-             threads: int = _SCAN.threads, observations: bool = False, clearance: float = _SCAN.clearance) -> Evaluation:
+def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, seed: int = DEFAULTS.scan.seed,
+             noise: float | None = DEFAULTS.scan.noise, dof: int = DEFAULTS.metric.dof, w1: float = DEFAULTS.metric.w1,
+             scan_voxel: float = DEFAULTS.scan.scan_voxel, association: str = DEFAULTS.metric.association,
+             threads: int = DEFAULTS.scan.threads, observations: bool = False,
+             clearance: float = DEFAULTS.scan.clearance) -> Evaluation:
     """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric.
 
     pose: (x, y, z, yaw), (x, y, z, qw, qx, qy, qz) or a 4 x 4 sensor-to-world

@@ -44,7 +44,8 @@ def kiss_icp_config(sensor: Sensor, *, voxel_size: float = DEFAULTS.kiss_icp.vox
 
 
 def run_kiss_icp(scans, sensor: Sensor, initial_pose, *, voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
-                 deskew: bool = True, min_points: int = DEFAULTS.kiss_icp.min_points, threads: int = DEFAULTS.scan.threads, progress=None) -> Estimate:
+                 deskew: bool = True, min_points: int = DEFAULTS.kiss_icp.min_points,
+                 threads: int = DEFAULTS.scan.threads, progress=None) -> Estimate:
     """KISS-ICP over ``scans`` (MovingScan objects, e.g. a ScanStream), anchored
     at ``initial_pose`` (4 x 4, the true pose of the first scan). A scan with
     fewer than ``min_points`` hits is not given to KISS-ICP (its estimate stays

@@ -46,7 +46,8 @@ METHOD_PARAMS = {
                      "scan_voxel": SCAN_VOXEL, "degenerate_std": DEGENERATE_STD, "remap": True,
                      "max_correspondence_distance": MAX_CORRESPONDENCE_DISTANCE,
                      "max_iterations": MAX_ITERATIONS, "min_points": MIN_POINTS, "registration_threads": 1},
-    "odometry": {"voxel_size": DEFAULTS.kiss_icp.voxel_size, "min_points": DEFAULTS.kiss_icp.min_points, "deskew": True},
+    "odometry": {"voxel_size": DEFAULTS.kiss_icp.voxel_size, "min_points": DEFAULTS.kiss_icp.min_points,
+                 "deskew": True},
     "lio": {"imu_rate": DEFAULTS.replay.imu_rate, "imu_preset": None, "imu_noise": DEFAULTS.replay.imu_noise,
             "rest": LIO_REST},
 }
@@ -79,7 +80,8 @@ def check_method(method: str, params: dict) -> dict:
 
 
 def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor, method: str = DEFAULTS.replay.method,
-           seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate, height: float = DEFAULTS.replay.height,
+           seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate,
+           height: float = DEFAULTS.replay.height,
            noise: float | None = DEFAULTS.scan.noise, target: RegistrationTarget | None = None,
            threads: int = DEFAULTS.scan.threads, progress=None, **params) -> ReplayResult:
     """Replays a trajectory with ``method`` (module docstring) and scores it.

@@ -76,8 +76,8 @@ from ._model import Sensor, spinning_rings
 from ._presets import DEFAULT_INTEGRATION_TIME, PRESET_NAMES, find_preset, presets
 from ._yaml import load_sensor_yaml
 
-__all__ = ["Sensor", "SensorError", "as_sensor", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES", "spinning_rings",
-           "DEFAULT_INTEGRATION_TIME"]
+__all__ = ["Sensor", "SensorError", "as_sensor", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES",
+           "spinning_rings", "DEFAULT_INTEGRATION_TIME"]
 
 
 def _known() -> str:

@@ -18,19 +18,19 @@ from lf3pm.solm.store import CHANNELS, TILE, check_new_store, open_or_create, ti
 from lf3pm.solm.tiles import compute_tile, crop_margin, make_job, write_tile
 from lf3pm.terrain import column_minimum
 
-_SCAN, _METRIC, _SOLM = ScanConfig(), MetricConfig(), SolmConfig()
 
 
 #: Engines that compute the tiles: here (local) or as Ray tasks (cluster.py).
 ENGINES = ("local", "ray")
 
 
-def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = _SCAN.seed,
-               noise: float | None = _SCAN.noise, robot_radius: float = _SOLM.robot_radius,
-               floor_clearance: float = DEFAULTS.solm.floor_clearance, association: str = _METRIC.association, w1: float = _METRIC.w1,
-               threads: int = _SCAN.threads, yaw_reuse: bool = _SOLM.yaw_reuse, ray_stride: int = _SOLM.ray_stride,
+def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = DEFAULTS.scan.seed,
+               noise: float | None = DEFAULTS.scan.noise, robot_radius: float = DEFAULTS.solm.robot_radius,
+               floor_clearance: float = DEFAULTS.solm.floor_clearance, association: str = DEFAULTS.metric.association,
+               w1: float = DEFAULTS.metric.w1, threads: int = DEFAULTS.scan.threads,
+               yaw_reuse: bool = DEFAULTS.solm.yaw_reuse, ray_stride: int = DEFAULTS.solm.ray_stride,
                tile: int = TILE, max_tiles: int | None = None, crop: bool = False,
-               crop_above: int = _SOLM.crop_above, engine: str = "local", address: str | None = None,
+               crop_above: int = DEFAULTS.solm.crop_above, engine: str = "local", address: str | None = None,
                progress=None) -> dict:
     """Builds (or resumes) the SOLM of ``world`` (a Map, or MapPoints: a map not indexed
     whole, built on crops) for ``sensor`` (a Sensor or a preset name) on ``grid`` into the
