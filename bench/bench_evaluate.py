@@ -1,153 +1,205 @@
-"""Benchmark: one full evaluation (cast + associate + metric) of a VLP-16 scan
-(1800 x 16 rays) on a map of over 2 million points, on one core.
+"""Benchmark suite: one full evaluation (cast + associate + metric) against Embree
+casting the same rays, on maps of different character (bench_maps.py), per sensor and
+sensor height, on one core.
 
-Ours: lf3pm's fused C++ pipeline. Baselines, in the same run: the same hits
-associated the way a Python user would (scipy cKDTree 5-NN, NumPy plane fits,
-NumPy metric from A); and Embree (embreex, one thread) only casting the same rays on
-a mesh of the same surfaces at the map's own resolution: one square of two triangles
-per map point, in its plane, as wide as its disc (so the mesh holds 2 triangles per
-point). Prints ms per scan, rays per second and the ratios.
+Per map, sensor and height, at each of the map's sensor positions, in one run and
+interleaved (ours, then Embree, round after round; medians):
+  cast         lf3pm's surfel caster alone (no range noise);
+  association  k-NN association, plane fits, observation rows and their Gram
+               (the full evaluation less the cast and the metric);
+  metric       q_min/q_n/q_max and the baselines from the Gram (eigen-decompositions);
+  evaluate     the core's full evaluation; api: what lf3pm.evaluate(map, pose, "name")
+               spends outside the core (timed with the core's call answering at once);
+  Embree       embreex (Embree 4, one thread) casting the same rays on a mesh of the
+               same surfaces at the map's own resolution: one square of two triangles
+               per map point, centred on it, in its neighbourhood plane, as wide as its
+               disc (2 triangles per point; Embree's hits lie within 5 cm of ours for the
+               share printed as "agree": its squares are not our discs).
+Ratios are ours / Embree's: they carry over between machines, the times do not.
 
-    .venv/bin/python bench/bench_evaluate.py [--repeat 20]
+    .venv/bin/python bench/bench_evaluate.py [--maps town,street] [--sensors vlp16]
+        [--heights 0.5,1.0] [--repeat 10] [--markdown out/bench_evaluate.md]
+
+Embree from `pip install embreex` (`make bench` installs it); real maps from
+../shared/data (LF3PM_DATA), skipped when absent.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import time
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from baseline_pipeline import association_and_metric
+from bench_maps import MAPS
 
 import lf3pm
 from lf3pm import _core
-from lf3pm.metric import eval_params
-from lf3pm.config import scan_params
+from lf3pm.config import MetricConfig, ScanConfig, scan_params
+from lf3pm.pose import pose_matrix
+
+SENSORS = ("vlp16", "os1-64", "mid70")
+HEIGHTS = (0.5, 1.0)
 
 
-def town_map(seed: int = 0) -> np.ndarray:
-    """A 120 m square street grid: ground every 10 cm, 16 buildings with walls
-    every 5 cm, 5 mm of surface roughness. About 2.6 million points."""
-    rng = np.random.default_rng(seed)
-    g = np.arange(-60.0, 60.0, 0.1)
-    gx, gy = np.meshgrid(g, g, indexing="ij")
-    parts = [np.c_[gx.ravel(), gy.ravel(), np.zeros(gx.size)]]
-    for cx in (-36.0, -12.0, 12.0, 36.0):
-        for cy in (-36.0, -12.0, 12.0, 36.0):
-            w, d, h = 10.0 + (cx % 7), 9.0 + (cy % 5), 6.0 + ((cx + cy) % 4)
-            a = np.arange(0.0, 1.0, 0.05 / w)
-            b = np.arange(0.0, 1.0, 0.05 / d)
-            z = np.arange(0.0, h, 0.05)
-            for (x0, y0, x1, y1, s) in ((cx - w / 2, cy - d / 2, cx + w / 2, cy - d / 2, a),
-                                        (cx - w / 2, cy + d / 2, cx + w / 2, cy + d / 2, a),
-                                        (cx - w / 2, cy - d / 2, cx - w / 2, cy + d / 2, b),
-                                        (cx + w / 2, cy - d / 2, cx + w / 2, cy + d / 2, b)):
-                ss, zz = np.meshgrid(s, z, indexing="ij")
-                parts.append(np.c_[x0 + (x1 - x0) * ss.ravel(), y0 + (y1 - y0) * ss.ravel(), zz.ravel()])
-    pts = np.vstack(parts)
-    return np.ascontiguousarray(pts + rng.normal(scale=0.005, size=pts.shape))
+def ground_height(points: np.ndarray, xy) -> float:
+    """The ground under xy: the 5th percentile of the heights of the points within 1.5 m."""
+    near = points[np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1]) < 1.5]
+    return float(np.percentile(near[:, 2], 5)) if len(near) else float(points[:, 2].min())
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=20)
-    args = parser.parse_args()
-
-    points = town_map()
-    t = time.perf_counter()
-    world = lf3pm.load_map(points, threads=0)
-    build_s = time.perf_counter() - t
-    sensor = lf3pm.get_sensor("vlp16")
-    pose = np.eye(4)
-    pose[:3, 3] = (0.0, 0.0, 1.8)
-    args_core = (world.index, pose, sensor.directions)
-
-    def timed(**kwargs):
-        params = eval_params(sensor.min_range, sensor.max_range, **kwargs)
-        times = []
-        for _ in range(args.repeat):
-            t = time.perf_counter()
-            out = _core.evaluate(*args_core, params)
-            times.append(time.perf_counter() - t)
-        return float(np.median(times)), out
-
-    ours_s, res = timed(threads=1)
-    variants = {
-        "k-NN association (default), 2 threads": timed(threads=2)[0],
-        "surfel association, 1 thread": timed(threads=1, association="surfel")[0],
-        "k-NN, scan voxel 0.5 m (FAST-LIO filter_size_surf), 1 thread":
-            timed(threads=1, scan_voxel=0.5)[0],
-    }
-    one_thread = scan_params(sensor.min_range, sensor.max_range, threads=1)
-    scan = _core.simulate_scan(*args_core, one_thread)
-    cast = []
-    for _ in range(args.repeat):
-        t = time.perf_counter()
-        _core.simulate_scan(*args_core, one_thread)
-        cast.append(time.perf_counter() - t)
-    tree = cKDTree(world.points)
-    base = []
-    for _ in range(max(3, args.repeat // 5)):
-        t = time.perf_counter()
-        q_base = association_and_metric(tree, world.points, scan["world_points"], pose[:3, 3])
-        base.append(time.perf_counter() - t)
-
-    cast_s, base_s = np.median(cast), np.median(base)
-    rays = sensor.num_rays
-    print(f"map: {world.size:,} points, index built in {build_s:.2f} s "
-          f"({world.index.memory_bytes / 2**20:.0f} MiB), cell {world.index.cell_size:.3f} m")
-    print(f"scan: {rays:,} rays, {res.hits:,} hits, {res.metric.m:,} observation rows")
-    print(f"ours, one core: {ours_s * 1e3:.2f} ms per scan ({rays / ours_s / 1e6:.2f} M rays/s); "
-          f"casting alone {cast_s * 1e3:.2f} ms")
-    for name, seconds in variants.items():
-        print(f"  {name}: {seconds * 1e3:.2f} ms per scan")
-    print(f"baseline association + metric (cKDTree + NumPy), after our cast: {base_s * 1e3:.1f} ms")
-    print(f"ratio, baseline association+metric / ours end to end: {base_s / ours_s:.1f}x")
-    print(f"q_n ours {res.metric.q_n:.6g} vs baseline (k-NN association) {q_base:.6g}")
-    embree_s, agree = embree_cast(world, pose, sensor, scan, args.repeat)
-    if embree_s is not None:
-        print(f"Embree casting alone (embreex, 1 thread, {2 * world.size:,} triangles): {embree_s * 1e3:.2f} ms; "
-              f"hits within 5 cm of ours: {agree:.1%}")
-        print(f"ratio, ours end to end / Embree casting: {ours_s / embree_s:.2f}x; "
-              f"our casting / Embree casting: {cast_s / embree_s:.2f}x")
-
-
-def embree_cast(world, pose, sensor, scan, repeat: int):
-    """Median seconds for Embree to cast the scan's rays on a surfel mesh, and the share of
-    our hits it finds within 5 cm; (None, None) without embreex (pip install embreex)."""
+def embree_scene(world):
+    """Embree's scene of the map's surfels (see the module docstring), or None without embreex."""
     try:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
     except ImportError:
-        print("Embree baseline skipped: pip install embreex")
-        return None, None
+        return None
     centres, normals = world.points, world.index.normals
     radius = world.index.disc_radius.astype(np.float64)[:, None]
-    # Two unit vectors in each point's plane.
     helper = np.where(np.abs(normals[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     u = np.cross(normals, helper)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(normals, u)
-    a, b = u * radius, v * radius
+    a, b = u * radius, np.cross(normals, u) * radius
     corners = [centres - a - b, centres + a - b, centres + a + b, centres - a + b]
     triangles = np.concatenate([np.stack([corners[0], corners[1], corners[2]], axis=1),
                                 np.stack([corners[0], corners[2], corners[3]], axis=1)]).astype(np.float32)
     scene = rtcore_scene.EmbreeScene()
     TriangleMesh(scene, triangles)
-    dirs = (sensor.directions @ pose[:3, :3].T).astype(np.float32)
-    origins = np.repeat(pose[None, :3, 3], len(dirs), axis=0).astype(np.float32)
-    scene.run(origins, dirs, output=1)  # builds the BVH
-    times = []
-    for _ in range(repeat):
+    return scene
+
+
+def api_overhead(world, pose, sensor_name: str, result) -> float:
+    """Seconds lf3pm.evaluate(world, pose, sensor_name) spends outside the core: the call
+    timed with the core's evaluate answering at once (with `result`)."""
+    module = importlib.import_module("lf3pm.metric")
+    core = module._core
+    module._core = SimpleNamespace(evaluate=lambda *args: result)
+    try:
         t = time.perf_counter()
-        out = scene.run(origins, dirs, output=1)
-        times.append(time.perf_counter() - t)
-    distance = np.where(out["geomID"] >= 0, out["tfar"], np.inf)
-    ours = np.linalg.norm(scan["sensor_points"], axis=1)
-    agree = float(np.mean(np.abs(distance[scan["ray"]] - ours) < 0.05))
-    return float(np.median(times)), agree
+        lf3pm.evaluate(world, pose, sensor_name, noise=0.0, threads=1)
+        return time.perf_counter() - t
+    finally:
+        module._core = core
+
+
+def measure(world, scene, sensor, pose: np.ndarray, repeat: int) -> dict:
+    """Median seconds of each stage at one pose (see the module docstring)."""
+    directions = sensor.directions
+    cast_params = scan_params(sensor.min_range, sensor.max_range, threads=1)
+    eval_params = MetricConfig().core(ScanConfig(noise=0.0, threads=1).core(sensor))
+    api_pose = np.asarray(pose)
+    dirs32 = (directions @ pose[:3, :3].T).astype(np.float32)
+    origins = np.repeat(pose[None, :3, 3], len(directions), axis=0).astype(np.float32)
+    scan = _core.simulate_scan(world.index, pose, directions, cast_params)
+    gram_result = _core.evaluate_with_observations(world.index, pose, directions, eval_params)[1]
+    gram = _core.gram(gram_result["A"], gram_result["b"])
+    times = {k: [] for k in ("cast", "evaluate", "metric", "api", "embree")}
+    if scene is not None:
+        scene.run(origins, dirs32, output=1)  # builds the BVH outside the timing
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        _core.simulate_scan(world.index, pose, directions, cast_params)
+        t1 = time.perf_counter()
+        result = _core.evaluate(world.index, pose, directions, eval_params)
+        t2 = time.perf_counter()
+        _core.metric_from_gram(gram, result.metric.m)
+        t3 = time.perf_counter()
+        t4 = t3 + api_overhead(world, api_pose, sensor.name, result)
+        times["cast"].append(t1 - t0)
+        times["evaluate"].append(t2 - t1)
+        times["metric"].append(t3 - t2)
+        times["api"].append(t4 - t3)
+        if scene is not None:
+            t5 = time.perf_counter()
+            out = scene.run(origins, dirs32, output=1)
+            times["embree"].append(time.perf_counter() - t5)
+    med = {k: float(np.median(v)) if v else float("nan") for k, v in times.items()}
+    med["association"] = med["evaluate"] - med["cast"] - med["metric"]
+    med["hits"] = int(result.hits)
+    med["rays"] = len(directions)
+    med["agree"] = float("nan")
+    if scene is not None:
+        distance = np.where(out["geomID"] >= 0, out["tfar"], np.inf)
+        ours = np.linalg.norm(scan["sensor_points"], axis=1)
+        med["agree"] = float(np.mean(np.abs(distance[scan["ray"]] - ours) < 0.05))
+    return med
+
+
+def run_map(name: str, sensors, heights, repeat: int) -> list[dict]:
+    spec = MAPS[name]
+    try:
+        points, positions = spec.build()
+    except FileNotFoundError as exc:
+        print(f"{name}: skipped ({exc})")
+        return []
+    t = time.perf_counter()
+    world = lf3pm.load_map(points, threads=0)
+    index_s = time.perf_counter() - t
+    scene = embree_scene(world)
+    if scene is None:
+        print("Embree baseline skipped: pip install embreex")
+    print(f"{name}: {world.size:,} points, indexed in {index_s:.1f} s ({world.index.memory_bytes / 2**20:.0f} MiB)",
+          flush=True)
+    rows = []
+    for sensor_name in sensors:
+        sensor = lf3pm.get_sensor(sensor_name)
+        for height in heights:
+            per_pose = [measure(world, scene, sensor, pose_matrix(
+                (x, y, ground_height(world.points, (x, y)) + height, 0.0)), repeat) for x, y in positions]
+            keys = ("cast", "association", "metric", "evaluate", "api", "embree")
+            row = {k: float(np.sum([p[k] for p in per_pose])) for k in keys}
+            row.update(map=name, points=world.size, sensor=sensor_name, height=height, poses=len(per_pose),
+                       rays=sum(p["rays"] for p in per_pose), hits=sum(p["hits"] for p in per_pose),
+                       agree=float(np.mean([p["agree"] for p in per_pose])))
+            rows.append(row)
+            print(format_row(row), flush=True)
+    return rows
+
+
+HEADER = ("| map | points | sensor | height (m) | hits / rays | cast (ms) | association (ms) | metric (µs) | "
+          "Embree (ms) | cast / Embree | evaluate / Embree | api overhead (ms) | agree |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+
+
+def format_row(r: dict) -> str:
+    n = r["poses"]
+    return (f"| {r['map']} | {r['points'] / 1e6:.2f} M | {r['sensor']} | {r['height']:.1f} | "
+            f"{r['hits'] / r['rays']:.0%} of {r['rays'] // n:,} | {r['cast'] / n * 1e3:.1f} | "
+            f"{r['association'] / n * 1e3:.1f} | {r['metric'] / n * 1e6:.0f} | {r['embree'] / n * 1e3:.1f} | "
+            f"**{r['cast'] / r['embree']:.2f}×** | **{r['evaluate'] / r['embree']:.2f}×** | "
+            f"{r['api'] / n * 1e3:.2f} | {r['agree']:.1%} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--maps", default=",".join(MAPS), help=f"comma-separated, of {', '.join(MAPS)}")
+    parser.add_argument("--sensors", default=",".join(SENSORS))
+    parser.add_argument("--heights", default=",".join(map(str, HEIGHTS)), help="sensor heights above ground (m)")
+    parser.add_argument("--repeat", type=int, default=10)
+    parser.add_argument("--markdown", type=Path, help="also write the table here")
+    args = parser.parse_args()
+    maps = args.maps.split(",")
+    unknown = [m for m in maps if m not in MAPS]
+    if unknown:
+        parser.error(f"unknown map(s) {', '.join(unknown)}; known: {', '.join(MAPS)}")
+    heights = [float(h) for h in args.heights.split(",")]
+    print(HEADER)
+    rows = [row for name in maps for row in run_map(name, args.sensors.split(","), heights, args.repeat)]
+    worst_cast = max(rows, key=lambda r: r["cast"] / r["embree"])
+    worst_eval = max(rows, key=lambda r: r["evaluate"] / r["embree"])
+    summary = (f"\nworst cast / Embree {worst_cast['cast'] / worst_cast['embree']:.2f}x "
+               f"({worst_cast['map']}, {worst_cast['sensor']} at {worst_cast['height']} m); "
+               f"worst evaluate / Embree {worst_eval['evaluate'] / worst_eval['embree']:.2f}x "
+               f"({worst_eval['map']}, {worst_eval['sensor']} at {worst_eval['height']} m); "
+               f"api overhead at most {max(r['api'] / r['poses'] for r in rows) * 1e3:.2f} ms")
+    print(summary)
+    if args.markdown:
+        args.markdown.parent.mkdir(parents=True, exist_ok=True)
+        args.markdown.write_text("\n".join([HEADER, *map(format_row, rows)]) + "\n" + summary + "\n")
 
 
 if __name__ == "__main__":

@@ -82,6 +82,8 @@ class Sensor:
             bad = int(err.argmax())
             raise SensorError(f"{label}: direction {bad} is not a unit vector "
                               f"(|d| = {float(np.linalg.norm(dirs[bad])):.6g})")
+        # Read-only: presets are built once and shared (get_sensor), like the sensor itself.
+        dirs.setflags(write=False)
         object.__setattr__(self, "directions", dirs)
 
     @property
