@@ -54,8 +54,8 @@ def _finish(parts, seed):
 
 def town(seed: int = 0, half: float = 60.0, pitch: float = 24.0):
     """A square street grid 2 half wide: 10 cm ground, buildings with 5 cm walls on a
-    `pitch` m grid. half=60: about 2.6 M points."""
-    centres = np.arange(-half + pitch / 2, half, pitch)
+    `pitch` m grid (the street crossing at the origin). half=60: about 2.6 M points."""
+    centres = np.arange(-half + pitch, half - pitch / 2, pitch)
     parts = [_ground(-half, half, -half, half)]
     for cx in centres:
         for cy in centres:
@@ -99,8 +99,8 @@ def tunnel(seed: int = 0):
 
 
 def site(seed: int = 0):
-    """A 10 M-point site: the town's street grid over 300 m x 300 m."""
-    return town(seed, half=150.0, pitch=30.0)
+    """A site of about 10 M points: the town's street grid over 220 m x 220 m."""
+    return town(seed, half=110.0, pitch=30.0)
 
 
 def free_positions(points: np.ndarray, count: int = 3, clearance: float = 0.4, step: float = 0.5) -> np.ndarray:
@@ -148,5 +148,5 @@ MAPS = {m.name: m for m in (
     BenchMap("room", "indoor_pcl_room_scan1 (real)", real_map("indoor_pcl_room_scan1.pcd"), True),
     BenchMap("urban64", "outdoor_urban64 scan (real)",
              real_map("outdoor_urban64_2021-10-26-16-21-29-468.pcd"), True),
-    BenchMap("site", "300 m street grid, 10 M points", site),
+    BenchMap("site", "220 m street grid, 10 M points", site),
 )}
