@@ -23,7 +23,12 @@ build: $(STAMP)
 demo: build
 	$(PY) -m lf3pm.demo --out out
 
+# The browser test of `lf3pm view` needs Debian's chromium: installed here when we may
+# (as root), else that one test is skipped with its reason.
 test: build
+	@command -v chromium >/dev/null 2>&1 || { [ "$$(id -u)" = 0 ] && { apt-get install -y -q chromium >/dev/null 2>&1 \
+	  || { apt-get update -q >/dev/null 2>&1 && apt-get install -y -q chromium >/dev/null 2>&1; }; }; } \
+	  || echo "chromium not installed: the browser test of lf3pm view will be skipped"
 	$(PY) -m pytest -q
 
 # bench_evaluate.py's Embree baseline needs embreex. The SOLM benchmark's baseline

@@ -37,7 +37,8 @@ def replay_command(
     rate: Optional[float] = option("replay.rate"),
     noise: Optional[float] = option("scan.noise"),
     threads: Optional[int] = option("scan.threads", help="Scan simulation threads (0 = all cores)."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (each run with its true and "
+                                 "estimated positions and errors: what `lf3pm view --replay` shows)."),
     png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
     bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
                                        help="ROS 2 bag (directory) of the first seed's simulated stream."),
@@ -82,7 +83,7 @@ def replay_command(
                           + f", {lidar.name}, {run.rate:g} Hz")
         if as_json:
             print(json.dumps({"trajectory": str(trajectory), "map": str(map_path), "method": run.method, **options,
-                              "sensor": lidar.name, **series.to_dict(),
+                              "sensor": lidar.name, **series.to_dict(trajectories=True),
                               "png": None if png is None else str(png), "bag": bag_info}))
             return
         print_series(series)

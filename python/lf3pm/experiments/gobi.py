@@ -28,7 +28,9 @@ from lf3pm.validation import RegistrationTarget
 from lf3pm.trajectory.sampling import sample_trajectory
 from lf3pm.validation.trajectory_mde import mde_along
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
-from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
+from lf3pm.experiments.map_cases import MapCase, build_case_solm, case_source
+from lf3pm.io import write_points
+from lf3pm.map import load_map
 from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays
 from lf3pm.planner.plan import Planner
 from lf3pm.trajectory.robots import Robot
@@ -83,7 +85,10 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
     step = progress or (lambda label, total, advance=1, restart=False: None)
     guidance = (UNGUIDED,) + GUIDANCE
     case = map_case(setup)
-    world, _ = load_case_map(case)
+    source, _ = case_source(case)
+    world = load_map(source)
+    # The map beside its SOLM, to look at both: `lf3pm view DIR/map.npy --solm DIR/solm.zarr`.
+    write_points(out / "map.npy", source)
     goal = (case.bounds[2] - setup.margin, 0.0, 0.0)
     start = (0.0, 0.0, 0.0)  # the town square (the scene's free reference pose)
     step(f"SOLM se2 at {setup.solm_res} m, Mid-70", 1, 0, restart=True)

@@ -37,21 +37,27 @@ class MapCase:
     both_ways: bool = False
 
 
-def load_case_map(case: MapCase):
-    """(Map, zones) of a case; the same in the main process and in every worker."""
-    from lf3pm.map import load_map
-
+def case_source(case: MapCase):
+    """(what the case's map is read from: its scene's points or its file, zones)."""
     if case.source.startswith("scene:"):
         from lf3pm.scenes import build_scene
 
         scene = build_scene(case.source.split(":", 1)[1], seed=case.scene_seed, **case.scene_params)
         zones = case.zones or {name: tuple(zone) for name, zone in scene.zones.items()}
-        return load_map(scene.points), zones
+        return scene.points, zones
     from lf3pm.experiments.data import shared_data_dir
 
     if case.zones is None:
         raise Lf3pmError(f"map case {case.name}: a map file needs its start and goal zones")
-    return load_map(shared_data_dir() / case.source), dict(case.zones)
+    return shared_data_dir() / case.source, dict(case.zones)
+
+
+def load_case_map(case: MapCase):
+    """(Map, zones) of a case; the same in the main process and in every worker."""
+    from lf3pm.map import load_map
+
+    source, zones = case_source(case)
+    return load_map(source), zones
 
 
 def build_case_solm(case: MapCase, path: Path, world=None) -> Path:

@@ -56,7 +56,8 @@ _MAPS: dict = {}  # per process: case name -> (Map, registration target)
 
 def replay_task(task) -> None:
     """One replay: APE (rmse, median, max), scans, the share of degenerate scans,
-    seconds, and the error once per second, written atomically as JSON."""
+    seconds, and once per second the error and the true and estimated positions,
+    written atomically as JSON."""
     from lf3pm.validation.mde import RegistrationTarget
     from lf3pm.replays.replay import replay
 
@@ -72,7 +73,10 @@ def replay_task(task) -> None:
               "scans": result.scans, "degenerate_share": float(np.mean(result.degenerate)),
               "seconds": float(sum(result.seconds_per_scan.values()) * result.scans),
               "times_every_second": (result.times[::every] - result.times[0]).tolist(),
-              "errors_every_second": errors[::every].tolist()}
+              "errors_every_second": errors[::every].tolist(),
+              # the paths too, for `lf3pm view --replay`
+              "truth_xyz_every_second": result.truth[::every, :3, 3].tolist(),
+              "estimate_xyz_every_second": result.estimate[::every, :3, 3].tolist()}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path) as fp:
         fp.write(json.dumps(record).encode())

@@ -207,7 +207,9 @@ class ReplaySeries:
     results: list
     median: dict
 
-    def to_dict(self) -> dict:
-        return {"seeds": [r.seed for r in self.results], "runs": [r.to_dict() for r in self.results],
-                "median": self.median}
+    def to_dict(self, trajectories: bool = False) -> dict:
+        """JSON-ready: each run's :meth:`ReplayResult.to_dict` (with ``trajectories`` its
+        times, true and estimated positions and errors too) and the medians."""
+        return {"seeds": [r.seed for r in self.results],
+                "runs": [r.to_dict(trajectories) for r in self.results], "median": self.median}
 

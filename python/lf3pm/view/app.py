@@ -1,0 +1,382 @@
+"""The page: a viser scene of the map, its SOLM, plans and replays, with the controls that
+query lf3pm (a cell's evaluation, plans between clicked poses). Every action goes through
+lf3pm's public API and the arrays of lf3pm.view.layers; an error is shown in the page,
+never raised into viser's threads."""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+
+import numpy as np
+
+from lf3pm.config import DEFAULTS, GuidanceConfig
+from lf3pm.errors import Lf3pmError
+from lf3pm.pose import pose_matrix
+from lf3pm.view import layers
+from lf3pm.view.inputs import ViewInputs
+
+#: Colours (RGB) of what the page draws besides colour-mapped layers.
+PLAN_COLORS = [(230, 60, 60), (40, 120, 255), (250, 160, 20), (150, 60, 200), (20, 170, 120)]
+GUIDED, UNGUIDED = (255, 80, 200), (255, 255, 255)
+TRUTH = (200, 200, 200)
+SCAN = (255, 40, 40)
+ARROWS = [(255, 0, 0), (255, 150, 0), (255, 230, 0)]  # weakest first
+#: Seconds between two footprints drawn along a trajectory.
+FOOTPRINT_EVERY_S = 2.0
+#: Where the page is served unless told otherwise (this machine only).
+DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8080
+
+
+class ViewApp:
+    """A running viewer (:func:`serve` starts it): ``server`` is its viser server,
+    ``stop()`` ends it. ``status`` holds the last message shown (for tests)."""
+
+    def __init__(self, inputs: ViewInputs, *, host: str, port: int, robot=None,
+                 guidance: GuidanceConfig | None = None, sensor: str | None = None):
+        import viser
+
+        from lf3pm.trajectory.robots import Robot
+
+        self.inputs = inputs
+        self.robot = robot if robot is not None else Robot.from_config(DEFAULTS.robot)
+        self.guidance = guidance or DEFAULTS.guidance
+        solm = inputs.solm
+        self.sensor = sensor or (solm.attrs.get("sensor") if solm is not None else DEFAULTS.sensor)
+        # The body the SOLM's obstacle mask was built for.
+        self.footprint_radius = float(solm.attrs.get("robot_radius", DEFAULTS.solm.robot_radius)
+                                      if solm is not None else DEFAULTS.solm.robot_radius)
+        self.status = ""
+        self._lock = threading.Lock()
+        self._planner = None
+        self._start = self._goal = None
+        self._ground = None
+        # The SOLM's cells are drawn as squares facing the camera, res wide: lines drawn
+        # this far above the ground stay in front of them.
+        self._above_layer = 0.5 * (solm.grid_spec.res if solm is not None else 0.0) + 0.15
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server.scene.set_up_direction("+z")
+        self._add_map()
+        if solm is not None:
+            self._add_solm_controls()
+        self._add_given_plans()
+        self._add_replays()
+        self._add_click_controls()
+        self._set_camera()
+
+    # -- what is given -------------------------------------------------------------------
+
+    def _add_map(self) -> None:
+        points = self.inputs.world.points
+        self._map_points, self._map_colors = layers.map_cloud(points)
+        self._map_point_size = max(0.03, 1.5 * float(self.inputs.world.index.median_spacing))
+        lo, hi = self.inputs.world.bounds
+        gui = self.server.gui
+        gui.add_markdown(f"**Map** `{self.inputs.world.source}`: {len(self._map_points):,} of "
+                         f"{len(points):,} points shown, coloured by height")
+        # Indoors the ceiling hides everything under it: cut the map below it.
+        bottom, top = math.floor(lo[2] * 10) / 10, math.ceil(hi[2] * 10) / 10
+        self.map_ceiling = gui.add_slider("hide the map above (m)", min=bottom, max=top, step=0.1,
+                                          initial_value=top)
+        self.map_ceiling.on_update(lambda _: self._guarded(self._draw_map))
+        self._draw_map()
+
+    def _draw_map(self) -> None:
+        keep = self._map_points[:, 2] <= self.map_ceiling.value
+        self.server.scene.add_point_cloud("/map", self._map_points[keep], self._map_colors[keep],
+                                          point_size=self._map_point_size, point_shape="square",
+                                          point_shading="flat")
+
+    def _add_solm_controls(self) -> None:
+        solm, gui = self.inputs.solm, self.server.gui
+        g = solm.grid_spec
+        with gui.add_folder("SOLM"):
+            gui.add_markdown(f"{g.space.upper()} grid, {g.nx} × {g.ny} cells of {g.res:g} m, "
+                             f"sensor {solm.attrs.get('sensor')}")
+            self.channel = gui.add_dropdown("channel", tuple(layers.CHANNELS), initial_value="q_n")
+            self.min_yaw = self.layer = None
+            if g.space == "se2":
+                self.min_yaw = gui.add_checkbox("min over yaw", initial_value=True)
+                self.layer = gui.add_slider("yaw (deg)", min=0, max=360 - 360 / g.yaw_bins, step=360 / g.yaw_bins,
+                                            initial_value=0, disabled=True)
+                self.min_yaw.on_update(lambda _: self._guarded(self._solm_changed))
+            elif g.space == "r3":
+                self.layer = gui.add_slider("height level", min=0, max=len(g.z_levels) - 1, step=1,
+                                            initial_value=0)
+            self.colorbar = gui.add_image(np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8),
+                                          label="colour bar")
+        self.channel.on_update(lambda _: self._guarded(self._solm_changed))
+        if self.layer is not None:
+            self.layer.on_update(lambda _: self._guarded(self._solm_changed))
+        self._solm_changed()
+
+    def _solm_index(self) -> int | None:
+        """The layer the controls select: None for the minimum over yaw."""
+        g = self.inputs.solm.grid_spec
+        if g.space == "se2":
+            self.layer.disabled = bool(self.min_yaw.value)
+            return None if self.min_yaw.value else int(round(self.layer.value / (360 / g.yaw_bins))) % g.yaw_bins
+        return int(self.layer.value) if self.layer is not None else None
+
+    def _solm_changed(self) -> None:
+        layer = layers.solm_layer(self.inputs.solm, self.channel.value, self._solm_index())
+        self.server.scene.add_point_cloud("/solm", layer["centres"], layer["colors"], point_size=layer["res"],
+                                          point_shape="square", point_shading="flat")
+        self.colorbar.image = layers.colorbar_image(layer["lo"], layer["hi"], layers.CHANNELS[self.channel.value])
+
+    def _add_given_plans(self) -> None:
+        gui = self.server.gui
+        if not self.inputs.plans:
+            return
+        lines = []
+        for k, (name, samples) in enumerate(self.inputs.plans.items()):
+            color = PLAN_COLORS[k % len(PLAN_COLORS)]
+            self._draw_trajectory(f"/plans/{k}", samples, color)
+            lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
+                         f"{layers.path_length(samples['x'], samples['y']):.1f} m, {samples['t'][-1]:.1f} s"
+                         + self._mean_error_text(samples))
+        gui.add_markdown("**Plans**\n\n" + "\n".join(lines))
+
+    def _add_replays(self) -> None:
+        if not self.inputs.replays:
+            return
+        lines = []
+        for k, (name, tracks) in enumerate(self.inputs.replays.items()):
+            self.server.scene.add_line_segments(f"/replays/{k}/truth", tracks["truth"], TRUTH, thickness=2.0,
+                                                thickness_units="screen")
+            self.server.scene.add_line_segments(f"/replays/{k}/estimate", tracks["estimate"], tracks["colors"],
+                                                thickness=4.0, thickness_units="screen")
+            lines.append(f"- {name}: error {tracks['lo'] * 100:.1f}-{tracks['hi'] * 100:.1f} cm "
+                         f"(estimate coloured from dark, {tracks['lo'] * 100:.1f} cm, to yellow, "
+                         f"{tracks['hi'] * 100:.1f} cm; truth grey)")
+        self.server.gui.add_markdown("**Replays**\n\n" + "\n".join(lines))
+
+    def _set_camera(self) -> None:
+        lo, hi = self.inputs.world.bounds
+        centre = 0.5 * (np.asarray(lo) + np.asarray(hi))
+        span = float(max(hi[0] - lo[0], hi[1] - lo[1]))
+        camera = self.server.initial_camera
+        camera.look_at = (centre[0], centre[1], lo[2])
+        camera.position = (centre[0], centre[1] - 0.45 * span, lo[2] + 0.55 * span)
+
+    # -- clicks: inspect a cell, set a start and a goal, plan ------------------------------
+
+    def _add_click_controls(self) -> None:
+        gui = self.server.gui
+        with gui.add_folder("Click on the ground to"):
+            self.mode = gui.add_dropdown("action", ("inspect a cell", "set the start", "set the goal"),
+                                         initial_value="inspect a cell")
+            self.cell_text = gui.add_markdown("Click a cell: its metric, its simulated scan and its "
+                                              "least observable directions.")
+        if self.inputs.solm is not None:
+            with gui.add_folder("Plan"):
+                self.start_yaw = gui.add_slider("start yaw (deg)", min=-180, max=180, step=5, initial_value=0)
+                self.goal_yaw = gui.add_slider("goal yaw (deg)", min=-180, max=180, step=5, initial_value=0)
+                button = gui.add_button("plan: default guidance and none")
+                self.plan_text = gui.add_markdown(f"Robot: {self.robot.kind} (from the configuration); "
+                                                  "set a start and a goal by clicking.")
+            button.on_click(lambda event: self._guarded(self.plan_between, event.client))
+            self.start_yaw.on_update(lambda _: self._guarded(self._draw_ends))
+            self.goal_yaw.on_update(lambda _: self._guarded(self._draw_ends))
+        self.server.scene.on_click()(lambda event: self._guarded(self._clicked, event))
+
+    def _clicked(self, event) -> None:
+        xy = self.ground_point(np.asarray(event.ray_origin), np.asarray(event.ray_direction))
+        if xy is None:
+            raise Lf3pmError("that click does not meet the ground")
+        if self.mode.value == "inspect a cell":
+            self.inspect(xy, event.client)
+        elif self.mode.value == "set the start":
+            self._start = xy
+            self._draw_ends()
+        else:
+            self._goal = xy
+            self._draw_ends()
+
+    def ground_height(self, x: float, y: float) -> float:
+        """The ground under (x, y): the SOLM's ground height there, else the map's lowest
+        points nearby."""
+        solm = self.inputs.solm
+        if solm is not None:
+            if self._ground is None:
+                self._ground = solm.channel("ground_z").astype(np.float64)
+            g = solm.grid_spec
+            inside = g.x0 <= x < g.x0 + g.nx * g.res and g.y0 <= y < g.y0 + g.ny * g.res
+            z = float(self._ground[g.cell(x, y)[-2:]]) if inside else math.nan
+            if math.isfinite(z):
+                return z
+        pts = self.inputs.world.points
+        near = pts[np.hypot(pts[:, 0] - x, pts[:, 1] - y) < 1.0]
+        return float(np.percentile(near[:, 2], 5)) if len(near) else float(pts[:, 2].min())
+
+    def ground_point(self, origin: np.ndarray, direction: np.ndarray) -> np.ndarray | None:
+        """Where a click's ray meets the ground (x, y), or None when it points at the sky."""
+        lo, _ = self.inputs.world.bounds
+        z = float(lo[2])
+        for _ in range(3):  # meet a plane at the ground's height there, then refine
+            if direction[2] >= -1e-9:
+                return None
+            t = (z - origin[2]) / direction[2]
+            x, y = origin[:2] + t * direction[:2]
+            z = self.ground_height(x, y)
+        return np.array([x, y])
+
+    def inspect(self, xy, client=None) -> dict:
+        """Evaluates the cell at ``xy``: its SOLM values, lf3pm.evaluate at the SOLM's sensor
+        height (yaw: the yaw slider, or the cell's best yaw with min over yaw), the scan drawn
+        as points and the least observable translations as arrows. Returns the evaluation's
+        numbers."""
+        import lf3pm
+
+        solm = self.inputs.solm
+        height = solm.grid_spec.height if solm is not None else 1.0
+        yaw = 0.0
+        if solm is not None and solm.grid_spec.space == "se2":
+            index = self._solm_index()
+            if index is None:  # the best yaw at this cell
+                values = solm.query(np.full(solm.grid_spec.yaw_bins, xy[0]), np.full(solm.grid_spec.yaw_bins, xy[1]),
+                                    yaw=solm.grid_spec.yaws())[0]
+                index = int(np.nanargmin(values)) if np.isfinite(values).any() else 0
+            yaw = float(solm.grid_spec.yaws()[index])
+        pose = (xy[0], xy[1], self.ground_height(*xy) + height, yaw)
+        note = client.add_notification("evaluating", f"cell ({xy[0]:.1f}, {xy[1]:.1f})", loading=True,
+                                       with_close_button=False) if client is not None else None
+        try:
+            result = lf3pm.evaluate(self.inputs.world, pose, self.sensor, observations=True)
+        finally:
+            if note is not None:
+                note.remove()
+        hits = result.observations["points"].astype(np.float32)
+        self.server.scene.add_point_cloud("/cell/scan", hits, SCAN, point_size=0.08, point_shape="circle")
+        position = np.asarray(pose_matrix(pose))[:3, 3]
+        text = [f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
+                f"at {height:g} m", f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
+                f"- {result.hits:,} hits of {result.rays:,} rays (red points)"]
+        if result.predicted_localization_error_m is not None:
+            lo, hi = result.predicted_localization_error_interval_m
+            text.append(f"- predicted localization error {result.predicted_localization_error_m * 100:.1f} cm "
+                        f"({lo * 100:.1f}-{hi * 100:.1f} cm)")
+        if solm is not None:
+            stored = solm.query(xy[0], xy[1], yaw=yaw)[0]
+            text.append(f"- SOLM q_n here {float(stored):.4g} (interpolated)")
+        if not result.degenerate and len(result.observations["A"]) >= 6:
+            weak = layers.weak_directions(result.observations, position)
+            self.server.scene.add_arrows("/cell/weak", weak["arrows"], np.array(ARROWS), shaft_radius=0.05,
+                                         head_radius=0.15, head_length=0.3)
+            d = weak["directions"][0]
+            text.append(f"- least observable translation ({d[0]:+.2f}, {d[1]:+.2f}, {d[2]:+.2f}), red arrow; "
+                        "orange and yellow: the others, shorter as they are better observed")
+        else:
+            text.append("- degenerate: the scan does not fix the pose")
+        self.cell_text.content = "\n".join(text)
+        self.status = self.cell_text.content
+        return {"q_n": result.q_n, "hits": result.hits, "pose": pose}
+
+    def _draw_ends(self) -> None:
+        for name, xy, yaw_slider, color in (("start", self._start, getattr(self, "start_yaw", None), (60, 220, 60)),
+                                            ("goal", self._goal, getattr(self, "goal_yaw", None), (230, 60, 60))):
+            if xy is None or yaw_slider is None:
+                continue
+            yaw = math.radians(yaw_slider.value)
+            z = self.ground_height(*xy) + self._above_layer
+            tip = np.array([xy[0] + 1.5 * math.cos(yaw), xy[1] + 1.5 * math.sin(yaw), z])
+            self.server.scene.add_arrows(f"/ends/{name}", np.array([[[xy[0], xy[1], z], tip]]), color,
+                                         shaft_radius=0.08, head_radius=0.25, head_length=0.5)
+
+    def plan_between(self, client=None) -> dict:
+        """Plans from the clicked start to the clicked goal with the default guidance and
+        with none (lf3pm.Planner on the SOLM), draws both with the robot's footprint and
+        returns {name: summary with the mean predicted error}."""
+        from lf3pm.planner.plan import Planner
+
+        if self._start is None or self._goal is None:
+            raise Lf3pmError("set a start and a goal first (choose the action, then click the ground)")
+        start = (*self._start, math.radians(self.start_yaw.value))
+        goal = (*self._goal, math.radians(self.goal_yaw.value))
+        note = client.add_notification("planning", "default guidance and none", loading=True,
+                                       with_close_button=False) if client is not None else None
+        try:
+            if self._planner is None:
+                self._planner = Planner(self.inputs.solm)
+            g = self.guidance
+            plans = {"default guidance": self._planner.plan(start, goal, robot=self.robot, metric=g.metric,
+                                                            weight=g.weight, power=g.power),
+                     "none (shortest)": self._planner.plan(start, goal, robot=self.robot, metric="none")}
+        finally:
+            if note is not None:
+                note.remove()
+        lines, out = [], {}
+        for name, plan in plans.items():
+            samples = plan.trajectory.sample(20.0)
+            color = GUIDED if name.startswith("default") else UNGUIDED
+            self._draw_trajectory(f"/planned/{name.split()[0]}", samples, color)
+            summary = plan.summary()
+            out[name] = {**summary, "mean_predicted_error_m": self.mean_predicted_error(samples)}
+            lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
+                         f"{summary['trajectory_length_m']:.1f} m, {summary['duration_s']:.1f} s"
+                         + self._mean_error_text(samples))
+        self.plan_text.content = f"Robot {self.robot.kind}:\n\n" + "\n".join(lines)
+        self.status = self.plan_text.content
+        return out
+
+    def _draw_trajectory(self, name: str, samples: dict, color) -> None:
+        z = np.array([self.ground_height(x, y) for x, y in zip(samples["x"][::20], samples["y"][::20])])
+        z = np.interp(np.arange(len(samples["x"])), np.arange(0, len(samples["x"]), 20), z) + self._above_layer
+        path = layers.polyline(samples["x"], samples["y"], z)
+        self.server.scene.add_line_segments(f"{name}/path", path, color, thickness=4.0, thickness_units="screen")
+        with_z = dict(samples, z=z)
+        self.server.scene.add_line_segments(f"{name}/footprint",
+                                            layers.footprints(with_z, self.footprint_radius, FOOTPRINT_EVERY_S),
+                                            color, thickness=0.05)
+
+    def mean_predicted_error(self, samples: dict) -> float | None:
+        """The mean predicted localization error (m) along a trajectory's samples, from the
+        SOLM's q_n and the packaged fit, over the samples where q_n is known and not
+        degenerate; None without a SOLM or such samples."""
+        from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error
+
+        solm, fit = self.inputs.solm, packaged_calibration(LOCALIZATION_PACKAGED)
+        if solm is None or fit is None:
+            return None
+        q = solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0]
+        errors = [e[0] for e in (predict_localization_error(fit, float(v)) for v in q) if e is not None]
+        return float(np.mean(errors)) if errors else None
+
+    def _mean_error_text(self, samples: dict) -> str:
+        error = self.mean_predicted_error(samples)
+        return "" if error is None else f", mean predicted error {error * 100:.1f} cm"
+
+    # -- errors and shutdown -------------------------------------------------------------
+
+    def _guarded(self, action, *args):
+        """Runs a page action; an error becomes a message in the page (and in ``status``)."""
+        with self._lock:
+            try:
+                return action(*args)
+            except Lf3pmError as err:
+                self._show_error(str(err), args)
+            except Exception as err:  # noqa: BLE001 - a page action must never kill the page
+                message = f"{err.__class__.__name__}: {err}"
+                self._show_error(message, args)
+                print(f"lf3pm view: {message}", file=sys.stderr)
+
+    def _show_error(self, message: str, args) -> None:
+        self.status = f"error: {message}"
+        client = next((a for a in args if hasattr(a, "add_notification")), None)
+        client = client or next((getattr(a, "client", None) for a in args if hasattr(a, "client")), None)
+        targets = [client] if client is not None else list(self.server.get_clients().values())
+        for c in targets:
+            c.add_notification("lf3pm", message, color="red", auto_close_seconds=10.0)
+
+    def stop(self) -> None:
+        self.server.stop()
+
+
+def serve(inputs: ViewInputs, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, robot=None,
+          guidance: GuidanceConfig | None = None, sensor: str | None = None) -> ViewApp:
+    """Starts the viewer of ``inputs`` (lf3pm.view.load_view_inputs) on ``host``:``port``
+    and returns it (its server runs in a thread; ``stop()`` ends it). ``robot`` and
+    ``guidance`` plan the clicked start and goal (default: the configuration's); ``sensor``
+    evaluates clicked cells (default: the SOLM's)."""
+    return ViewApp(inputs, host=host, port=port, robot=robot, guidance=guidance, sensor=sensor)
