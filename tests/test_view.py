@@ -90,6 +90,19 @@ def test_replay_tracks_read_both_replay_formats_and_refuse_one_without_positions
         layers.replay_tracks({"ape_rmse": 0.1})
 
 
+def test_what_lf3pm_replay_json_writes_is_shown(site, tmp_path):
+    d, _ = site
+    run = subprocess.run([sys.executable, "-m", "lf3pm", "replay", str(d / "plan.csv"), "--map", str(d / "map.npy"),
+                          "--sensor", "vlp16", "--method", "localization", "--json"],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    (tmp_path / "replay.json").write_text(run.stdout)
+    tracks = load_view_inputs(d / "map.npy", replay_paths=[tmp_path / "replay.json"]).replays["replay replay"]
+    result = json.loads(run.stdout)["runs"][0]
+    assert len(tracks["truth"]) == result["scans"] - 1
+    assert tracks["hi"] == pytest.approx(max(result["ape"]["max"], 2e-3))
+
+
 def test_the_weakest_direction_of_a_corridor_is_along_it():
     """Planes facing y and z only (a corridor along x): x is unobserved."""
     rng = np.random.default_rng(1)
