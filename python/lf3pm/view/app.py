@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import sys
 import threading
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -79,14 +80,15 @@ class ViewApp:
         bottom, top = math.floor(lo[2] * 10) / 10, math.ceil(hi[2] * 10) / 10
         self.map_ceiling = gui.add_slider("hide the map above (m)", min=bottom, max=top, step=0.1,
                                           initial_value=top)
-        self.map_ceiling.on_update(lambda _: self._guarded(self._draw_map))
+        self.map_ceiling.on_update(lambda event: self._guarded(self._draw_map, event.client))
         self._draw_map()
 
-    def _draw_map(self) -> None:
+    def _draw_map(self, client=None) -> None:
         keep = self._map_points[:, 2] <= self.map_ceiling.value
-        self.server.scene.add_point_cloud("/map", self._map_points[keep], self._map_colors[keep],
-                                          point_size=self._map_point_size, point_shape="square",
-                                          point_shading="flat")
+        with self._busy(client, "drawing the map"):
+            self.server.scene.add_point_cloud("/map", self._map_points[keep], self._map_colors[keep],
+                                              point_size=self._map_point_size, point_shape="square",
+                                              point_shading="flat")
 
     def _add_solm_controls(self) -> None:
         solm, gui = self.inputs.solm, self.server.gui
@@ -100,15 +102,15 @@ class ViewApp:
                 self.min_yaw = gui.add_checkbox("min over yaw", initial_value=True)
                 self.layer = gui.add_slider("yaw (deg)", min=0, max=360 - 360 / g.yaw_bins, step=360 / g.yaw_bins,
                                             initial_value=0, disabled=True)
-                self.min_yaw.on_update(lambda _: self._guarded(self._solm_changed))
+                self.min_yaw.on_update(lambda event: self._guarded(self._solm_changed, event.client))
             elif g.space == "r3":
                 self.layer = gui.add_slider("height level", min=0, max=len(g.z_levels) - 1, step=1,
                                             initial_value=0)
             self.colorbar = gui.add_image(np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8),
                                           label="colour bar")
-        self.channel.on_update(lambda _: self._guarded(self._solm_changed))
+        self.channel.on_update(lambda event: self._guarded(self._solm_changed, event.client))
         if self.layer is not None:
-            self.layer.on_update(lambda _: self._guarded(self._solm_changed))
+            self.layer.on_update(lambda event: self._guarded(self._solm_changed, event.client))
         self._solm_changed()
 
     def _solm_index(self) -> int | None:
@@ -119,11 +121,13 @@ class ViewApp:
             return None if self.min_yaw.value else int(round(self.layer.value / (360 / g.yaw_bins))) % g.yaw_bins
         return int(self.layer.value) if self.layer is not None else None
 
-    def _solm_changed(self) -> None:
-        layer = layers.solm_layer(self.inputs.solm, self.channel.value, self._solm_index())
-        self.server.scene.add_point_cloud("/solm", layer["centres"], layer["colors"], point_size=layer["res"],
-                                          point_shape="square", point_shading="flat")
-        self.colorbar.image = layers.colorbar_image(layer["lo"], layer["hi"], layers.CHANNELS[self.channel.value])
+    def _solm_changed(self, client=None) -> None:
+        with self._busy(client, "drawing the SOLM", self.channel.value):
+            layer = layers.solm_layer(self.inputs.solm, self.channel.value, self._solm_index())
+            self.server.scene.add_point_cloud("/solm", layer["centres"], layer["colors"], point_size=layer["res"],
+                                              point_shape="square", point_shading="flat")
+            self.colorbar.image = layers.colorbar_image(layer["lo"], layer["hi"],
+                                                        layers.CHANNELS[self.channel.value])
 
     def _add_given_plans(self) -> None:
         gui = self.server.gui
@@ -240,13 +244,8 @@ class ViewApp:
                 index = int(np.nanargmin(values)) if np.isfinite(values).any() else 0
             yaw = float(solm.grid_spec.yaws()[index])
         pose = (xy[0], xy[1], self.ground_height(*xy) + height, yaw)
-        note = client.add_notification("evaluating", f"cell ({xy[0]:.1f}, {xy[1]:.1f})", loading=True,
-                                       with_close_button=False) if client is not None else None
-        try:
+        with self._busy(client, "evaluating", f"cell ({xy[0]:.1f}, {xy[1]:.1f})"):
             result = lf3pm.evaluate(self.inputs.world, pose, self.sensor, observations=True)
-        finally:
-            if note is not None:
-                note.remove()
         hits = result.observations["points"].astype(np.float32)
         self.server.scene.add_point_cloud("/cell/scan", hits, SCAN, point_size=0.08, point_shape="circle")
         position = np.asarray(pose_matrix(pose))[:3, 3]
@@ -294,18 +293,13 @@ class ViewApp:
             raise Lf3pmError("set a start and a goal first (choose the action, then click the ground)")
         start = (*self._start, math.radians(self.start_yaw.value))
         goal = (*self._goal, math.radians(self.goal_yaw.value))
-        note = client.add_notification("planning", "default guidance and none", loading=True,
-                                       with_close_button=False) if client is not None else None
-        try:
+        with self._busy(client, "planning", "default guidance and none"):
             if self._planner is None:
                 self._planner = Planner(self.inputs.solm)
             g = self.guidance
             plans = {"default guidance": self._planner.plan(start, goal, robot=self.robot, metric=g.metric,
                                                             weight=g.weight, power=g.power),
                      "none (shortest)": self._planner.plan(start, goal, robot=self.robot, metric="none")}
-        finally:
-            if note is not None:
-                note.remove()
         lines, out = [], {}
         for name, plan in plans.items():
             samples = plan.trajectory.sample(20.0)
@@ -347,7 +341,17 @@ class ViewApp:
         error = self.mean_predicted_error(samples)
         return "" if error is None else f", mean predicted error {error * 100:.1f} cm"
 
-    # -- errors and shutdown -------------------------------------------------------------
+    # -- progress, errors and shutdown ---------------------------------------------------
+
+    @contextmanager
+    def _busy(self, client, title: str, body: str = ""):
+        """A notice in the page of ``client`` (None: none) while the block runs."""
+        note = client.add_notification(title, body, loading=True, with_close_button=False) if client else None
+        try:
+            yield
+        finally:
+            if note is not None:
+                note.remove()
 
     def _guarded(self, action, *args):
         """Runs a page action; an error becomes a message in the page (and in ``status``)."""
