@@ -236,8 +236,11 @@ def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list
                     plan[method] = {**replay_summary(runs), "scans": runs[0]["scans"]}
     comparisons = {}
     names = [g.name for g in guidance]
+    risky, safe = [r for r in records if r["at_risk"]], [r for r in records if not r["at_risk"]]
     for method, compared in (("localization", names), ("lio", lio_names)):
         comparisons[method] = {name: _compare(records, name, method) for name in compared}
+        comparisons[method]["by_risk"] = {name: {"at_risk": _compare(risky, name, method),
+                                                 "no_risk": _compare(safe, name, method)} for name in compared}
         if "default" in names:
             comparisons[method]["default_by_map"] = {
                 case.name: _compare([r for r in records if r["case"] == case.name], "default", method)
@@ -245,9 +248,8 @@ def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list
             comparisons[method]["default_by_robot"] = {
                 kind: _compare([r for r in records if r["robot"] == kind], "default", method)
                 for kind in sorted({r["robot"] for r in records})}
-            comparisons[method]["default_at_risk"] = _compare([r for r in records if r["at_risk"]], "default", method)
-            comparisons[method]["default_no_risk"] = _compare([r for r in records if not r["at_risk"]], "default",
-                                                              method)
+            comparisons[method]["default_at_risk"] = comparisons[method]["by_risk"]["default"]["at_risk"]
+            comparisons[method]["default_no_risk"] = comparisons[method]["by_risk"]["default"]["no_risk"]
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
             "lio_guidance": ["none"] + lio_names,
             "replay_cpu_s": replay_seconds,
@@ -362,6 +364,13 @@ def report(summary: dict) -> str:
             risk = (f"at risk (SOLM: >= {100 * AT_RISK_SHARE:.0f} % of the unguided plan's poses degenerate or "
                     f"q_n >= {RISK_FACTOR:g} x the map's median)")
             lines += [row(risk, comps[method]["default_at_risk"]), row("no risk", comps[method]["default_no_risk"])]
+    for method, title in (("localization", "localization"), ("lio", "LIO")):
+        by_risk = comps[method].get("by_risk", {})
+        if by_risk:
+            lines += ["", f"## Every guidance against none, at risk and no risk ({title})", "",
+                      header.replace("| guidance |", "| guidance, pairs |")]
+            lines += [row(f"{name}, {label}", c[key]) for name, c in by_risk.items()
+                      for key, label in (("at_risk", "at risk"), ("no_risk", "no risk")) if c[key]["pairs"]]
     cal = summary.get("calibration", {})
     if cal:
         lines += ["", "## Which channel predicts localization error (every plan's mean along its trajectory)", "",
