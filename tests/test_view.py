@@ -4,9 +4,11 @@ through the library, and the page itself in headless Chromium."""
 from __future__ import annotations
 
 import json
+import math
 import socket
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -202,3 +204,18 @@ def test_the_page_shows_the_scene_in_a_real_browser(app, tmp_path):
                        ready=lambda img: solm_share(img) > 0.01)
     assert image.std() > 10, "blank page"
     assert solm_share(image) > 0.01, "the SOLM's colours are not on the page"
+
+
+def test_turning_the_ring_at_the_start_sets_its_yaw(app):
+    app.mode.value = "set the start"
+    app._clicked(SimpleNamespace(ray_origin=(1.0, 1.0, 10.0), ray_direction=(0.0, 0.0, -1.0), client=None))
+    assert app._start == pytest.approx([1.0, 1.0], abs=1e-6)
+    ring = app._rings["start"]
+    ring.wxyz = (math.cos(math.radians(91) / 2), 0.0, 0.0, math.sin(math.radians(91) / 2))
+    app._ring_turned("start", ring)
+    assert app.start_yaw.value == 90.0  # the slider's 5° step
+    app.start_yaw.value = -45.0
+    app._draw_ends()
+    w, _, _, z = ring.wxyz
+    assert math.degrees(2 * math.atan2(z, w)) == pytest.approx(-45.0)
+    app.mode.value = "inspect a cell"

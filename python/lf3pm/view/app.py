@@ -49,7 +49,8 @@ class ViewApp:
         self.footprint_radius = float(solm.attrs.get("robot_radius", DEFAULTS.solm.robot_radius)
                                       if solm is not None else DEFAULTS.solm.robot_radius)
         self.status = ""
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()  # an action may set a control whose callback runs inside it
+        self._rings = {}
         self._planner = None
         self._start = self._goal = None
         self._ground = None
@@ -175,6 +176,7 @@ class ViewApp:
                                               "least observable directions.")
         if self.inputs.solm is not None:
             with gui.add_folder("Plan"):
+                # Or drag the ring that appears at a clicked start or goal.
                 self.start_yaw = gui.add_slider("start yaw (deg)", min=-180, max=180, step=5, initial_value=0)
                 self.goal_yaw = gui.add_slider("goal yaw (deg)", min=-180, max=180, step=5, initial_value=0)
                 button = gui.add_button("plan: default guidance and none")
@@ -193,10 +195,32 @@ class ViewApp:
             self.inspect(xy, event.client)
         elif self.mode.value == "set the start":
             self._start = xy
+            self._place_yaw_ring("start", xy)
             self._draw_ends()
         else:
             self._goal = xy
+            self._place_yaw_ring("goal", xy)
             self._draw_ends()
+
+    def _yaw_slider(self, end: str):
+        return self.start_yaw if end == "start" else self.goal_yaw
+
+    def _place_yaw_ring(self, end: str, xy) -> None:
+        """A rotation ring about the vertical at the start or goal: dragging it turns the
+        end's heading (and its slider)."""
+        yaw = math.radians(self._yaw_slider(end).value)
+        ring = self.server.scene.add_transform_controls(
+            f"/ends/{end}_yaw", scale=2.0, active_axes=(False, False, True), disable_axes=True,
+            disable_sliders=True, position=(xy[0], xy[1], self.ground_height(*xy) + self._above_layer),
+            wxyz=(math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
+        ring.on_update(lambda event: self._guarded(self._ring_turned, end, event.target))
+        self._rings[end] = ring
+
+    def _ring_turned(self, end: str, ring) -> None:
+        w, _, _, z = ring.wxyz
+        degrees = math.degrees(2.0 * math.atan2(z, w))
+        slider = self._yaw_slider(end)
+        slider.value = float(round(((degrees + 180.0) % 360.0 - 180.0) / slider.step) * slider.step)
 
     def ground_height(self, x: float, y: float) -> float:
         """The ground under (x, y): the SOLM's ground height there, else the map's lowest
@@ -282,6 +306,11 @@ class ViewApp:
             tip = np.array([xy[0] + 1.5 * math.cos(yaw), xy[1] + 1.5 * math.sin(yaw), z])
             self.server.scene.add_arrows(f"/ends/{name}", np.array([[[xy[0], xy[1], z], tip]]), color,
                                          shaft_radius=0.08, head_radius=0.25, head_length=0.5)
+            ring = self._rings.get(name)
+            if ring is not None:  # the slider moved: turn the ring with it (a drag keeps within a step)
+                w, _, _, rz = ring.wxyz
+                if abs(math.remainder(2.0 * math.atan2(rz, w) - yaw, 2 * math.pi)) > math.radians(yaw_slider.step):
+                    ring.wxyz = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
 
     def plan_between(self, client=None) -> dict:
         """Plans from the clicked start to the clicked goal with the default guidance and
