@@ -281,8 +281,9 @@ class ViewApp:
             text.append(f"- predicted localization error {result.predicted_localization_error_m * 100:.1f} cm "
                         f"({lo * 100:.1f}-{hi * 100:.1f} cm)")
         if solm is not None:
-            stored = solm.query(xy[0], xy[1], yaw=yaw)[0]
-            text.append(f"- SOLM q_n here {float(stored):.4g} (interpolated)")
+            stored = float(solm.query(xy[0], xy[1], yaw=yaw)[0])
+            text.append(f"- SOLM q_n here {stored:.4g} (interpolated)" if math.isfinite(stored) else
+                        "- the SOLM has no value here (an obstacle, unknown ground or its edge)")
         if not result.degenerate and len(result.observations["A"]) >= 6:
             weak = layers.weak_directions(result.observations, position)
             self.server.scene.add_arrows("/cell/weak", weak["arrows"], np.array(ARROWS), shaft_radius=0.05,
