@@ -219,3 +219,20 @@ def test_turning_the_ring_at_the_start_sets_its_yaw(app):
     w, _, _, z = ring.wxyz
     assert math.degrees(2 * math.atan2(z, w)) == pytest.approx(-45.0)
     app.mode.value = "inspect a cell"
+
+
+def test_an_r3_solm_is_shown_and_inspected_level_by_level(site, tmp_path):
+    """An R3 SOLM stores no ground: its layer sits at the level's height, and a clicked
+    cell is evaluated there."""
+    d, world = site
+    grid = make_grid(world, "r3", 1.0, bounds=BOUNDS, z_levels=[0.5, 1.5])
+    build_solm(world, "vlp16", grid, tmp_path / "r3.zarr", ray_stride=8)
+    solm = Solm.open(tmp_path / "r3.zarr")
+    layer = layers.solm_layer(solm, "q_n", 1)
+    assert len(layer["centres"]) > 0 and np.all(layer["centres"][:, 2] == np.float32(1.5))
+    viewer = serve(load_view_inputs(d / "map.npy", tmp_path / "r3.zarr"), port=free_port())
+    try:
+        viewer.layer.value = 1
+        assert viewer.inspect(np.array([0.0, 0.0]))["pose"][2] == 1.5
+    finally:
+        viewer.stop()

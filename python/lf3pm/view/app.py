@@ -226,7 +226,7 @@ class ViewApp:
         """The ground under (x, y): the SOLM's ground height there, else the map's lowest
         points nearby."""
         solm = self.inputs.solm
-        if solm is not None:
+        if solm is not None and solm.grid_spec.space != "r3":  # an R3 SOLM stores no ground
             if self._ground is None:
                 self._ground = solm.channel("ground_z").astype(np.float64)
             g = solm.grid_spec
@@ -267,21 +267,24 @@ class ViewApp:
                                     yaw=solm.grid_spec.yaws())[0]
                 index = int(np.nanargmin(values)) if np.isfinite(values).any() else 0
             yaw = float(solm.grid_spec.yaws()[index])
-        pose = (xy[0], xy[1], self.ground_height(*xy) + height, yaw)
+        z = self.ground_height(*xy) + height
+        if solm is not None and solm.grid_spec.space == "r3":  # the level shown, in the map's frame
+            z = float(solm.grid_spec.z_levels[self._solm_index() or 0])
+        pose = (xy[0], xy[1], z, yaw)
         with self._busy(client, "evaluating", f"cell ({xy[0]:.1f}, {xy[1]:.1f})"):
             result = lf3pm.evaluate(self.inputs.world, pose, self.sensor, observations=True)
         hits = result.observations["points"].astype(np.float32)
         self.server.scene.add_point_cloud("/cell/scan", hits, SCAN, point_size=0.08, point_shape="circle")
         position = np.asarray(pose_matrix(pose))[:3, 3]
         text = [f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
-                f"at {height:g} m", f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
+                f"at z = {z:.2f} m", f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
                 f"- {result.hits:,} hits of {result.rays:,} rays (red points)"]
         if result.predicted_localization_error_m is not None:
             lo, hi = result.predicted_localization_error_interval_m
             text.append(f"- predicted localization error {result.predicted_localization_error_m * 100:.1f} cm "
                         f"({lo * 100:.1f}-{hi * 100:.1f} cm)")
         if solm is not None:
-            stored = float(solm.query(xy[0], xy[1], yaw=yaw)[0])
+            stored = float(solm.query(xy[0], xy[1], yaw=yaw, z=z if solm.grid_spec.space == "r3" else None)[0])
             text.append(f"- SOLM q_n here {stored:.4g} (interpolated)" if math.isfinite(stored) else
                         "- the SOLM has no value here (an obstacle, unknown ground or its edge)")
         if not result.degenerate and len(result.observations["A"]) >= 6:

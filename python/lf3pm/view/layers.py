@@ -87,10 +87,10 @@ def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
     values = solm_values(solm, channel, layer)
     g = solm.grid_spec
     ys, xs = np.meshgrid(g.ys(), g.xs(), indexing="ij")
-    ground = solm.channel("ground_z").astype(np.float64)
-    if g.space == "r3":
-        z = np.full_like(ground, g.z_levels[int(layer or 0)])
+    if g.space == "r3":  # its levels are heights in the map's frame
+        z = np.full(values.shape, g.z_levels[int(layer or 0)])
     else:
+        ground = solm.channel("ground_z").astype(np.float64)
         z = np.where(np.isfinite(ground), ground, 0.0) + 0.05
     shown = np.isfinite(values) & (values > 0)
     v = values[shown]
