@@ -111,6 +111,10 @@ def main() -> None:
         fp.write(json.dumps(records, indent=1).encode())
     print(f"wrote {report}, {args.out / 'report.json'}, figures in {args.out}/ and {args.out / 'gobi'}/ "
           f"in {time.perf_counter() - started:.0f} s")
+    gobi = args.out / "gobi"
+    print(f"look at them in 3D (docs/view.md): lf3pm view {gobi / 'map.npy'} --solm {gobi / 'solm.zarr'} "
+          f"--plan {gobi / 'trajectories/default.csv'} --plan {gobi / 'trajectories/none.csv'} "
+          f"--replay {gobi / 'replays/default_localization_0.json'}")
 
 
 def demo_gobi(out: Path) -> str:
