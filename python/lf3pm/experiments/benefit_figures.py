@@ -32,14 +32,23 @@ def _errors(summary: dict, guidance: str, method: str):
 
 def scatter_figure(summary: dict, path: Path) -> None:
     """APE of each guided plan against its unguided twin, log-log, one panel per
-    guidance (localization) and one for the LIO; below the diagonal guidance helped."""
+    guidance, a row for localization and one for the LIO (the guidances it replayed);
+    below the diagonal guidance helped."""
     plt = _plt()
-    panels = [(g["name"], "localization") for g in summary["guidance"] if g["name"] != "none"]
-    if "default" in summary["comparisons"]["lio"]:
-        panels.append(("default", "lio"))
-    fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 3.9), dpi=110, squeeze=False)
+    names = [g["name"] for g in summary["guidance"] if g["name"] != "none"]
+    rows_of_panels = [[(name, "localization") for name in names],
+                      [(name, "lio") for name in names if name in summary["comparisons"]["lio"]]]
+    rows_of_panels = [row for row in rows_of_panels if row]
+    columns = max(len(row) for row in rows_of_panels)
+    fig, axes = plt.subplots(len(rows_of_panels), columns, figsize=(3.6 * columns, 3.9 * len(rows_of_panels)),
+                             dpi=110, squeeze=False)
     cases = [c["name"] for c in summary["cases"]]
-    for ax, (guidance, method) in zip(axes[0], panels):
+    for ax in axes.flat:
+        ax.set_visible(False)
+    panels = [(axes[r][k], guidance, method) for r, row in enumerate(rows_of_panels)
+              for k, (guidance, method) in enumerate(row)]
+    for ax, guidance, method in panels:
+        ax.set_visible(True)
         rows = _errors(summary, guidance, method)
         values = [v for _, a, b in rows for v in (a, b)] or [1e-3, 1.0]
         lo, hi = max(min(values) / 1.5, 1e-4), max(values) * 1.5
