@@ -34,7 +34,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from bench_maps import MAPS
+from bench_maps import MAPS, ground_height
 
 import lf3pm
 from lf3pm import _core
@@ -43,12 +43,6 @@ from lf3pm.pose import pose_matrix
 
 SENSORS = ("vlp16", "os1-64", "mid70")
 HEIGHTS = (0.5, 1.0)
-
-
-def ground_height(points: np.ndarray, xy) -> float:
-    """The ground under xy: the 5th percentile of the heights of the points within 1.5 m."""
-    near = points[np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1]) < 1.5]
-    return float(np.percentile(near[:, 2], 5)) if len(near) else float(points[:, 2].min())
 
 
 def embree_scene(world):

@@ -103,10 +103,16 @@ def site(seed: int = 0):
     return town(seed, half=110.0, pitch=30.0)
 
 
+def ground_height(points: np.ndarray, xy) -> float:
+    """The ground under xy: the 5th percentile of the heights of the points within 1.5 m."""
+    near = points[np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1]) < 1.5]
+    return float(np.percentile(near[:, 2], 5)) if len(near) else float(points[:, 2].min())
+
+
 def free_positions(points: np.ndarray, count: int = 3, clearance: float = 0.4, step: float = 0.5) -> np.ndarray:
     """`count` x-y positions of a real map where a sensor 0.5-1 m above the ground has
     `clearance` m of free space: on a `step` m lattice over the map's central half, the
-    ones nearest the centre, at least 3 m apart. Ground: as bench_evaluate.ground_height."""
+    ones nearest the centre, at least 3 m apart, over ground (ground_height) seen by 10 points."""
     from scipy.spatial import cKDTree
     tree = cKDTree(points)
     lo, hi = np.percentile(points[:, :2], [25, 75], axis=0)
@@ -115,13 +121,12 @@ def free_positions(points: np.ndarray, count: int = 3, clearance: float = 0.4, s
     candidates = np.c_[gx.ravel(), gy.ravel()]
     candidates = candidates[np.argsort(np.hypot(*(candidates - centre).T), kind="stable")]
     chosen = []
+    reach = 1.5 + np.ptp(points[:, 2])  # a ball holding every point within 1.5 m in x-y
     for xy in candidates:
-        near = tree.query_ball_point([xy[0], xy[1], np.median(points[:, 2])], 1.5 + np.ptp(points[:, 2]))
-        column = points[near]
-        column = column[np.hypot(column[:, 0] - xy[0], column[:, 1] - xy[1]) < 1.5]
-        if len(column) < 10:
+        column = points[tree.query_ball_point([xy[0], xy[1], np.median(points[:, 2])], reach)]
+        if np.count_nonzero(np.hypot(column[:, 0] - xy[0], column[:, 1] - xy[1]) < 1.5) < 10:
             continue
-        ground = np.percentile(column[:, 2], 5)
+        ground = ground_height(column, xy)
         probes = [(xy[0], xy[1], ground + h) for h in (0.5, 1.0)]
         if (min(tree.query(probes)[0]) >= clearance
                 and all(np.hypot(*(xy - c)) >= 3.0 for c in chosen)):

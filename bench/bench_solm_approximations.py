@@ -19,8 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.stats import spearmanr
 
-from bench_evaluate import ground_height
-from bench_maps import MAPS
+from bench_maps import MAPS, ground_height
 
 import lf3pm
 from lf3pm import _core

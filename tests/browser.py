@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from lf3pm.view import free_port
+
 CANDIDATES = ("chromium", "chromium-browser", "google-chrome")
 
 
@@ -34,7 +36,7 @@ def screenshot(url: str, path: Path, *, seconds: float = 20.0, size=(1280, 800),
     if browser is None:
         raise RuntimeError("no Chromium found (Debian: apt-get install chromium)")
     with tempfile.TemporaryDirectory() as profile:
-        debug_port = _free_port()
+        debug_port = free_port()
         proc = subprocess.Popen([browser, "--headless=new", "--no-sandbox", "--use-angle=swiftshader",
                                  "--enable-unsafe-swiftshader", "--no-first-run", "--disable-extensions",
                                  f"--remote-debugging-port={debug_port}", f"--window-size={size[0]},{size[1]}",
@@ -78,11 +80,3 @@ def _page(port: int, timeout: float = 30.0) -> dict:
             if time.monotonic() > deadline:
                 raise RuntimeError("headless Chromium did not start") from None
             time.sleep(0.2)
-
-
-def _free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]

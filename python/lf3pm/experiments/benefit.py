@@ -248,8 +248,6 @@ def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list
             comparisons[method]["default_by_robot"] = {
                 kind: _compare([r for r in records if r["robot"] == kind], "default", method)
                 for kind in sorted({r["robot"] for r in records})}
-            comparisons[method]["default_at_risk"] = comparisons[method]["by_risk"]["default"]["at_risk"]
-            comparisons[method]["default_no_risk"] = comparisons[method]["by_risk"]["default"]["no_risk"]
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
             "lio_guidance": ["none"] + lio_names,
             "replay_cpu_s": replay_seconds,
@@ -307,8 +305,8 @@ def _goal(comparisons: dict) -> dict:
     overhead of at most 15 %."""
     goal = {}
     for method in ("localization", "lio"):
-        risky = comparisons[method].get("default_at_risk", {})
-        safe = comparisons[method].get("default_no_risk", {})
+        default = comparisons[method]["by_risk"].get("default", {})
+        risky, safe = default.get("at_risk", {}), default.get("no_risk", {})
         if risky.get("pairs"):
             goal[f"{method}_at_risk_ratio_at_most_0.3"] = risky["median_ratio"] <= 0.3
             goal[f"{method}_at_risk_wilcoxon_p_below_0.01"] = bool(risky["wilcoxon_p"] < 0.01)
@@ -363,7 +361,8 @@ def report(summary: dict) -> str:
             lines += [row(f"{kind} robot", c) for kind, c in comps[method]["default_by_robot"].items()]
             risk = (f"at risk (SOLM: >= {100 * AT_RISK_SHARE:.0f} % of the unguided plan's poses degenerate or "
                     f"q_n >= {RISK_FACTOR:g} x the map's median)")
-            lines += [row(risk, comps[method]["default_at_risk"]), row("no risk", comps[method]["default_no_risk"])]
+            default = comps[method]["by_risk"]["default"]
+            lines += [row(risk, default["at_risk"]), row("no risk", default["no_risk"])]
     for method, title in (("localization", "localization"), ("lio", "LIO")):
         by_risk = comps[method].get("by_risk", {})
         if by_risk:

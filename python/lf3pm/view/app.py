@@ -212,13 +212,12 @@ class ViewApp:
         ring = self.server.scene.add_transform_controls(
             f"/ends/{end}_yaw", scale=2.0, active_axes=(False, False, True), disable_axes=True,
             disable_sliders=True, position=(xy[0], xy[1], self.ground_height(*xy) + self._above_layer),
-            wxyz=(math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
+            wxyz=_yaw_quaternion(yaw))
         ring.on_update(lambda event: self._guarded(self._ring_turned, end, event.target))
         self._rings[end] = ring
 
     def _ring_turned(self, end: str, ring) -> None:
-        w, _, _, z = ring.wxyz
-        degrees = math.degrees(2.0 * math.atan2(z, w))
+        degrees = math.degrees(_quaternion_yaw(ring.wxyz))
         slider = self._yaw_slider(end)
         slider.value = float(round(((degrees + 180.0) % 360.0 - 180.0) / slider.step) * slider.step)
 
@@ -312,9 +311,8 @@ class ViewApp:
                                          shaft_radius=0.08, head_radius=0.25, head_length=0.5)
             ring = self._rings.get(name)
             if ring is not None:  # the slider moved: turn the ring with it (a drag keeps within a step)
-                w, _, _, rz = ring.wxyz
-                if abs(math.remainder(2.0 * math.atan2(rz, w) - yaw, 2 * math.pi)) > math.radians(yaw_slider.step):
-                    ring.wxyz = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+                if abs(math.remainder(_quaternion_yaw(ring.wxyz) - yaw, 2 * math.pi)) > math.radians(yaw_slider.step):
+                    ring.wxyz = _yaw_quaternion(yaw)
 
     def plan_between(self, client=None) -> dict:
         """Plans from the clicked start to the clicked goal with the default guidance and
@@ -361,14 +359,15 @@ class ViewApp:
         """The mean predicted localization error (m) along a trajectory's samples, from the
         SOLM's q_n and the packaged fit, over the samples where q_n is known and not
         degenerate; None without a SOLM or such samples."""
-        from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error
-
-        solm, fit = self.inputs.solm, packaged_calibration(LOCALIZATION_PACKAGED)
-        if solm is None or fit is None:
+        solm = self.inputs.solm
+        if solm is None:
             return None
-        q = solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0]
-        errors = [e[0] for e in (predict_localization_error(fit, float(v)) for v in q) if e is not None]
-        return float(np.mean(errors)) if errors else None
+        try:
+            errors = layers.predicted_error(solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0])
+        except Lf3pmError:  # no packaged fit
+            return None
+        errors = errors[np.isfinite(errors)]
+        return float(np.mean(errors)) if errors.size else None
 
     def _mean_error_text(self, samples: dict) -> str:
         error = self.mean_predicted_error(samples)
@@ -408,6 +407,16 @@ class ViewApp:
 
     def stop(self) -> None:
         self.server.stop()
+
+
+def _yaw_quaternion(yaw: float) -> tuple:
+    """(w, x, y, z) of a rotation by ``yaw`` about the vertical."""
+    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+def _quaternion_yaw(wxyz) -> float:
+    """The yaw of a rotation about the vertical given as (w, x, y, z)."""
+    return 2.0 * math.atan2(wxyz[3], wxyz[0])
 
 
 def serve(inputs: ViewInputs, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, robot=None,

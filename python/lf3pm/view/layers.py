@@ -71,13 +71,17 @@ def solm_values(solm: Solm, channel: str, layer: int | None = None) -> np.ndarra
                 data[~np.isfinite(data)] = np.nan
         else:
             data = data[int(layer or 0)]
-    if channel == "predicted_error":
-        fit = packaged_calibration(LOCALIZATION_PACKAGED)
-        if fit is None:
-            raise Lf3pmError("no packaged localization-error fit: the predicted error is not available")
-        predict = np.vectorize(lambda q: (predict_localization_error(fit, q) or (np.nan,))[0], otypes=[float])
-        data = predict(data)
-    return data
+    return predicted_error(data) if channel == "predicted_error" else data
+
+
+def predicted_error(q_n: np.ndarray) -> np.ndarray:
+    """The localization error (m) the packaged fit predicts at each q_n; NaN where q_n is
+    unknown or degenerate. Lf3pmError when lf3pm ships no fit."""
+    fit = packaged_calibration(LOCALIZATION_PACKAGED)
+    if fit is None:
+        raise Lf3pmError("no packaged localization-error fit: the predicted error is not available")
+    predict = np.vectorize(lambda q: (predict_localization_error(fit, q) or (np.nan,))[0], otypes=[float])
+    return predict(np.asarray(q_n, dtype=np.float64))
 
 
 def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
