@@ -92,3 +92,26 @@ def test_quick_study_end_to_end(tmp_path):
     stamps = [p.stat().st_mtime_ns for p in replays]
     again = subprocess.run(command, capture_output=True, text=True)
     assert again.returncode == 0 and [p.stat().st_mtime_ns for p in replays] == stamps
+
+
+def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
+    from lf3pm.experiments.replay_tasks import write_plan
+    from lf3pm.trajectory.trajectory import Trajectory
+
+    def line(speed):  # one cubic piece along x, 2 s
+        c = np.zeros((1, 4, 3))
+        c[0, 1, 0] = speed
+        return Trajectory(c, np.array([2.0]))
+
+    csv, replays = tmp_path / "trajectories" / "00_omni_default.csv", tmp_path / "replays"
+    replays.mkdir()
+    names = ["00_default_localization_0.json", "00_default_lio_2.json",    # this plan's
+             "00_default_x_lio_0.json", "01_default_lio_0.json", "00_none_lio_0.json"]  # others'
+    write_plan(line(1.0), csv, replays, "00_default_")
+    for name in names:
+        (replays / name).write_text("{}")
+    write_plan(line(1.0), csv, replays, "00_default_")  # the same plan again: replays kept
+    assert sorted(p.name for p in replays.iterdir()) == sorted(names)
+    write_plan(line(0.5), csv, replays, "00_default_")  # another plan: its old replays go
+    assert sorted(p.name for p in replays.iterdir()) == sorted(names[2:])
+    assert csv.read_bytes() == line(0.5).csv_bytes()

@@ -31,7 +31,7 @@ from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, case_source
 from lf3pm.io import write_points
 from lf3pm.map import load_map
-from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays
+from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays, write_plan
 from lf3pm.planner.plan import Planner
 from lf3pm.trajectory.robots import Robot
 from lf3pm.sensors import get_sensor
@@ -104,7 +104,7 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
         plan = planner.plan(start, goal, robot=robot, metric=g.channel, weight=g.weight, power=g.power)
         plans[g.name] = plan
         csv = out / "trajectories" / f"{g.name}.csv"
-        plan.trajectory.to_csv(csv)
+        write_plan(plan.trajectory, csv, out / "replays", f"{g.name}_")
         samples = plan.trajectory.sample(100.0)
         z = _ground_under(ground, solm, samples["x"], samples["y"]) + solm.grid_spec.height
         times, poses = sample_trajectory(samples["t"], samples["x"], samples["y"], samples["yaw"],

@@ -10,14 +10,33 @@ OpenMP hangs (shared BUILD-NOTES).
 
 from __future__ import annotations
 
+import glob
 import json
+import re
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
+from pathlib import Path
 
 import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.experiments.map_cases import load_case_map
+
+
+def write_plan(trajectory, csv: Path, replays: Path, prefix: str) -> None:
+    """Writes ``trajectory`` to ``csv``. Where another plan was written there before (a
+    changed default, planner or map), first deletes the replays made of it, the JSONs in
+    ``replays`` named ``{prefix}{method}_{seed}.json``: an experiment resumes by skipping
+    replays that exist, and must never score an old plan's replay as the new one's."""
+    data = trajectory.csv_bytes()
+    if csv.exists() and csv.read_bytes() != data:
+        stale = re.compile(re.escape(prefix) + r"[a-z]+_\d+\.json")
+        for path in replays.glob(f"{glob.escape(prefix)}*.json"):
+            if stale.fullmatch(path.name):
+                path.unlink()
+    csv.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(csv) as fp:
+        fp.write(data)
 
 
 def run_replays(tasks: list, workers: int, step) -> None:

@@ -84,13 +84,17 @@ class Trajectory:
         return piece, t - starts[piece]
 
     def to_csv(self, path, rate: float = CSV_RATE) -> None:
-        """Write :meth:`sample` as CSV with header ``t,x,y,yaw,vx,vy,omega`` (atomically)."""
+        """Write :meth:`csv_bytes` to ``path`` (atomically)."""
+        with atomic_write(path) as fp:
+            fp.write(self.csv_bytes(rate))
+
+    def csv_bytes(self, rate: float = CSV_RATE) -> bytes:
+        """:meth:`sample` as CSV with header ``t,x,y,yaw,vx,vy,omega``."""
         s = self.sample(rate)
         buf = io.StringIO()
         np.savetxt(buf, np.column_stack([s[c] for c in CSV_COLUMNS]), delimiter=",", fmt="%.9g",
                    header=",".join(CSV_COLUMNS), comments="")
-        with atomic_write(path) as fp:
-            fp.write(buf.getvalue().encode())
+        return buf.getvalue().encode()
 
 
 def _travel_heading(c, tau, durations):
