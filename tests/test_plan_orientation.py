@@ -55,6 +55,18 @@ def test_omni_travels_facing_the_structure_behind_it(planner):
     assert backwards_share(unguided.trajectory.sample(100.0)) < 0.05
 
 
+def test_the_turn_price_decides_whether_turning_round_pays(planner):
+    # Facing -x instead of +x saves at most weight * (5 - 1) / 3 per metre (cost q / median q,
+    # median 3), under 46 m over these 34 m; turning the sensor by pi / 2 or more and back
+    # costs at least pi * turn_radius * (1 + 1/3) of path: 84 m at 20 m, so it never pays.
+    # At the default radius (2 m: at most 34 m for turning round and back) it does.
+    ends, robot = ((2.0, 6.0, 0.0), (36.0, 6.0, 0.0)), Robot("omni", r_safe=0.05)
+    priced = planner.plan(*ends, robot=robot, metric="q_n", weight=1.0, turn_radius=20.0)
+    yaw = priced.trajectory.sample(100.0)["yaw"]
+    assert np.max(np.abs(np.angle(np.exp(1j * yaw)))) < math.pi / 2
+    assert backwards_share(planner.plan(*ends, robot=robot, metric="q_n", weight=1.0).trajectory.sample(100.0)) > 0.7
+
+
 def test_yaw_aware_shortcut_keeps_the_turns_and_never_costs_more():
     solm = FieldSolm()
     cost = GridField(solm.channel("q_n") / 3.0, 0.0, 0.0, RES)

@@ -15,7 +15,7 @@ from lf3pm.errors import Lf3pmError
 
 #: Where each option of plan lives in the config.
 PLAN_PATHS = {"robot": "robot.kind", "metric": "guidance.metric", "weight": "guidance.weight",
-              "power": "guidance.power", **{name: f"robot.{name}" for name in (
+              "power": "guidance.power", "turn_radius": "guidance.turn_radius", **{name: f"robot.{name}" for name in (
                   "vmax_lon", "vmax_lat", "vmax_norm", "wmax", "amax_lon", "amax_lat", "alpha_max",
                   "min_turn_radius", "r_safe")}}
 
@@ -36,6 +36,9 @@ def plan(
                                                              "(docs/benefit.md)."),
     power: Optional[float] = option("guidance.power", help="Exponent applied to the channel (over its median) "
                                                            "before the weight (docs/benefit.md)."),
+    turn_radius: Optional[float] = option("guidance.turn_radius", help="A turn of the sensor costs the arc a point "
+                                                                       "this far from its axis travels (m per rad; "
+                                                                       "docs/benefit.md)."),
     vmax_lon: Optional[float] = option("robot.vmax_lon", help="Longitudinal speed limit (m/s)."),
     vmax_lat: Optional[float] = option("robot.vmax_lat", help="Lateral speed limit (m/s; omni)."),
     vmax_norm: Optional[float] = typer.Option(
@@ -62,7 +65,7 @@ def plan(
         metric = guidance.metric
         solm = Solm.open(solm_path)
         result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=guidance.weight,
-                                    power=guidance.power)
+                                    power=guidance.power, turn_radius=guidance.turn_radius)
         # All or none: the figure first (the likelier to fail), then the CSV; a CSV that
         # cannot be written takes the new figure with it.
         if png is not None:

@@ -26,15 +26,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core, libm
-from lf3pm.config import core_struct
+from lf3pm.config import DEFAULTS, core_struct
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.poses import cell_on_grid, format_pose
 
 #: Default turn radius (m): a yaw step costs the arc a point this far from the rotation
-#: axis travels.
-TURN_RADIUS = 0.5
+#: axis travels (config.GuidanceConfig).
+TURN_RADIUS = DEFAULTS.guidance.turn_radius
 
 
 @dataclass(frozen=True)

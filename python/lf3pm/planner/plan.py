@@ -22,7 +22,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.config import DEFAULTS
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
-from lf3pm.planner.graph_search import TURN_RADIUS, GraphPath, search_path
+from lf3pm.planner.graph_search import GraphPath, search_path
 from lf3pm.grid_field import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
 from lf3pm.trajectory.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, optimize_trajectory
@@ -84,10 +84,11 @@ class Planner:
 
     def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = DEFAULTS.guidance.metric,
              weight: float = DEFAULTS.guidance.weight, power: float = DEFAULTS.guidance.power, rho_T: float = 1.0,
-             heuristic: bool = True) -> Plan:
+             heuristic: bool = True, turn_radius: float = DEFAULTS.guidance.turn_radius) -> Plan:
         """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
         (``none``: shortest and fastest only) raised to ``power``, with trade-off ``weight``
-        (lambda)."""
+        (lambda). ``turn_radius``: the front end prices a turn of the sensor as the arc a
+        point this far from the rotation axis travels (m per rad; graph_search.py)."""
         start, goal = as_pose(start, "start"), as_pose(goal, "goal")
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
@@ -103,7 +104,7 @@ class Planner:
             piece_length = min(piece_length, 0.5 * math.pi * robot.min_turn_radius)
         else:
             path = search_path(layer, self.esdf, self.solm.grid_spec, start, goal, weight=weight,
-                               heuristic=heuristic, r_safe=robot.r_safe, turn_radius=TURN_RADIUS)
+                               heuristic=heuristic, r_safe=robot.r_safe, turn_radius=turn_radius)
             waypoints = np.array(path.poses, dtype=np.float64)
             # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
             waypoints[0], waypoints[-1] = start, goal
@@ -115,7 +116,7 @@ class Planner:
             # otherwise the yaw is the direction of travel.
             oriented = robot.kind == "omni" and cost is not None and cost.yaw_bins > 1
             keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + ESDF_MARGIN, cost, weight,
-                                 yaw="interpolate" if oriented else "travel", turn_radius=TURN_RADIUS)
+                                 yaw="interpolate" if oriented else "travel", turn_radius=turn_radius)
             waypoints, corners = waypoints[keep], True
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
                                      rho_T=rho_T, esdf_margin=ESDF_MARGIN, piece_length=piece_length,

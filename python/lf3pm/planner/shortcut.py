@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from lf3pm import libm
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid_field import GridField
 
@@ -34,7 +35,7 @@ YAW_MODES = ("travel", "interpolate")
 
 def shortcut_path(points, esdf: GridField, clearance: float, cost: GridField | None = None,
                   weight: float = 0.0, step: float | None = None, *, yaw: str = "travel",
-                  turn_radius: float = 0.5) -> np.ndarray:
+                  turn_radius: float = DEFAULTS.guidance.turn_radius) -> np.ndarray:
     """Indices (M,) of the waypoints kept from the path ``points`` (K, 3: x, y, yaw
     unwrapped; K >= 2), first and last included.
 
