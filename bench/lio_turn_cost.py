@@ -24,7 +24,7 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS
 from lf3pm.experiments.benefit import CASES
-from lf3pm.experiments.replay_tasks import load_replay, run_replays, write_plan
+from lf3pm.experiments.replay_tasks import load_replay, replay_json, run_replays, write_plan
 
 METHODS = ("lio", "localization")
 #: One change at a time from the default guided plan: the front end's turn price
@@ -67,14 +67,14 @@ def main() -> None:
                 csv = out / "trajectories" / name / f"{tag[:-1]}.csv"
                 write_plan(plan.trajectory, csv, out / "replays" / name, tag)
                 rows.append((p, label, csv, plan.summary()["trajectory_length_m"]))
-                tasks += [(cases[name], str(csv), method, seed, out / "replays" / name / f"{tag}{method}_{seed}.json")
+                tasks += [(cases[name], str(csv), method, seed, replay_json(out / "replays" / name, tag, method, seed))
                           for method in METHODS for seed in range(seeds)]
         print(f"{name}: {len(mine)} omni pairs planned", flush=True)
     run_replays(tasks, 2, lambda *a, **k: None)
 
     def ape(p, label, method):
         tag = f"{p['pair']:02d}_{label.replace(' ', '')}_"
-        return float(np.median([load_replay(out / "replays" / p["case"] / f"{tag}{method}_{s}.json")["ape_rmse"]
+        return float(np.median([load_replay(replay_json(out / "replays" / p["case"], tag, method, s))["ape_rmse"]
                                 for s in range(seeds)]))
 
     print(f"\nMedian over {seeds} seeds; ratios to the unguided plan of the same pair.\n")

@@ -41,7 +41,7 @@ from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.localization_error import localization_error_fit
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN, compare
-from lf3pm.experiments.replay_tasks import load_replay, replay_summary, run_replays, write_plan
+from lf3pm.experiments.replay_tasks import load_replay, replay_json, replay_summary, run_replays, write_plan
 from lf3pm.experiments.risk import AT_RISK_SHARE, RISK_FACTOR, at_risk, risk_share
 
 #: The reduced Gobi scene of the demo (experiments/gobi.py): town and open desert.
@@ -167,7 +167,7 @@ def _plan_pairs(case: MapCase, solm_path: Path, out: Path, seed: np.random.SeedS
                 if g is UNGUIDED:
                     risk = risk_share(planner.solm, plan.trajectory)
                 csv = folder / f"{number:02d}_{robot.kind}_{g.name}.csv"
-                write_plan(plan.trajectory, csv, out / "replays" / case.name, f"{number:02d}_{g.name}_")
+                write_plan(plan.trajectory, csv, out / "replays" / case.name, _plan_prefix(number, g.name))
                 summary = plan.summary()
                 plans[g.name] = {"csv": str(csv.relative_to(out)), "length_m": summary["trajectory_length_m"],
                                  "duration_s": summary["duration_s"], "violations": summary["violations"],
@@ -215,7 +215,12 @@ def _draw(planner, zone, robot, rng, tries: int = 200):
 
 def replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str, seed: int) -> Path:
     """Where the study keeps one replay's JSON (replay_tasks.replay_task)."""
-    return out / "replays" / case.name / f"{pair:02d}_{guidance}_{method}_{seed}.json"
+    return replay_json(out / "replays" / case.name, _plan_prefix(pair, guidance), method, seed)
+
+
+def _plan_prefix(pair: int, guidance: str) -> str:
+    """The name shared by a plan's replays (replay_tasks.replay_json)."""
+    return f"{pair:02d}_{guidance}_"
 
 
 # --- analysis -------------------------------------------------------------------------

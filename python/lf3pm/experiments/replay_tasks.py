@@ -23,11 +23,17 @@ from lf3pm.atomic import atomic_write
 from lf3pm.experiments.map_cases import load_case_map
 
 
+def replay_json(replays: Path, prefix: str, method: str, seed: int) -> Path:
+    """Where an experiment keeps one replay (replay_task's JSON) of the plan that
+    ``prefix`` names in the folder ``replays``."""
+    return replays / f"{prefix}{method}_{seed}.json"
+
+
 def write_plan(trajectory, csv: Path, replays: Path, prefix: str) -> None:
     """Writes ``trajectory`` to ``csv``. Where another plan was written there before (a
-    changed default, planner or map), first deletes the replays made of it, the JSONs in
-    ``replays`` named ``{prefix}{method}_{seed}.json``: an experiment resumes by skipping
-    replays that exist, and must never score an old plan's replay as the new one's."""
+    changed default, planner or map), first deletes the replays made of it (their
+    :func:`replay_json` paths): an experiment resumes by skipping replays that exist,
+    and must never score an old plan's replay as the new one's."""
     data = trajectory.csv_bytes()
     if csv.exists() and csv.read_bytes() != data:
         stale = re.compile(re.escape(prefix) + r"[a-z]+_\d+\.json")

@@ -32,11 +32,6 @@ from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.poses import cell_on_grid, format_pose
 
-#: Default turn radius (m): a yaw step costs the arc a point this far from the rotation
-#: axis travels (config.GuidanceConfig).
-TURN_RADIUS = DEFAULTS.guidance.turn_radius
-
-
 @dataclass(frozen=True)
 class GraphPath:
     """A grid path from start to goal.
@@ -61,7 +56,7 @@ class GraphPath:
 
 
 def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float = 1.0,
-                heuristic: bool = True, r_safe: float = 0.0, turn_radius: float = TURN_RADIUS,
+                heuristic: bool = True, r_safe: float = 0.0, turn_radius: float = DEFAULTS.guidance.turn_radius,
                 turn_while_moving: bool = True) -> GraphPath:
     """Least-cost path from ``start`` to ``goal`` (x, y, yaw), snapped to their cells.
 
