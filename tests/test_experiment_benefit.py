@@ -37,6 +37,8 @@ def test_worse_beyond_noise_needs_a_difference_larger_than_the_seeds_spread():
     unguided = [[0.031, 0.030, 0.032], [0.028, 0.018, 0.038], [0.1, 0.2, 0.15]]
     assert worse_beyond_noise(guided, unguided) == pytest.approx(1 / 3)
     assert math.isnan(worse_beyond_noise([[0.1]], [[0.2]]))  # one seed: no spread to compare with
+    # A pair with one seed on a side is left out of the share, not counted either way.
+    assert worse_beyond_noise(guided + [[0.5]], unguided + [[0.1, 0.1]]) == pytest.approx(1 / 3)
 
 
 def test_bootstrap_interval_is_seeded_and_covers_the_median():
@@ -78,6 +80,14 @@ def test_quick_study_end_to_end(tmp_path):
             assert math.isfinite(plan["localization"]["ape"])
             assert ("lio" in plan) == (name in ("none", "default"))
     assert summary["lio_guidance"] == ["none", "default"]
+    # Each LIO replay says whether the odometry held still during its rest, and the
+    # comparison from steady starts keeps only the seeds where both plans' did.
+    lio_plans = [p["plans"][n]["lio"] for p in summary["pairs"] for n in ("none", "default")]
+    assert all(len(plan["rest_steady_per_seed"]) == 1 for plan in lio_plans)
+    assert sum(v["replays"] for v in summary["lio_rest"].values()) == len(lio_plans)
+    steady_pairs = sum(all(p["plans"][n]["lio"]["rest_steady_per_seed"][0] for n in ("none", "default"))
+                       for p in summary["pairs"])
+    assert summary["comparisons"]["lio_steady"]["default"]["pairs"] == steady_pairs
     loc = summary["comparisons"]["localization"]
     assert loc["default"]["pairs"] == 2 and set(loc["default_by_map"]) == {"tunnel", "orientation"}
     # In the tunnel the unguided plans drive through the degenerate passage and the guided
@@ -115,3 +125,31 @@ def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
     write_plan(line(0.5), csv, replays, "00_default_")  # another plan: its old replays go
     assert sorted(p.name for p in replays.iterdir()) == sorted(names[2:])
     assert csv.read_bytes() == line(0.5).csv_bytes()
+
+
+def test_a_lio_replay_saved_without_its_rest_gets_it_added(tmp_path, monkeypatch):
+    """Replays saved before the rest was recorded: run_replays adds it (replay_rest on the
+    rest alone) and keeps the rest of the record; a localization replay is left alone."""
+    import importlib
+
+    from lf3pm.experiments import replay_tasks
+
+    replay_module = importlib.import_module("lf3pm.replays.replay")  # lf3pm.replays.replay is the function
+    from lf3pm.experiments.benefit import QUICK
+
+    rest = {"seconds": 2.0, "drift_m": 0.3, "speed_mps": 0.2, "steady": False}
+    calls = []
+    monkeypatch.setattr(replay_module, "replay_rest", lambda *a, **k: calls.append((a, k)) or rest)
+    monkeypatch.setattr(replay_tasks, "_case_map", lambda case: ("map", None))
+    monkeypatch.setattr(replay_tasks, "replay_task", lambda task: pytest.fail(f"replayed {task}"))
+    old = {"ape_rmse": 0.5, "scans": 10}
+    lio, localization = tmp_path / "00_none_lio_1.json", tmp_path / "00_none_localization_1.json"
+    for path in (lio, localization):
+        path.write_text(json.dumps(old))
+    tasks = [(QUICK[1], "plan.csv", "lio", 1, lio), (QUICK[1], "plan.csv", "localization", 1, localization)]
+    replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)
+    assert json.loads(lio.read_text()) == {**old, "rest": rest}
+    assert json.loads(localization.read_text()) == old
+    assert calls == [(("map", "plan.csv", QUICK[1].sensor, 1), {"threads": 1})]
+    replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)  # nothing left to do
+    assert len(calls) == 1

@@ -23,11 +23,13 @@ def test_reduced_gobi_experiment_writes_every_guidance(tmp_path):
         assert result["S"] > 0 and result["mde_poses"] >= 3
         for method in ("localization", "lio"):
             assert np.isfinite(result[method]["ape"]) and len(result[method]["errors"]) > 20
+        assert len(result["lio"]["rest_steady_per_seed"]) == 1  # whether the LIO held still before the plan
         data = np.loadtxt(tmp_path / "trajectories" / f"{metric}.csv", delimiter=",", skiprows=1)
         assert np.allclose(data[0, 1:3], summary["start"][:2]) and np.allclose(data[-1, 1:3], summary["goal"][:2])
         ix = ((data[:, 1] - g.x0) / g.res).astype(int)
         iy = ((data[:, 2] - g.y0) / g.res).astype(int)
         assert not blocked[iy, ix].any(), f"the {metric} trajectory crosses an obstacle cell"
-    assert "| default |" in (tmp_path / "gobi.md").read_text()
+    table = (tmp_path / "gobi.md").read_text()
+    assert "| default |" in table and "LIO rests steady" in table
     for name in ("trajectories.png", "along.png"):
         assert (tmp_path / name).stat().st_size > 10_000

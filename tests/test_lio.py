@@ -236,8 +236,21 @@ def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, 
     motion = town_drive(town, turn_rate)
     result = lf3pm.replay(town, motion, sensor, "lio", seed=0, noise=0.0, imu_noise=False, odometry=odometry)
     assert result.ape["rmse"] < 0.02, result.ape["rmse"]
+    assert result.rest["steady"], result.rest  # it did not enter the drive moving
     timing = time_offset(result.times, result.estimate, motion.pose)
     assert abs(timing["offset"]) <= 0.01, timing
+
+
+def test_the_rest_alone_is_what_the_replay_saw(town):
+    """replay_rest runs the stream only up to the trajectory's start: the same scans, IMU
+    samples and (the odometry looking only back) estimates as the whole replay, so the
+    same rest, bit for bit; the Mid-70 with noise, where GenZ-LIO's rests vary most."""
+    import lf3pm
+    from lf3pm.replays.replay import replay_rest
+
+    motion = town_drive(town, 0.3, seconds=3.0)
+    whole = lf3pm.replay(town, motion, "mid70", "lio", seed=1)
+    assert replay_rest(town, motion, "mid70", seed=1) == whole.rest
 
 
 def test_a_lidar_clock_50ms_late_is_detected(town):

@@ -60,9 +60,13 @@ class Clock:
 SIMULATE_S, ESTIMATE_S = 2.0, 0.5
 
 
+#: How far the fake LIO's estimate moves along x per scan (m), the rest's scans included.
+DRIFT_PER_SCAN = 0.001
+
+
 def run_lio(scans, imu, sensor, *, initial_pose, **params):
     """Consumes every scan (each taking ESTIMATE_S on the stand-in clock besides its
-    simulation); returns the truth shifted along x by 1 mm per scan."""
+    simulation); returns the truth shifted along x by DRIFT_PER_SCAN per scan."""
     calls["lio"] = {"params": params, "initial_pose": initial_pose, "imu_samples": len(imu.t)}
     ends = []
     for scan in scans:
@@ -70,7 +74,7 @@ def run_lio(scans, imu, sensor, *, initial_pose, **params):
         Clock.now += ESTIMATE_S
     ends = np.array(ends)
     poses = scans.truth.copy()
-    poses[:, 0, 3] += 0.001 * np.arange(len(poses))
+    poses[:, 0, 3] += DRIFT_PER_SCAN * np.arange(len(poses))
     return FakeEstimate(times=ends, poses=poses, skipped=[3, len(ends) - 2])
 
 
@@ -143,3 +147,33 @@ def test_cli_bag_and_lio(fake_lio, boxes, tmp_path):
     with Reader(bag) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
     assert counts == {"/points": 11, "/imu": 201, "/ground_truth": 101, "/tf": 101, "/tf_static": 1}
+
+
+@pytest.mark.parametrize("per_scan, steady", [(0.001, True), (0.01, False)])
+def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(fake_lio, boxes, monkeypatch,
+                                                                             tmp_path, per_scan, steady):
+    """The estimate moving per_scan m every 0.1 s scan of the 2 s rest: drift 20 per_scan
+    at the rest's end, speed 10 per_scan m/s (0.01 m/s: steady; 0.1 m/s: above
+    REST_SPEED_LIMIT), and the CLI warns about the second only."""
+    from lf3pm.replays.replay_result import REST_SPEED_LIMIT
+
+    monkeypatch.setattr(sys.modules[__name__], "DRIFT_PER_SCAN", per_scan)
+    world, motion = boxes
+    result = replay(world, motion, "vlp16", "lio", seed=0)
+    scans = round(LIO_REST * 10)
+    assert result.rest["drift_m"] == pytest.approx(per_scan * scans)
+    assert result.rest["speed_mps"] == pytest.approx(per_scan * 10)
+    assert result.rest["steady"] is steady and (per_scan * 10 <= REST_SPEED_LIMIT) is steady
+    assert json.loads(json.dumps(result.to_dict()))["rest"] == result.rest
+    assert replay(world, motion, "vlp16", "localization", seed=0).rest == {}  # no rest there
+
+    np.save(tmp_path / "boxes.npy", world.points)
+    csv = tmp_path / "traj.csv"
+    t = np.linspace(0.0, 1.0, 101)
+    rows = np.column_stack([t, -2 + 0.8 * t, 0 * t, 0 * t, np.full_like(t, 0.8), 0 * t, 0 * t])
+    np.savetxt(csv, rows, delimiter=",", header="t,x,y,yaw,vx,vy,omega", comments="")
+    done = CliRunner().invoke(app, ["replay", str(csv), "--map", str(tmp_path / "boxes.npy"), "--method", "lio"])
+    assert done.exit_code == 0, done.output
+    text = " ".join(done.output.split())
+    assert f"seed 0 {1000 * per_scan * scans:.0f} mm" in text
+    assert ("entered the trajectory with a velocity error" in text) is not steady

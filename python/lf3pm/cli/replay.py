@@ -121,3 +121,23 @@ def print_series(series) -> None:
     if len(series.results) > 1:
         table.add_row("median", *(show(key, series.median[key]) for key, _, _ in FIGURES))
     console.print(table)
+    print_rest(series.results)
+
+
+def print_rest(results) -> None:
+    """What the LIO did while the sensor stood still before the trajectory, per seed,
+    and a warning for each seed that entered the trajectory moving."""
+    from lf3pm.replays.replay_result import REST_SPEED_LIMIT
+
+    rested = [r for r in results if r.rest]
+    if not rested:
+        return
+    moves = ", ".join(f"seed {r.seed} {1000 * r.rest['drift_m']:.0f} mm" for r in rested)
+    console.print(f"rest ({rested[0].rest['seconds']:g} s still before the trajectory; APE re-anchored after it): "
+                  f"the estimate moved at most {moves}", highlight=False)
+    for r in rested:
+        if not r.rest["steady"]:
+            console.print(f"warning: seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at "
+                          f"the end of the rest (> {REST_SPEED_LIMIT:g} m/s): it entered the trajectory with a "
+                          "velocity error, so this APE measures its start, not the trajectory (docs/lio.md, "
+                          "\"A still sensor\")", style="yellow", highlight=False)

@@ -159,16 +159,20 @@ def _table(summary: dict) -> str:
              f"Start {summary['start']} (town square), goal {summary['goal']} (west of the warehouse). "
              f"{summary['paper']}. APE: rmse of the translation error, median over {seeds} seed(s).", "",
              "| guidance | length (m) | duration (s) | S (sum of MDE) | MDE poses | localization APE (m) "
-             "| degenerate scans | LIO APE (m) |", "|---|---|---|---|---|---|---|---|"]
+             "| degenerate scans | LIO APE (m) | LIO rests steady |", "|---|---|---|---|---|---|---|---|---|"]
     for name, r in summary["results"].items():
         loc, lio = r["localization"], r["lio"]
+        steady = lio.get("rest_steady_per_seed")
+        rests = "n/a" if steady is None else f"{sum(steady)} of {len(steady)}"
         lines.append(f"| {name} | {r['trajectory_length_m']:.1f} | {r['duration_s']:.1f} | {r['S']:.4g} | "
                      f"{r['mde_poses'] - r['mde_refused']} | {loc['ape']:.3g} | "
-                     f"{100 * loc['degenerate_share']:.0f} % | {lio['ape']:.3g} |")
+                     f"{100 * loc['degenerate_share']:.0f} % | {lio['ape']:.3g} | {rests} |")
     f = summary["finding"]
     below = ", ".join(f"{k}: {'yes' if v else 'no'}" for k, v in f["default_below_none"].items())
     lines += ["", f"Lowest S: {f['S_lowest']}; lowest localization APE: {f['localization_lowest']}; lowest LIO "
-                  f"APE: {f['lio_lowest']}. Default guidance below none by {below}.", ""]
+                  f"APE: {f['lio_lowest']}. Default guidance below none by {below}. LIO rests steady: seeds on "
+                  "which the odometry held still while the sensor stood at the start before the plan (docs/replay.md, "
+                  "\"What the rest reports\"); an unsteady one enters the plan moving.", ""]
     return "\n".join(lines)
 
 

@@ -57,12 +57,13 @@ def wilcoxon_p(guided, unguided) -> float:
 def worse_beyond_noise(guided_seeds, unguided_seeds, margin: float = 0.0) -> float:
     """Share of pairs whose guided mean error exceeds the unguided one by more than
     twice the standard error of the difference and by more than ``margin`` (m)
-    (lists of per-seed errors per pair)."""
+    (lists of per-seed errors per pair), among the pairs with at least two seeds on
+    each side (NaN if none has: no spread to compare with)."""
     flags = []
     for a, b in zip(guided_seeds, unguided_seeds):
         a, b = np.asarray(a, float), np.asarray(b, float)
         if min(a.size, b.size) < 2:
-            return math.nan
+            continue
         se = math.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size)
         flags.append(a.mean() - b.mean() > max(2.0 * se, margin))
     return float(np.mean(flags)) if flags else math.nan

@@ -165,13 +165,14 @@ class Motion:
 class RestFirst:
     """``motion`` preceded by ``seconds`` at rest at its first pose (what a LiDAR-inertial
     odometry needs to initialise: it takes the first IMU samples for a still sensor's).
-    The same methods as :class:`Motion`; t0 is ``seconds`` earlier."""
+    The same methods as :class:`Motion`; t0 is ``seconds`` earlier. ``rest_only``: end
+    where the motion starts (the rest alone, as the full stream begins)."""
 
-    def __init__(self, motion, seconds: float):
+    def __init__(self, motion, seconds: float, *, rest_only: bool = False):
         if not (np.isfinite(seconds) and seconds >= 0):
             raise Lf3pmError(f"the rest before the motion must be >= 0 s, got {seconds}")
         self.motion, self.rest = motion, float(seconds)
-        self.t0, self.t1 = motion.t0 - self.rest, motion.t1
+        self.t0, self.t1 = motion.t0 - self.rest, (motion.t0 if rest_only else motion.t1)
 
     def __getattr__(self, name):
         # position, velocity, ... clamp to the motion's own span: at rest before it.

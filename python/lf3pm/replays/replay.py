@@ -19,13 +19,16 @@ import math
 import os
 import time
 
+import numpy as np
+
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
                                            MIN_POINTS, SCAN_VOXEL, WheelOdometry, localization_params, localize)
 from lf3pm.validation.mde import RegistrationTarget
 from lf3pm.replays.motion import Motion, RestFirst
 from lf3pm.replays.odometry import kiss_icp_params, run_kiss_icp
-from lf3pm.replays.replay_result import Estimate, ReplayResult, ReplaySeries, library_versions, median_figures
+from lf3pm.replays.replay_result import (Estimate, ReplayResult, ReplaySeries, library_versions, median_figures,
+                                        rest_motion)
 from lf3pm.scan.scans import ScanStream
 from lf3pm.map import Map, as_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
@@ -99,17 +102,9 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor
     Raises Lf3pmError for bad input.
     """
     params = check_method(method, params)
-    run = validated(ReplayConfig, "replay", method=method, rate=rate, height=height)
-    rate, height = run.rate, run.height
-    noise = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads).noise
-    map = as_map(map)
-    sensor = resolve_sensor(sensor, rate)
-    motion = _motion(motion_or_csv, map, height)
-    first = 0
-    if method == "lio" and params["rest"] > 0:
-        motion = RestFirst(motion, params["rest"])
-        first = int(math.floor(params["rest"] * rate + 1e-9))  # the scans before the trajectory starts
-    scans = ScanStream(map, motion, sensor, rate=rate, seed=seed, noise=noise, threads=threads)
+    map, sensor, motion, scans, first = _stream(map, motion_or_csv, sensor, method, seed, rate, height, noise,
+                                                threads, params)
+    rate = scans.rate
     common = {"rate": float(rate), "seed": int(seed), "noise": scans.noise, "noise_stream": "scan index",
               "height": motion.height, "ground": {"cell": motion.ground.cell,
                                                   "smoothing": motion.ground.smoothing,
@@ -190,6 +185,41 @@ def _motion(source, map: Map, height: float) -> Motion:
     s = trajectory.sample()  # at the CSV's rate (planner.trajectory.CSV_RATE)
     return Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map,
                               height=height)
+
+
+def replay_rest(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor,
+                seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate,
+                height: float = DEFAULTS.replay.height, noise: float | None = DEFAULTS.scan.noise,
+                threads: int = DEFAULTS.scan.threads, **params) -> dict:
+    """What the LIO does while the sensor stands still before the trajectory: the
+    ``rest`` that :func:`replay` with method lio and the same arguments reports,
+    for the cost of the rest alone (the same scans, IMU samples and estimates: the
+    stream up to the trajectory's start does not depend on what follows, and the
+    odometry only looks back). Raises Lf3pmError for bad input or a zero rest."""
+    params = check_method("lio", params)
+    if not params["rest"] > 0:
+        raise Lf3pmError("replay_rest needs a rest before the trajectory (rest > 0 s)")
+    _, sensor, motion, scans, first = _stream(map, motion_or_csv, sensor, "lio", seed, rate, height, noise,
+                                              threads, params, rest_only=True)
+    run, _, _ = _lio(scans, motion, sensor, seed, params)
+    times = scans.times if run.times is None else np.asarray(run.times, float)  # DLIO's: mid-scan
+    return rest_motion(times[: first + 1], motion.pose(times[: first + 1]), run.poses[: first + 1])
+
+
+def _stream(map, motion_or_csv, sensor, method, seed, rate, height, noise, threads, params, rest_only=False):
+    """(Map, Sensor, motion, ScanStream, index of the trajectory's first scan) of a replay,
+    the arguments validated; the LIO's motion starts with its rest."""
+    run = validated(ReplayConfig, "replay", method=method, rate=rate, height=height)
+    noise = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads).noise
+    map = as_map(map)
+    sensor = resolve_sensor(sensor, run.rate)
+    motion = _motion(motion_or_csv, map, run.height)
+    first = 0
+    if method == "lio" and params["rest"] > 0:
+        motion = RestFirst(motion, params["rest"], rest_only=rest_only)
+        first = int(math.floor(params["rest"] * run.rate + 1e-9))  # the scans before the trajectory starts
+    scans = ScanStream(map, motion, sensor, rate=run.rate, seed=seed, noise=noise, threads=threads)
+    return map, sensor, motion, scans, first
 
 
 def lio_modules(needed_by: str = "method lio"):

@@ -60,7 +60,9 @@ class ReplayResult:
     path. ``seconds_per_scan``: wall time split into "simulate" (the scans) and
     "estimate" (the method). ``params``: every parameter of the run;
     ``versions``: lf3pm and the libraries that produced the estimate and the
-    metrics; ``report``: what the estimator itself said (e.g. a lost track).
+    metrics; ``report``: what the estimator itself said (e.g. a lost track);
+    ``rest``: after a rest before the trajectory (the LIO's), what the estimate did
+    while the sensor stood still (:func:`rest_motion`; empty without a rest).
     """
 
     method: str
@@ -81,6 +83,7 @@ class ReplayResult:
     map_sha256: str
     versions: dict
     report: dict = field(default_factory=dict)
+    rest: dict = field(default_factory=dict)
 
     @classmethod
     def evaluate(cls, *, times, truth, estimate, degenerate_directions=None, **fields) -> "ReplayResult":
@@ -100,7 +103,7 @@ class ReplayResult:
         simulation time), scored from scan ``first`` on (earlier scans: a rest before the
         trajectory, for the estimator to initialise), the estimate re-anchored there to
         the true pose (an odometry's frame is arbitrary; what it did while the robot stood
-        still is not the trajectory's)."""
+        still is not the trajectory's, but is reported: ``rest``)."""
         count, keep = len(scans), slice(first, None)
         directions = run.degenerate_directions
         times, truth = scans.times, scans.truth
@@ -108,13 +111,15 @@ class ReplayResult:
             times = np.asarray(run.times, float)
             truth = scans.motion.pose(times)
         estimate = run.poses[keep]
+        rest = {}
         if first:
+            rest = rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1])
             estimate = truth[first] @ np.linalg.inv(estimate[0]) @ estimate
         return cls.evaluate(times=times[keep], truth=truth[keep], estimate=estimate,
                             hits=run.hits[keep], skipped=[k - first for k in run.skipped if k >= first],
                             degenerate_directions=None if directions is None else directions[keep],
                             seconds_per_scan={"simulate": scans.seconds / count, "estimate": run.seconds / count},
-                            report=dict(run.report), **fields)
+                            report=dict(run.report), rest=rest, **fields)
 
     @property
     def scans(self) -> int:
@@ -142,7 +147,8 @@ class ReplayResult:
                "rpe_frame": _clean(self.rpe_frame), "rpe_metre": _clean(self.rpe_metre),
                "seconds_per_scan": _clean(self.seconds_per_scan),
                "scans_per_second": _clean(self.scans_per_second), "params": _clean(self.params),
-               "map_sha256": self.map_sha256, "versions": dict(self.versions), "report": _clean(self.report)}
+               "map_sha256": self.map_sha256, "versions": dict(self.versions), "report": _clean(self.report),
+               "rest": _clean(self.rest)}
         if trajectories:
             out["times"] = self.times.tolist()
             out["truth_xyz"] = self.truth[:, :3, 3].tolist()
@@ -157,6 +163,32 @@ class ReplayResult:
         inverse = lambda x: 1.0 / x if x > 0 else math.inf
         return {"simulate": inverse(s["simulate"]), "estimate": inverse(s["estimate"]),
                 "total": inverse(s["simulate"] + s["estimate"])}
+
+
+#: Over the last REST_WINDOW s of a rest, an estimate moving faster than REST_SPEED_LIMIT
+#: (m/s) hands the trajectory a velocity error: its APE then measures the odometry's
+#: start, not the trajectory. Steady rests of GenZ-LIO and DLIO move at most 0.03 m/s
+#: with noisy scans and IMU, mm/s without noise (bench/lio_rest.py); a sensor that
+#: carries 0.05 m/s into the plan is 5 cm off after its first second, more than the
+#: whole APE of a good LIO run (docs/lio.md, "A still sensor").
+REST_SPEED_LIMIT = 0.05
+REST_WINDOW = 0.5
+
+
+def rest_motion(times, truth, poses) -> dict:
+    """What an estimate did while the sensor stood still: ``times`` (n,), ``truth`` and
+    ``poses`` (n, 4, 4) of the rest's scans and the first of the trajectory, the
+    estimate anchored at the true first pose. ``drift_m``: its largest distance from
+    the truth; ``speed_mps``: its mean speed over the last REST_WINDOW s; ``steady``:
+    that speed at most REST_SPEED_LIMIT."""
+    times = np.asarray(times, float)
+    estimate = truth[0] @ np.linalg.inv(poses[0]) @ poses
+    drift = np.linalg.norm(estimate[:, :3, 3] - truth[:, :3, 3], axis=1)
+    back = int(np.searchsorted(times, times[-1] - REST_WINDOW - 1e-9))
+    span = times[-1] - times[back]
+    speed = float(np.linalg.norm(estimate[-1, :3, 3] - estimate[back, :3, 3]) / span) if span > 0 else 0.0
+    return {"seconds": float(times[-1] - times[0]), "drift_m": float(drift.max()), "speed_mps": speed,
+            "steady": bool(speed <= REST_SPEED_LIMIT)}
 
 
 def _clean(value):
