@@ -15,7 +15,8 @@ from typer.testing import CliRunner
 import lf3pm
 from lf3pm.cli import app
 from lf3pm.replays.motion import Motion
-from lf3pm.replays.replay import LIO_REST, replay
+from lf3pm.errors import Lf3pmError
+from lf3pm.replays.replay import LIO_REST, replay, replay_rest
 from lf3pm.scenes import build_scene
 
 
@@ -166,6 +167,9 @@ def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(fak
     assert result.rest["steady"] is steady and (per_scan * 10 <= REST_SPEED_LIMIT) is steady
     assert json.loads(json.dumps(result.to_dict()))["rest"] == result.rest
     assert replay(world, motion, "vlp16", "localization", seed=0).rest == {}  # no rest there
+    assert replay_rest(world, motion, "vlp16", seed=0) == result.rest
+    with pytest.raises(Lf3pmError, match="needs a rest"):
+        replay_rest(world, motion, "vlp16", rest=0.0)
 
     np.save(tmp_path / "boxes.npy", world.points)
     csv = tmp_path / "traj.csv"
