@@ -88,6 +88,13 @@ def test_replay_tracks_read_both_replay_formats_and_refuse_one_without_positions
     study = {"truth_xyz_every_second": run["truth_xyz"], "estimate_xyz_every_second": run["estimate_xyz"],
              "errors_every_second": run["errors"]}
     np.testing.assert_array_equal(layers.replay_tracks(study)["estimate"], tracks["estimate"])
+    assert tracks["rest"] == {}  # a LIO replay's rest comes along (the viewer warns when unsteady)
+    rest = {"seconds": 2.0, "drift_m": 0.9, "speed_mps": 3.4, "steady": False}
+    unsteady = layers.replay_tracks({**study, "rest": rest})
+    assert unsteady["rest"] == rest
+    assert "already moving at 3.40 m/s" in layers.replay_caption("r", unsteady)
+    assert "moving" not in layers.replay_caption("r", layers.replay_tracks({**study, "rest": {**rest, "steady": True}}))
+    assert layers.replay_caption("r", tracks).startswith("r: error 0.1-40.0 cm")
     with pytest.raises(Lf3pmError, match="no true and estimated positions"):
         layers.replay_tracks({"ape_rmse": 0.1})
 

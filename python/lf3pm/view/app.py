@@ -152,9 +152,7 @@ class ViewApp:
                                                 thickness_units="screen")
             self.server.scene.add_line_segments(f"/replays/{k}/estimate", tracks["estimate"], tracks["colors"],
                                                 thickness=4.0, thickness_units="screen")
-            lines.append(f"- {name}: error {tracks['lo'] * 100:.1f}-{tracks['hi'] * 100:.1f} cm "
-                         f"(estimate coloured from dark, {tracks['lo'] * 100:.1f} cm, to yellow, "
-                         f"{tracks['hi'] * 100:.1f} cm; truth grey)")
+            lines.append(f"- {layers.replay_caption(name, tracks)}")
         self.server.gui.add_markdown("**Replays**\n\n" + "\n".join(lines))
 
     def _set_camera(self) -> None:

@@ -153,8 +153,10 @@ def path_length(x: np.ndarray, y: np.ndarray) -> float:
 def replay_tracks(replay: dict) -> dict:
     """The truth and the estimate of a replay as segments, the estimate's coloured by its
     error: ``truth`` (N-1, 2, 3), ``estimate`` (N-1, 2, 3), ``colors`` (N-1, 2, 3) uint8,
-    ``errors`` (N,) m, ``lo``/``hi`` (m). ``replay``: what ``lf3pm replay --json`` writes
-    (its first run is shown), or a study's replay record (its positions once a second)."""
+    ``errors`` (N,) m, ``lo``/``hi`` (m), ``rest``: what a LIO did while the sensor stood
+    still before the trajectory (replay_result.rest_motion; empty for other methods).
+    ``replay``: what ``lf3pm replay --json`` writes (its first run is shown), or a study's
+    replay record (its positions once a second)."""
     run = replay["runs"][0] if isinstance(replay.get("runs"), list) and replay["runs"] else replay
     keys = [("truth_xyz", "estimate_xyz", "errors"),
             ("truth_xyz_every_second", "estimate_xyz_every_second", "errors_every_second")]
@@ -170,7 +172,21 @@ def replay_tracks(replay: dict) -> dict:
     lo, hi = max(float(np.nanmin(errors)), 1e-3), max(float(np.nanmax(errors)), 2e-3)
     colors = colormap(errors, lo, hi, name="plasma")
     return {"truth": polyline(*truth.T), "estimate": polyline(*estimate.T),
-            "colors": np.stack([colors[:-1], colors[1:]], axis=1), "errors": errors, "lo": lo, "hi": hi}
+            "colors": np.stack([colors[:-1], colors[1:]], axis=1), "errors": errors, "lo": lo, "hi": hi,
+            "rest": dict(run.get("rest") or {})}
+
+
+def replay_caption(name: str, tracks: dict) -> str:
+    """The viewer's line for a replay (replay_tracks' ``tracks``): its error range and
+    colours, and a warning when a LIO entered the trajectory already moving."""
+    lo, hi = tracks["lo"] * 100, tracks["hi"] * 100
+    text = (f"{name}: error {lo:.1f}-{hi:.1f} cm (estimate coloured from dark, {lo:.1f} cm, to yellow, "
+            f"{hi:.1f} cm; truth grey).")
+    rest = tracks["rest"]
+    if rest and not rest["steady"]:
+        text += (f" **The odometry was already moving at {rest['speed_mps']:.2f} m/s before the trajectory "
+                 "started: this error measures its start, not the trajectory.**")
+    return text
 
 
 def weak_directions(observations: dict, position: np.ndarray) -> dict:
