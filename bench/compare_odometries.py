@@ -14,7 +14,9 @@ from rest, speed ramped C2 to 1 m/s over 2 s as a plan starts):
 Each runs noise-free (scans and IMU) and noisy (the sensor's range noise, the
 BMI088 preset, seed 0). Printed per run: APE translation RMSE and max, scored at
 the times each odometry's poses refer to, the best time shift of the truth
-(trajectory_metrics.time_offset), and ms per scan of the odometry alone.
+(trajectory_metrics.time_offset), ms per scan of the odometry alone, and how far the
+estimate strayed while the sensor stood still for the rest (m; * where it was still
+moving at the rest's end: ReplayResult.rest, docs/lio.md "A still sensor").
 
     .venv/bin/python bench/compare_odometries.py [--scenes boxes houses gobi tunnel]
     # one odometry's settings against its defaults, over noisy seeds 0-2:
@@ -104,7 +106,7 @@ def main() -> None:
     columns = [(odometry, label, settings) for odometry in args.odometries for label, settings in variants]
     print(f"{'scene':10s} {'sensor':7s} {'data':10s}" + "".join(
         f" | {odometry + (' ' + label if args.settings else '') + ' APE rmse/max (m)':>34s} {'shift s':>7s}"
-        f" {'ms/scan':>7s}" for odometry, label, _ in columns))
+        f" {'ms/scan':>7s} {'rest m':>7s}" for odometry, label, _ in columns))
     for scene, world, motion in scenarios(args.scenes):
         for sensor in args.sensors:
             runs = [("noise-free", 0, {"noise": 0.0, "imu_noise": False})]
@@ -115,8 +117,9 @@ def main() -> None:
                     result = lf3pm.replay(world, motion, sensor, "lio", seed=seed, odometry=odometry, **noise,
                                           **settings)
                     shift = time_offset(result.times, result.estimate, motion.pose)["offset"]
+                    rest = f"{result.rest['drift_m']:.3f}" + ("" if result.rest["steady"] else "*")
                     row += (f" | {result.ape['rmse']:20.3f} / {result.ape['max']:9.3f} {shift:+7.3f} "
-                            f"{result.seconds_per_scan['estimate'] * 1e3:7.1f}")
+                            f"{result.seconds_per_scan['estimate'] * 1e3:7.1f} {rest:>7s}")
                 print(row, flush=True)
 
 
