@@ -120,3 +120,13 @@ def test_lio_with_dlio_in_json(files):
     run = out["runs"][0]
     assert out["odometry"] == "dlio" and run["versions"]["evalio"] == "0.6.1"
     assert run["ape"]["rmse"] < 0.05 and run["report"]["odometry"] == "DLIO"
+
+
+def test_table_cells_stay_readable_for_failed_runs():
+    from lf3pm.cli.replay import format_figure
+
+    assert format_figure("ape_rmse", 27.4634) == "27463"  # mm; 2.75e+04 would be cut at 80 columns
+    assert format_figure("ape_rmse", 0.0123) == "12.3"
+    assert format_figure("scans_per_second", 13.04) == "13"
+    assert format_figure("skipped_scans", 3) == "3"
+    assert format_figure("ape_aligned_rmse", float("nan")) == "-" and format_figure("ape_rmse", None) == "-"

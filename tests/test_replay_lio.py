@@ -181,3 +181,4 @@ def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(fak
     text = " ".join(done.output.split())
     assert f"seed 0 {1000 * per_scan * scans:.0f} mm" in text
     assert ("entered the trajectory with a velocity error" in text) is not steady
+

@@ -98,7 +98,7 @@ def replay_command(
 def print_series(series) -> None:
     """The figures of each seed and their medians, translations in mm (in metres eleven
     columns of 0.00xxx do not fit 80 characters)."""
-    from lf3pm.replays.replay_result import FIGURES, METRE_FIGURES
+    from lf3pm.replays.replay_result import FIGURES
 
     first = series.results[0]
     odometry = first.report.get("odometry") if first.method == "lio" else None
@@ -110,18 +110,25 @@ def print_series(series) -> None:
     for _, header, _ in FIGURES:
         table.add_column(header, justify="right")
 
-    def show(key, value):
-        if value is None or (isinstance(value, float) and not math.isfinite(value)):
-            return "-"
-        value = value * 1000.0 if key in METRE_FIGURES else value
-        return str(value) if isinstance(value, int) else f"{value:.3g}"
-
     for r in series.results:
-        table.add_row(str(r.seed), *(show(key, get(r)) for key, _, get in FIGURES))
+        table.add_row(str(r.seed), *(format_figure(key, get(r)) for key, _, get in FIGURES))
     if len(series.results) > 1:
-        table.add_row("median", *(show(key, series.median[key]) for key, _, _ in FIGURES))
+        table.add_row("median", *(format_figure(key, series.median[key]) for key, _, _ in FIGURES))
     console.print(table)
     print_rest(series.results)
+
+
+def format_figure(key: str, value) -> str:
+    """One cell of the replay table: metres in mm, three significant digits, whole numbers
+    from 1000 up (a failed run's 27463 mm, not 2.75e+04, which the 80-column table cuts)."""
+    from lf3pm.replays.replay_result import METRE_FIGURES
+
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    value = value * 1000.0 if key in METRE_FIGURES else value
+    if isinstance(value, int):
+        return str(value)
+    return f"{value:.0f}" if abs(value) >= 1000 else f"{value:.3g}"
 
 
 def print_rest(results) -> None:
