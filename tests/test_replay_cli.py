@@ -130,3 +130,13 @@ def test_table_cells_stay_readable_for_failed_runs():
     assert format_figure("scans_per_second", 13.04) == "13"
     assert format_figure("skipped_scans", 3) == "3"
     assert format_figure("ape_aligned_rmse", float("nan")) == "-" and format_figure("ape_rmse", None) == "-"
+
+
+def test_a_seed_that_entered_moving_says_so_in_the_figure_legend():
+    from types import SimpleNamespace
+
+    from lf3pm.replays.replay_figures import seed_label
+
+    run = SimpleNamespace(seed=1, ape={"rmse": 8.172}, rest={"steady": False, "speed_mps": 3.39})
+    assert seed_label(run) == "seed 1: APE rmse 8.17 m (LIO entered moving at 3.39 m/s)"
+    assert seed_label(SimpleNamespace(seed=0, ape={"rmse": 0.026}, rest={})) == "seed 0: APE rmse 0.026 m"

@@ -10,6 +10,15 @@ import numpy as np
 from lf3pm.atomic import atomic_write
 
 
+def seed_label(result) -> str:
+    """A seed's legend entry: its APE, and where a LIO entered the trajectory already moving
+    (an unsteady rest: ReplayResult.rest), that speed, as the CLI warns."""
+    label = f"seed {result.seed}: APE rmse {result.ape['rmse']:.3g} m"
+    if result.rest and not result.rest["steady"]:
+        label += f" (LIO entered moving at {result.rest['speed_mps']:.2f} m/s)"
+    return label
+
+
 def replay_figure(results: list, path, *, map_points: np.ndarray | None = None, title: str | None = None) -> None:
     """Writes a PNG of ``results`` (ReplayResults of one trajectory, one per seed):
     left, |t(estimate) - t(truth)| against time per seed, degenerate scans
@@ -26,8 +35,7 @@ def replay_figure(results: list, path, *, map_points: np.ndarray | None = None, 
     colours = plt.cm.tab10(np.arange(len(results)) % 10)
     for r, colour in zip(results, colours):
         t = r.times - r.times[0]
-        left.plot(t, r.errors, "-", color=colour, lw=1.2,
-                  label=f"seed {r.seed}: APE rmse {r.ape['rmse']:.3g} m")
+        left.plot(t, r.errors, "-", color=colour, lw=1.2, label=seed_label(r))
         bad = r.degenerate
         if bad.any():
             left.plot(t[bad], r.errors[bad], ".", color=colour, ms=5)
