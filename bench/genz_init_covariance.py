@@ -103,6 +103,8 @@ def run(folder: Path) -> None:
     for path in sorted(glob.glob(str(folder / "*.pkl"))):
         with open(path, "rb") as fp:
             stream = pickle.load(fp)
+        # As replays/_lio_worker.GenZ configures it, written out: this step runs in a venv
+        # that has a rebuilt genz_lio and no lf3pm.
         config = genz_lio.Config()
         config.max_threads = 1
         config.preprocess.lidar_type = genz_lio.LidarType.LIVOX

@@ -85,11 +85,11 @@ def rests(maps, poses: int, seeds: int) -> None:
 
 def identical(scans_fed: int = 8) -> None:
     """GenZ-LIO on one noise-free scan of a still Mid-70, repeated, in the boxes room."""
-    import genz_lio
     from scipy.spatial.transform import Rotation
 
+    from lf3pm.replays._lio_worker import GenZ
     from lf3pm.replays.imu import simulate_imu
-    from lf3pm.replays.lio import _imu_rows
+    from lf3pm.replays.lio import _imu_rows, _settings
     from lf3pm.replays.motion import RestFirst
     from lf3pm.scan.scans import ScanStream
     from lf3pm.sensors import get_sensor
@@ -101,14 +101,10 @@ def identical(scans_fed: int = 8) -> None:
     for pose in random_free_poses(world, 4, np.random.default_rng(7), sensor_height=1.0, region=region):
         motion = RestFirst(still(world, pose), 2.0)
         scans = ScanStream(world, motion, sensor, seed=0, noise=0.0, threads=1)
-        t, rows = _imu_rows(simulate_imu(motion, seed=0, noise=False))
-        config = genz_lio.Config()
-        config.max_threads = 1
-        config.preprocess.lidar_type = genz_lio.LidarType.LIVOX
-        config.preprocess.blind_min, config.preprocess.blind_max = sensor.min_range, sensor.max_range
-        config.preprocess.point_filter_num = 1
-        config.hybrid_metric.enable = False  # lf3pm's setting (replays/lio.py default_settings)
-        odometry = genz_lio.GenZLIO(config)
+        imu = simulate_imu(motion, seed=0, noise=False)
+        t, rows = _imu_rows(imu)
+        # Configured as the replay's worker configures it, lf3pm's settings included.
+        odometry = GenZ((sensor.min_range, sensor.max_range), 1, _settings("genz", sensor, imu, {})).odometry
         scan, before, moves, sigma = scans[0], 0, [], math.nan
         for k in range(scans_fed):
             end = float(scans.times[k])

@@ -49,28 +49,25 @@ def run_replays(tasks: list, workers: int, step) -> None:
     """Runs the tasks whose JSON is missing, ``workers`` at a time, calling
     step(label, total, advance=1, restart=False) as they end. A LIO replay saved
     before replays recorded their rest gets it added (rest_task)."""
-    todo = [t for t in tasks if not t[-1].exists() or _lacks_rest(t)]
+    todo = [(replay_task, t) for t in tasks if not t[-1].exists()]
+    todo += [(rest_task, t) for t in tasks if t[2] == "lio" and t[-1].exists() and "rest" not in load_replay(t[-1])]
     label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
     step(label, len(todo), 0, restart=True)
     if not todo:
         return
     if workers == 1:
-        for task in todo:
-            _run_task(task)
+        for job in todo:
+            _run(job)
             step(label, len(todo))
         return
     with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
-        for _ in pool.map(_run_task, todo):
+        for _ in pool.map(_run, todo):
             step(label, len(todo))
 
 
-def _lacks_rest(task) -> bool:
-    _, _, method, _, path = task
-    return method == "lio" and path.exists() and "rest" not in load_replay(path)
-
-
-def _run_task(task) -> None:
-    (rest_task if _lacks_rest(task) else replay_task)(task)
+def _run(job) -> None:
+    function, task = job
+    function(task)
 
 
 def load_replay(path) -> dict:
@@ -81,13 +78,12 @@ def load_replay(path) -> dict:
 def replay_summary(runs: list) -> dict:
     """One plan's replays (load_replay records, one per seed): the median APE rmse over
     seeds, each seed's, and the median share of degenerate scans; for LIO replays
-    whether each seed's rest was steady (replay_result.rest_motion) and its speed."""
+    whether each seed's rest was steady (replay_result.rest_motion)."""
     apes = [r["ape_rmse"] for r in runs]
     out = {"ape": float(np.median(apes)), "ape_per_seed": apes,
            "degenerate_share": float(np.median([r["degenerate_share"] for r in runs]))}
     if all("rest" in r for r in runs):  # the LIO's: was the odometry still while the sensor was?
         out["rest_steady_per_seed"] = [bool(r["rest"]["steady"]) for r in runs]
-        out["rest_speed_per_seed"] = [r["rest"]["speed_mps"] for r in runs]
     return out
 
 

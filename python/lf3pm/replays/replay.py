@@ -19,16 +19,14 @@ import math
 import os
 import time
 
-import numpy as np
-
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
                                            MIN_POINTS, SCAN_VOXEL, WheelOdometry, localization_params, localize)
 from lf3pm.validation.mde import RegistrationTarget
 from lf3pm.replays.motion import Motion, RestFirst
 from lf3pm.replays.odometry import kiss_icp_params, run_kiss_icp
-from lf3pm.replays.replay_result import (Estimate, ReplayResult, ReplaySeries, library_versions, median_figures,
-                                        rest_motion)
+from lf3pm.replays.replay_result import (Estimate, ReplayResult, ReplaySeries, estimate_times, library_versions,
+                                        median_figures, rest_motion)
 from lf3pm.scan.scans import ScanStream
 from lf3pm.map import Map, as_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
@@ -202,8 +200,8 @@ def replay_rest(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.s
     _, sensor, motion, scans, first = _stream(map, motion_or_csv, sensor, "lio", seed, rate, height, noise,
                                               threads, params, rest_only=True)
     run, _, _ = _lio(scans, motion, sensor, seed, params)
-    times = scans.times if run.times is None else np.asarray(run.times, float)  # DLIO's: mid-scan
-    return rest_motion(times[: first + 1], motion.pose(times[: first + 1]), run.poses[: first + 1])
+    times, truth = estimate_times(run, scans)
+    return rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1])
 
 
 def _stream(map, motion_or_csv, sensor, method, seed, rate, height, noise, threads, params, rest_only=False):

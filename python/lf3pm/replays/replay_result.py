@@ -106,10 +106,7 @@ class ReplayResult:
         still is not the trajectory's, but is reported: ``rest``)."""
         count, keep = len(scans), slice(first, None)
         directions = run.degenerate_directions
-        times, truth = scans.times, scans.truth
-        if run.times is not None and not np.array_equal(run.times, times):
-            times = np.asarray(run.times, float)
-            truth = scans.motion.pose(times)
+        times, truth = estimate_times(run, scans)
         estimate = run.poses[keep]
         rest = {}
         if first:
@@ -163,6 +160,16 @@ class ReplayResult:
         inverse = lambda x: 1.0 / x if x > 0 else math.inf
         return {"simulate": inverse(s["simulate"]), "estimate": inverse(s["estimate"]),
                 "total": inverse(s["simulate"] + s["estimate"])}
+
+
+def estimate_times(run: Estimate, scans) -> tuple[np.ndarray, np.ndarray]:
+    """The times ``run``'s poses refer to on the ScanStream ``scans`` (the scans' ends,
+    unless the estimator gives its own: DLIO's median return times) and the true poses
+    there."""
+    if run.times is None or np.array_equal(run.times, scans.times):
+        return scans.times, scans.truth
+    times = np.asarray(run.times, float)
+    return times, scans.motion.pose(times)
 
 
 #: Over the last REST_WINDOW s of a rest, an estimate moving faster than REST_SPEED_LIMIT
