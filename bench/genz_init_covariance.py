@@ -1,161 +1,125 @@
 """GenZ-LIO's initial covariance and a still Mid-70 (docs/lio.md, "A still sensor"):
-the experiment that isolated why its estimate slides while the sensor stands still.
+the experiment that isolated why its estimate slid while the sensor stood still, and
+the check of lf3pm's fix, both covariances in one run.
 
-GenZ-LIO sets FAST-LIO2's initial covariance (identity for position, rotation and
-velocity: 1 m, 1 rad, 1 m/s) and seeds its map from the first scan at that
-covariance. The python binding cannot change it, so the experiment rebuilds GenZ-LIO
-0.1.1 from its sdist with one change, an environment variable that overrides those
-nine diagonal entries, and runs both builds on the very same streams.
+GenZ-LIO starts at FAST-LIO2's initial covariance (variance 1 for position, rotation
+and velocity: 1 m, 1 rad, 1 m/s) and seeds its voxel map from the first scan at that
+covariance. lf3pm's build of it (third_party/genz_lio, installed by ``make build``)
+lets the GenZ-LIO setting ``initial_covariance.pose_variance`` change it; lf3pm's
+default is lio.GENZ_INIT_POSE_VARIANCE (1e-4). Unset (1), the build reproduces PyPI's
+wheel to the millimetre (gobi pair 5's guided plan, seeds 0 and 1: 8.172 and
+27.463 m with either).
 
-1. ``dump`` (in lf3pm's venv) writes the streams the replay would feed GenZ-LIO --
-   scans, per-point stamps, IMU rows, truth and lf3pm's GenZ-LIO settings -- for the
-   benefit study's starts on one map (``--map``, default gobi; the sensor still for the
-   rest and 1 s: noise-free, noisy seeds 0 and 1) and for the plans named with --plans
-   (the whole replay).
-   It needs the study's trajectories (``lf3pm experiment benefit -o out/benefit3``).
-2. ``run`` (in any venv with a genz_lio module) replays them: per stream the APE after
-   the rest (re-anchored there, as the replay scores it) and the largest drift during
-   the rest; per group of still streams the median and largest drift and the number
-   of rests still moving (> 0.05 m/s) at their end.
+On one benefit-study map (``--map``, default gobi), with each variance:
 
-The patched build (GPL-2.0 code, built locally, not part of lf3pm)::
+1. each pair's start, the sensor still for the replay's rest (lf3pm.replay_rest:
+   the LIO on the rest alone, as every replay starts), noise-free and noisy (seeds 0
+   and 1): per group the median and largest drift of the estimate from the still
+   truth and how many rests ended moving (unsteady, > REST_SPEED_LIMIT); and per
+   start its q_n (the view's predicted weakness), to see where the slides remain;
+2. the plans named with ``--plans`` (NAME:SEED), the whole replay: APE, the rest, and the
+   error every 5 s.
 
-    pip download --no-deps --no-binary :all: genz-lio==0.1.1 && tar xzf genz_lio-0.1.1.tar.gz
-    # cpp/genz_lio/core/ImuProcessor.cpp, after the init_P(21, 21) line:
-    #   { const char *e = std::getenv("GENZ_INIT_POSE_VAR");
-    #     if (e) for (int i : {0, 1, 2, 3, 4, 5, 12, 13, 14}) init_P(i, i) = std::atof(e); }
-    python3 -m venv /tmp/gvenv && /tmp/gvenv/bin/pip install "scikit-build-core>=0.11,<0.12" \\
-        "pybind11>=2.13,<3" cmeel-eigen cmeel-boost numpy pyyaml typer rich
-    P=/tmp/gvenv/lib/python3.11/site-packages; CMAKE_PREFIX_PATH=$P/cmeel.prefix:$P/pybind11/share/cmake \\
-        CXXFLAGS=-I$P/cmeel.prefix/include /tmp/gvenv/bin/pip install --no-build-isolation --no-deps genz_lio-0.1.1
+``--variances`` replaces the two. ``--plans-only`` skips part 1; ``--map-file`` and
+``--trajectories`` take the plans from another folder (a gobi experiment's). It needs the
+study's trajectories (``lf3pm experiment benefit -o out/benefit3``)::
 
-    .venv/bin/python bench/genz_init_covariance.py dump /tmp/streams
-    .venv/bin/python bench/genz_init_covariance.py dump /tmp/orientation --map orientation --plans
-    .venv/bin/python bench/genz_init_covariance.py run /tmp/streams                 # GenZ-LIO from PyPI
-    GENZ_INIT_POSE_VAR=1e-4 /tmp/gvenv/bin/python bench/genz_init_covariance.py run /tmp/streams
+    .venv/bin/python bench/genz_init_covariance.py
+    .venv/bin/python bench/genz_init_covariance.py --map orientation --plans 00_omni_default:0
+    .venv/bin/python bench/genz_init_covariance.py --plans-only --map-file out/gobi_full/map.npy \
+        --trajectories out/gobi_full/trajectories --plans none:1 --variances 1 0.1 0.01 1e-3 1e-4
 """
 
 from __future__ import annotations
 
 import argparse
-import glob
-import os
-import pickle
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import spearmanr
 
-#: The replay's rest (replays/replay.py LIO_REST) at 10 scans per second: the scan the
-#: trajectory starts at.
-REST_SCANS = 20
-#: A rest whose estimate still moves faster than this (m/s) at its end is unsteady
-#: (replays/replay_result.py REST_SPEED_LIMIT).
-SPEED_LIMIT = 0.05
+import lf3pm
+from lf3pm.experiments.benefit import CASES
+from lf3pm.experiments.map_cases import load_case_map
+from lf3pm.replays.lio import GENZ_INIT_POSE_VARIANCE
+from lf3pm.replays.motion import Motion
+from lf3pm.replays.replay import replay_rest
+
+#: GenZ-LIO's own initial variance, then lf3pm's.
+VARIANCES = (1.0, GENZ_INIT_POSE_VARIANCE)
 #: The default plans: gobi pair 5's guided plan on the two seeds GenZ-LIO ran away on
-#: (8.2 and 27 m), its unguided plan, and pair 0's guided and unguided omni plans.
+#: (8.2 and 27 m at its own covariance), its unguided plan, and pair 0's guided and
+#: unguided omni plans.
 PLANS = ("05_diff_default:0", "05_diff_default:1", "05_diff_none:0", "00_omni_default:2", "00_omni_none:2")
+#: (label, seed, noise-free) of the still rests at each start.
+RESTS = (("noise-free", 0, True), ("noisy", 0, False), ("noisy", 1, False))
 
 
-def dump(out: Path, study: Path, plans, map_name: str) -> None:
-    from lf3pm.experiments.benefit import CASES
-    from lf3pm.experiments.map_cases import load_case_map
-    from lf3pm.replays.imu import simulate_imu
-    from lf3pm.replays.lio import _imu_rows, _settings
-    from lf3pm.replays.motion import Motion, RestFirst
-    from lf3pm.scan.scans import ScanStream
-    from lf3pm.sensors import get_sensor
-
-    case = next(c for c in CASES if c.name == map_name)
-    world, _ = load_case_map(case)
-    sensor = get_sensor(case.sensor)
-    folder = study / "trajectories" / map_name
-    out.mkdir(parents=True, exist_ok=True)
-
-    def save(name, motion, seed, noisy):
-        scans = ScanStream(world, motion, sensor, seed=seed, threads=0, **({} if noisy else {"noise": 0.0}))
-        imu = simulate_imu(motion, seed=seed, noise=noisy)
-        t, rows = _imu_rows(imu)
-        stream = {"scans": [(np.asarray(s.points, np.float64), np.asarray(s.stamps), float(s.end)) for s in scans],
-                  "t": t, "rows": rows, "truth": scans.truth, "range": (sensor.min_range, sensor.max_range),
-                  "settings": _settings("genz", sensor, imu, {})}
-        with open(out / f"{name}.pkl", "wb") as fp:
-            pickle.dump(stream, fp)
-
-    for csv in sorted(folder.glob("*_none.csv")):  # each pair's start, still for the rest and 1 s
-        first = csv.read_text().splitlines()[1].split(",")
-        t = np.array([0.0, 1.0])
-        x, y, yaw = (np.full(2, float(v)) for v in first[1:4])
-        still = RestFirst(Motion.from_arrays(t, x, y, yaw, 0 * t, 0 * t, 0 * t, map=world, height=1.0), 2.0)
-        for seed, noisy in ((0, False), (0, True), (1, True)):
-            save(f"still_{'noisy' if noisy else 'exact'}_{csv.name[:2]}_{seed}", still, seed, noisy)
-    for plan in plans:
-        name, seed = plan.split(":")
-        motion = RestFirst(Motion.from_csv(folder / f"{name}.csv", world, height=1.0), 2.0)
-        save(f"plan_{name}_{seed}", motion, int(seed), True)
-    print(f"wrote {len(list(out.glob('*.pkl')))} streams to {out}")
-
-
-def run(folder: Path) -> None:
-    import genz_lio
-
-    print(f"GenZ-LIO {genz_lio.__version__}, GENZ_INIT_POSE_VAR={os.environ.get('GENZ_INIT_POSE_VAR', 'unset')}")
-    groups: dict = {}
-    for path in sorted(glob.glob(str(folder / "*.pkl"))):
-        with open(path, "rb") as fp:
-            stream = pickle.load(fp)
-        # As replays/_lio_worker.GenZ configures it, written out: this step runs in a venv
-        # that has a rebuilt genz_lio and no lf3pm.
-        config = genz_lio.Config()
-        config.max_threads = 1
-        config.preprocess.lidar_type = genz_lio.LidarType.LIVOX
-        config.preprocess.blind_min, config.preprocess.blind_max = stream["range"]
-        config.preprocess.point_filter_num = 1
-        for section, values in stream["settings"].items():
-            for key, value in values.items():
-                setattr(getattr(config, section), key, value)
-        odometry = genz_lio.GenZLIO(config)
-        t, rows, before, poses = stream["t"], stream["rows"], 0, []
-        for points, stamps, end in stream["scans"]:  # as replays/_lio_worker.py feeds it
-            upto = int(np.searchsorted(t, end, side="right"))
-            odometry.register_scan(np.ascontiguousarray(points), float(stamps[0]), end,
-                                   np.column_stack([t[before:upto], rows[before:upto]]),
-                                   timestamps=stamps - stamps[0])
-            before = upto
-            poses.append(np.array(odometry.lidar_pose))
-        poses, truth, k = np.array(poses), stream["truth"], REST_SCANS
-        whole = truth[0] @ np.linalg.inv(poses[0]) @ poses
-        drift = np.linalg.norm(whole[: k + 1, :3, 3] - truth[: k + 1, :3, 3], axis=1).max()
-        speed = np.linalg.norm(whole[k, :3, 3] - whole[k - 5, :3, 3]) / 0.5
-        name = Path(path).stem
-        if name.startswith("plan_"):
-            after = truth[k] @ np.linalg.inv(poses[k]) @ poses[k:]
-            error = np.linalg.norm(after[:, :3, 3] - truth[k:, :3, 3], axis=1)
-            print(f"{name}: APE rmse {np.sqrt(np.mean(error**2)):.3f} m, max {error.max():.3f} m; "
-                  f"rest drift {drift:.3f} m, {speed:.3f} m/s at its end", flush=True)
-        else:
-            groups.setdefault(name.split("_")[1], []).append((drift, speed))
-    for label, rows in groups.items():
-        drift = np.array([r[0] for r in rows])
-        unsteady = sum(r[1] > SPEED_LIMIT for r in rows)
-        print(f"still, {'noise-free' if label == 'exact' else 'noisy'}: {len(rows)} rests, drift median "
-              f"{np.median(drift):.3f} m, max {drift.max():.3f} m, {unsteady} unsteady")
+def still_starts(world, folder: Path):
+    """Per pair (its number, a still Motion at its unguided plan's first pose)."""
+    for csv in sorted(folder.glob("*_none.csv")):
+        x, y, yaw = (float(v) for v in csv.read_text().splitlines()[1].split(",")[1:4])
+        t = np.array([0.0, 0.5])
+        yield csv.name[:2], Motion.from_arrays(t, np.full(2, x), np.full(2, y), np.full(2, yaw), 0 * t, 0 * t,
+                                               0 * t, map=world, height=1.0)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    sub = parser.add_subparsers(dest="step", required=True)
-    d = sub.add_parser("dump", help="write the streams (lf3pm's venv)")
-    d.add_argument("out", type=Path)
-    d.add_argument("--study", type=Path, default=Path("out/benefit3"))
-    d.add_argument("--map", default="gobi", help="a benefit-study map with the Mid-70 (gobi, orientation, ...)")
-    d.add_argument("--plans", nargs="*", default=list(PLANS), help="NAME:SEED of the study's plans on that map")
-    r = sub.add_parser("run", help="replay them through the genz_lio importable here")
-    r.add_argument("folder", type=Path)
+    parser.add_argument("--study", type=Path, default=Path("out/benefit3"))
+    parser.add_argument("--map", default="gobi", help="a benefit-study map with the Mid-70 (gobi, orientation, ...)")
+    parser.add_argument("--plans", nargs="*", default=list(PLANS), help="NAME:SEED of the study's plans on that map")
+    parser.add_argument("--variances", nargs="+", type=float, default=list(VARIANCES))
+    parser.add_argument("--plans-only", action="store_true", help="skip the still starts")
+    parser.add_argument("--map-file", type=Path, help="the plans' map, instead of the study's --map")
+    parser.add_argument("--trajectories", type=Path, help="the plans' folder, instead of the study's")
     args = parser.parse_args()
-    if args.step == "dump":
-        dump(args.out, args.study, args.plans, args.map)
-    else:
-        run(args.folder)
+    case = next((c for c in CASES if c.name == args.map), None)
+    if case is None:
+        raise SystemExit(f"unknown map {args.map!r}; the study's: {', '.join(c.name for c in CASES)}")
+    folder = args.trajectories or args.study / "trajectories" / args.map
+    if not folder.is_dir():
+        raise SystemExit(f"no trajectories in {folder}: run lf3pm experiment benefit -o {args.study} first")
+    world = lf3pm.load_map(args.map_file) if args.map_file else load_case_map(case)[0]
+    if not args.plans_only:
+        still_rests(world, case.sensor, folder, args.map, args.variances)
+    replay_plans(world, case.sensor, folder, args.plans, args.variances)
+
+
+def still_rests(world, sensor, folder: Path, map_name: str, variances) -> None:
+    """Part 1: the still starts at each variance."""
+    starts = list(still_starts(world, folder))
+    q_n = np.array([lf3pm.evaluate(world, m.pose(0.0)[0], sensor).q_n for _, m in starts])
+
+    print(f"{map_name}, {sensor}: {len(starts)} starts held still for the replay's rest\n")
+    print("| initial variance | rests | drift median / max (m) | unsteady | Spearman(q_n, drift) |")
+    print("|---|---|---|---|---|")
+    for variance in variances:
+        setting = {"initial_covariance": {"pose_variance": variance}}
+        for label in ("noise-free", "noisy"):
+            rests = [(k, replay_rest(world, motion, sensor, seed, threads=1,
+                                     **({"noise": 0.0, "imu_noise": False} if exact else {}), **setting))
+                     for k, (_, motion) in enumerate(starts) for name, seed, exact in RESTS if name == label]
+            drift = np.array([r["drift_m"] for _, r in rests])
+            rho = spearmanr(q_n[[k for k, _ in rests]], drift).statistic
+            print(f"| {variance:g} | {label} {len(rests)} | {np.median(drift):.3f} / {drift.max():.3f} | "
+                  f"{sum(not r['steady'] for _, r in rests)} | {rho:.2f} |", flush=True)
+
+
+
+def replay_plans(world, sensor, folder: Path, plans, variances) -> None:
+    """Part 2: the whole replay of each plan at each variance."""
+    print("\n| plan:seed | initial variance | APE rmse (m) | rest drift (m) | rest speed (m/s) | error every 5 s (m) |")
+    print("|---|---|---|---|---|---|")
+    for plan in plans:
+        name, seed = plan.split(":")
+        for variance in variances:
+            result = lf3pm.replay(world, folder / f"{name}.csv", sensor, "lio", int(seed), threads=1,
+                                  initial_covariance={"pose_variance": variance})
+            error = np.linalg.norm(result.estimate[:, :3, 3] - result.truth[:, :3, 3], axis=1)
+            every = int(round(5 * result.params["rate"]))
+            print(f"| {plan} | {variance:g} | {result.ape['rmse']:.3f} | {result.rest['drift_m']:.3f} | "
+                  f"{result.rest['speed_mps']:.3f} | {' '.join(f'{e:.2f}' for e in error[::every])} |", flush=True)
 
 
 if __name__ == "__main__":

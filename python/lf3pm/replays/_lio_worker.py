@@ -9,6 +9,7 @@ on REPLY_FD ("ready", version) or ("error", message), then per scan
 ("pose", pose, time, status, seconds): the pose and the time it refers to.
 """
 
+import os
 import pickle
 import sys
 import time
@@ -32,6 +33,9 @@ class GenZ:
         config.preprocess.blind_min, config.preprocess.blind_max = sensor_range
         config.preprocess.point_filter_num = 1
         for section, values in settings.items():
+            if section == "initial_covariance":
+                self._initial_covariance(dict(values))
+                continue
             if section not in _GENZ_SECTIONS:
                 raise ValueError(f"unknown GenZ-LIO parameter section {section!r}; known: "
                                  f"{', '.join(_GENZ_SECTIONS)}")
@@ -41,6 +45,19 @@ class GenZ:
                     raise ValueError(f"unknown GenZ-LIO parameter {section}.{name}")
                 setattr(target, name, value)
         self.odometry = genz_lio.GenZLIO(config)
+
+    @staticmethod
+    def _initial_covariance(values):
+        """lf3pm's build of GenZ-LIO (third_party/genz_lio) reads the variance of position,
+        rotation and velocity at its start from the environment when it initialises."""
+        unknown = sorted(set(values) - {"pose_variance"})
+        if unknown:
+            raise ValueError(f"unknown GenZ-LIO parameter(s) initial_covariance.{', '.join(unknown)}; "
+                             "known: pose_variance")
+        variance = float(values.get("pose_variance", 1.0))
+        if not variance > 0:
+            raise ValueError(f"initial_covariance.pose_variance must be > 0, got {variance}")
+        os.environ["GENZ_LIO_INIT_POSE_VARIANCE"] = repr(variance)
 
     def scan(self, points, begin, end, offsets, imu):
         if len(imu) == 0:

@@ -4,7 +4,9 @@ each fed exactly the same scans and IMU samples (docs/lio.md compares them):
 - ``genz`` (default): GenZ-LIO (PyPI ``genz-lio``, pinned 0.1.1, GPL-2.0-only), a
   FAST-LIO2-style iterated error-state Kalman filter on a voxel map, run with
   point-to-plane updates only (its point-to-point ones made the estimate lag;
-  default_settings), the paper's FAST-LIO2 setting;
+  default_settings), the paper's FAST-LIO2 setting. ``make build`` replaces PyPI's
+  wheel by lf3pm's build of its sdist (third_party/genz_lio, 0.1.1+lf3pm.1), whose
+  one change lets the initial covariance be set (default_settings);
 - ``dlio``: DLIO (Direct LiDAR-Inertial Odometry, UCLA VECTR, MIT) as evalio
   (PyPI ``evalio``, pinned 0.6.1, MIT) compiles it: GICP scan-to-map registration
   with a nonlinear geometric observer, deskewing by IMU integration.
@@ -89,6 +91,7 @@ import pickle
 import subprocess
 import sys
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -135,6 +138,19 @@ _WORKER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_lio_worker.
 #: 0.59 m). GenZ-LIO's defaults (made for real IMUs) did as well in the gobi but
 #: left the IMU timing a flat optimum in the boxes room (docs/lio.md).
 NOISE_INFLATION = 100.0
+#: GenZ-LIO's variance of position, rotation and velocity at its start (m^2, rad^2,
+#: (m/s)^2) in lf3pm's build of it (third_party/genz_lio). GenZ-LIO's own, FAST-LIO2's
+#: 1 (1 m, 1 rad, 1 m/s), seeds its voxel map's planes at that uncertainty: their
+#: 3-sigma gates then take wrong matches and a still Mid-70's estimate slides 9-53 cm
+#: (median; up to 6 m) and carries that velocity into the trajectory (docs/lio.md,
+#: "A still sensor"). The odometry's frame is its first pose, which the replay anchors
+#: at the truth, so that pose is known; what is not is the tilt from gravity, which the
+#: IMU's 20 still samples fix to about a milliradian, and the velocity of a sensor held
+#: still: 1e-4 (1 cm, 0.01 rad, 0.01 m/s) bounds both. Chosen by that argument, not tuned.
+GENZ_INIT_POSE_VARIANCE = 1e-4
+#: The version lf3pm's build of GenZ-LIO reports; PyPI's wheel (GenZ-LIO's initial
+#: covariance) reports ODOMETRIES["genz"].version and runs with a warning.
+GENZ_LF3PM_BUILD = "0.1.1+lf3pm.1"
 #: Scan statuses that mean the odometry used the scan.
 TRACKING = ("ok", "map seeded")
 
@@ -218,20 +234,29 @@ def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = D
         finally:
             os.close(reply_write)
         with os.fdopen(reply_read, "rb") as replies:
-            times, poses, status, seconds = _drive(child, replies, log, scans, ends, t, rows, bounds, sensor,
-                                                   threads, odometry, settings)
+            times, poses, status, seconds, version = _drive(child, replies, log, scans, ends, t, rows, bounds,
+                                                            sensor, threads, odometry, settings)
         log.seek(0)
         messages += [line for line in log.read().decode(errors="replace").splitlines() if line.strip()]
 
     estimate = origin @ np.linalg.inv(poses[0]) @ poses
     lost = [k for k, s in enumerate(status) if s not in TRACKING + ("initializing",)]
     spec = ODOMETRIES[odometry]
-    used = {"threads": threads, "blind_min": sensor.min_range, "blind_max": sensor.max_range,
-            **({"lidar_type": "livox", "overrides": settings} if odometry == "genz" else {"settings": settings})}
+    used = {"threads": threads, "blind_min": sensor.min_range, "blind_max": sensor.max_range}
+    if odometry == "genz":
+        if version != GENZ_LF3PM_BUILD:  # PyPI's build ignores the initial covariance it is given
+            settings = {**settings, "initial_covariance": {"pose_variance": 1.0}}
+            messages.insert(0, f"lf3pm: genz-lio {version} is not lf3pm's build ({GENZ_LF3PM_BUILD}), so it "
+                               "starts at GenZ-LIO's own initial covariance (1 m, 1 rad): a still narrow-view "
+                               "sensor's estimate slides before it moves (docs/lio.md, 'A still sensor'); "
+                               "`make build` installs lf3pm's (third_party/genz_lio)")
+            warnings.warn(messages[0], stacklevel=2)
+        used |= {"lidar_type": "livox", "overrides": settings}
+    else:
+        used["settings"] = settings
     return LioEstimate(times=times, poses=estimate, status=status, lost=lost,
                        seconds_per_scan=float(np.mean(seconds)), odometry=spec.name, package=spec.package,
-                       version=spec.version,
-                       params=used, messages=messages)
+                       version=version, params=used, messages=messages)
 
 
 def _settings(odometry: str, sensor: Sensor, imu, params: dict) -> dict:
@@ -275,8 +300,10 @@ def default_settings(sensor: Sensor) -> dict:
       plan in the gobi 1.1-9.6 m against 2.6-5.1 cm (0.75 m: still 1.7 m on one of two
       seeds). The price: in the tunnel scene, degenerate along its axis, 11-27 cm
       instead of 3-5 cm (bench/compare_odometries.py --settings, docs/lio.md).
+    - ``initial_covariance.pose_variance`` GENZ_INIT_POSE_VARIANCE instead of
+      GenZ-LIO's 1 (a setting of lf3pm's build of GenZ-LIO only, third_party/genz_lio).
     """
-    return {"hybrid_metric": {"enable": False}}
+    return {"hybrid_metric": {"enable": False}, "initial_covariance": {"pose_variance": GENZ_INIT_POSE_VARIANCE}}
 
 
 def imu_noise_model(imu) -> dict:
@@ -325,7 +352,8 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, o
     try:
         request(("config", odometry, (float(sensor.min_range), float(sensor.max_range)), threads, settings))
         _, version = reply("while starting")
-        if version.split()[0] != spec.version:
+        version = version.split()[0]
+        if version.split("+")[0] != spec.version:
             raise Lf3pmError(f"{spec.package} {version} is installed; lf3pm's conventions are checked for "
                              f"{spec.version}")
         times, poses, status, seconds = np.empty(len(scans)), np.empty((len(scans), 4, 4)), [], []
@@ -341,7 +369,7 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, o
         request(("done",))
         child.stdin.close()
         child.wait()
-        return times, poses, status, seconds
+        return times, poses, status, seconds, version
     finally:
         if child.poll() is None:
             child.kill()

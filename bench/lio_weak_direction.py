@@ -1,0 +1,62 @@
+"""Where along a plan the LIO's error grows, and in which direction, against what the
+metric says of each view (docs/lio.md, "Drift along the view's weakest direction").
+
+For the guided and the unguided plan of one benefit-study pair, one replay seed: per
+second of the plan, the LIO's error vector (estimate - truth, world frame), the
+sensor's yaw, q_n and q_max, and the weakest eigenvalue of the view's information
+matrix A^T A (x, y, z, roll, pitch, yaw; translation first, world frame) with the
+horizontal direction of its eigenvector. It needs the study's trajectories
+(``lf3pm experiment benefit -o out/benefit3``)::
+
+    .venv/bin/python bench/lio_weak_direction.py                     # gobi pair 0, omni, seed 2
+    .venv/bin/python bench/lio_weak_direction.py --map corridor --pair 03_omni --seed 0
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+import lf3pm
+from lf3pm.experiments.benefit import CASES
+from lf3pm.experiments.map_cases import load_case_map
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--study", type=Path, default=Path("out/benefit3"))
+    parser.add_argument("--map", default="gobi")
+    parser.add_argument("--pair", default="00_omni", help="the pair's prefix, e.g. 00_omni or 05_diff")
+    parser.add_argument("--guidance", default="default")
+    parser.add_argument("--seed", type=int, default=2)
+    args = parser.parse_args()
+    case = next((c for c in CASES if c.name == args.map), None)
+    if case is None:
+        raise SystemExit(f"unknown map {args.map!r}; the study's: {', '.join(c.name for c in CASES)}")
+    world, _ = load_case_map(case)
+    for guidance in (args.guidance, "none"):
+        csv = args.study / "trajectories" / args.map / f"{args.pair}_{guidance}.csv"
+        if not csv.is_file():
+            raise SystemExit(f"no plan {csv}: run lf3pm experiment benefit -o {args.study} first")
+        result = lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1)
+        error = result.estimate[:, :3, 3] - result.truth[:, :3, 3]
+        print(f"\n{args.map} {args.pair} {guidance}, seed {args.seed}: LIO APE {result.ape['rmse']:.3f} m\n")
+        print("| t (s) | error x, y, z (m) | sensor yaw (deg) | q_n | q_max | weakest eigenvalue | its direction (deg) |")
+        print("|---|---|---|---|---|---|---|")
+        every = max(1, int(round(result.params["rate"])))
+        for k in range(0, len(result.times), every):
+            pose = result.truth[k]
+            view = lf3pm.evaluate(world, pose, case.sensor, observations=True)
+            a = np.asarray(view.observations["A"])
+            values, vectors = np.linalg.eigh(a.T @ a)
+            weak = vectors[:, 0]
+            print(f"| {result.times[k]:.0f} | {error[k, 0]:+.3f}, {error[k, 1]:+.3f}, {error[k, 2]:+.3f} | "
+                  f"{math.degrees(math.atan2(pose[1, 0], pose[0, 0])):.0f} | {view.q_n:.3f} | {view.q_max:.1f} | "
+                  f"{values[0]:.3g} | {math.degrees(math.atan2(weak[1], weak[0])) % 180:.0f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
