@@ -17,9 +17,10 @@ crashed (docs/lio.md, "Three odometries").
 
 The default, ``auto``, picks by measurement (docs/lio.md, bench/compare_odometries.py):
 DLIO for a spinning sensor (VLP-16: 1-6 mm APE on every structured drive, noise-free
-or noisy, where GenZ-LIO gave 1-18 cm and lagged the truth by up to 0.15 s), GenZ-LIO
-for a non-repetitive one (Mid-70: 0.4-4 cm on structured drives where DLIO lost
-the narrow 0.1 s scans, 0.1-3 m).
+or noisy, where GenZ-LIO gave 1-18 cm and lagged the truth by up to 0.15 s; at lf3pm's
+initial covariance GenZ-LIO gives 0.2-1.8 cm without lag, and DLIO is kept: no worse
+anywhere but the tunnel), GenZ-LIO for a non-repetitive one (Mid-70: 0.6-2.4 cm on
+structured drives where DLIO lost the narrow 0.1 s scans, 0.1-3 m).
 
 Why GenZ-LIO and not RKO-LIO (PyPI ``rko-lio`` 0.4.0, PRBonn; measured with
 GenZ-LIO's own defaults, before default_settings): both ran on the same
