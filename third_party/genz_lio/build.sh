@@ -18,6 +18,7 @@ fi
 if "$PY" -c "import genz_lio, sys; sys.exit(genz_lio.__version__ != '$VERSION')" 2>/dev/null; then
   exit 0
 fi
+command -v patch >/dev/null || { echo "building GenZ-LIO needs patch(1) (Debian: apt-get install patch)" >&2; exit 1; }
 echo "building GenZ-LIO $VERSION (GenZ-LIO 0.1.1 with lf3pm's initial-covariance patch; a few minutes)"
 rm -rf "$WORK" && mkdir -p "$WORK"
 "$PY" -m pip download -q --no-deps --no-binary genz-lio genz-lio==0.1.1 -d "$WORK"
