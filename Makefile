@@ -14,7 +14,7 @@ $(PY):
 # Editable install without build isolation (see shared BUILD-NOTES): the build
 # requirements live in .venv, the C++ core rebuilds on import when sources change.
 # GenZ-LIO is then rebuilt from its sdist with lf3pm's patch (third_party/genz_lio).
-$(STAMP): $(PY) pyproject.toml CMakeLists.txt third_party/genz_lio/init_pose_variance.patch
+$(STAMP): $(PY) pyproject.toml CMakeLists.txt third_party/genz_lio/init_pose_variance.patch third_party/genz_lio/build.sh
 	$(PY) -m pip install -q $(BUILD_DEPS)
 	$(PY) -m pip install -q --no-build-isolation -Ceditable.rebuild=true -e ".[test,lio,cluster]"
 	third_party/genz_lio/build.sh $(PY) build/genz_lio

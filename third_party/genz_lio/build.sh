@@ -1,15 +1,18 @@
 #!/bin/sh
 # Builds GenZ-LIO 0.1.1 from its sdist with lf3pm's patch (init_pose_variance.patch,
 # README.md says why) and installs it into the venv of PYTHON, over PyPI's wheel.
-# Usage: third_party/genz_lio/build.sh PYTHON WORKDIR. Does nothing when that build
-# is already installed (a new patch bumps VERSION). GPL-2.0-only code, built on
+# Usage: third_party/genz_lio/build.sh PYTHON WORKDIR, in a venv that has genz-lio's
+# dependencies (make installs the lio extra first). Does nothing when that build
+# is already installed (a new patch bumps the version it sets). GPL-2.0-only code, built on
 # this machine only.
 set -eu
 PY=$1
 WORK=$(mkdir -p "$2" && cd "$2" && pwd)
-VERSION=0.1.1+lf3pm.1
-SDIST_SHA256=03952763ece184160132a0b55891ea77362c17258cd3c1964da91ebed3df6552
 HERE=$(cd "$(dirname "$0")" && pwd)
+# The version the patch gives the build (lf3pm/replays/lio.py's GENZ_LF3PM_BUILD must match:
+# tests/test_lio.py checks the installed build against it).
+VERSION=$(sed -n 's/^+version = "\(.*\)"$/\1/p' "$HERE/init_pose_variance.patch")
+SDIST_SHA256=03952763ece184160132a0b55891ea77362c17258cd3c1964da91ebed3df6552
 
 if "$PY" -c "import sys; sys.exit(sys.version_info < (3, 13))"; then
   echo "GenZ-LIO needs Python < 3.13: not built (lf3pm's genz odometry says so when asked)"
