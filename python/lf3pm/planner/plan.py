@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.config import DEFAULTS
+from lf3pm.config import COST_CHANNELS, DEFAULTS
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import GraphPath, search_path
@@ -31,9 +31,6 @@ from lf3pm.trajectory.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
 from lf3pm.trajectory.trajectory import CSV_RATE, Trajectory
 from lf3pm.solm.reader import Solm
-
-METRICS = ("q_n", "q_min", "step_norm", "none")
-
 
 
 @dataclass
@@ -75,8 +72,8 @@ class Planner:
 
     def cost_layer(self, metric: str, power: float = DEFAULTS.guidance.power) -> CostLayer:
         """The cost layer of a SOLM channel raised to ``power`` (cost_map.py), computed once."""
-        if metric not in METRICS:
-            raise Lf3pmError(f"metric must be one of {', '.join(METRICS)}, got {metric!r}")
+        if metric not in COST_CHANNELS:
+            raise Lf3pmError(f"metric must be one of {', '.join(COST_CHANNELS)}, got {metric!r}")
         key = (metric, 1.0 if metric == "none" else float(power))
         if key not in self._layers:
             self._layers[key] = cost_from_solm(self.solm, metric, power=power)
