@@ -10,6 +10,7 @@ horizontal direction of its eigenvector. It needs the study's trajectories
 
     .venv/bin/python bench/lio_weak_direction.py                     # gobi pair 0, omni, seed 2
     .venv/bin/python bench/lio_weak_direction.py --map corridor --pair 03_omni --seed 0
+    .venv/bin/python bench/lio_weak_direction.py --odometry dlio --seed 0   # the same streams, DLIO
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import lf3pm
+from lf3pm.errors import PoseError
 from lf3pm.experiments.benefit import CASES
 from lf3pm.experiments.map_cases import load_case_map
 
@@ -32,6 +34,7 @@ def main() -> None:
     parser.add_argument("--pair", default="00_omni", help="the pair's prefix, e.g. 00_omni or 05_diff")
     parser.add_argument("--guidance", default="default")
     parser.add_argument("--seed", type=int, default=2)
+    parser.add_argument("--odometry", default="auto", help="genz, dlio or auto (lf3pm replay's --odometry)")
     args = parser.parse_args()
     case = next((c for c in CASES if c.name == args.map), None)
     if case is None:
@@ -41,21 +44,27 @@ def main() -> None:
         csv = args.study / "trajectories" / args.map / f"{args.pair}_{guidance}.csv"
         if not csv.is_file():
             raise SystemExit(f"no plan {csv}: run lf3pm experiment benefit -o {args.study} first")
-        result = lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1)
+        result = lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1, odometry=args.odometry)
         error = result.estimate[:, :3, 3] - result.truth[:, :3, 3]
-        print(f"\n{args.map} {args.pair} {guidance}, seed {args.seed}: LIO APE {result.ape['rmse']:.3f} m\n")
+        print(f"\n{args.map} {args.pair} {guidance}, seed {args.seed}, odometry {args.odometry}: "
+              f"LIO APE {result.ape['rmse']:.3f} m\n")
         print("| t (s) | error x, y, z (m) | sensor yaw (deg) | q_n | q_max | weakest eigenvalue | its direction (deg) |")
         print("|---|---|---|---|---|---|---|")
         every = max(1, int(round(result.params["rate"])))
         for k in range(0, len(result.times), every):
             pose = result.truth[k]
-            view = lf3pm.evaluate(world, pose, case.sensor, observations=True)
+            row = (f"| {result.times[k]:.0f} | {error[k, 0]:+.3f}, {error[k, 1]:+.3f}, {error[k, 2]:+.3f} | "
+                   f"{math.degrees(math.atan2(pose[1, 0], pose[0, 0])):.0f} |")
+            try:
+                view = lf3pm.evaluate(world, pose, case.sensor, observations=True)
+            except PoseError:  # the sensor within clearance of a map point (a bush beside the route)
+                print(f"{row} too close to the map | | | |", flush=True)
+                continue
             a = np.asarray(view.observations["A"])
             values, vectors = np.linalg.eigh(a.T @ a)
             weak = vectors[:, 0]
-            print(f"| {result.times[k]:.0f} | {error[k, 0]:+.3f}, {error[k, 1]:+.3f}, {error[k, 2]:+.3f} | "
-                  f"{math.degrees(math.atan2(pose[1, 0], pose[0, 0])):.0f} | {view.q_n:.3f} | {view.q_max:.1f} | "
-                  f"{values[0]:.3g} | {math.degrees(math.atan2(weak[1], weak[0])) % 180:.0f} |", flush=True)
+            print(f"{row} {view.q_n:.3f} | {view.q_max:.1f} | {values[0]:.3g} | "
+                  f"{math.degrees(math.atan2(weak[1], weak[0])) % 180:.0f} |", flush=True)
 
 
 if __name__ == "__main__":

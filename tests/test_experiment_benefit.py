@@ -58,7 +58,8 @@ def test_bad_comparisons_and_guidance_are_one_line_errors():
     with pytest.raises(Lf3pmError, match="equal-length"):
         compare([1.0], [1.0, 2.0])
     assert parse_guidance("cube=q_min:3:2").power == 3.0
-    for text in ("cube", "x=q_x:1:1", "x=q_n:0:1", "x=q_n:1:-1", "x=q_n:a:1"):
+    assert parse_guidance("weak=q_max:1:3").channel == "q_max"
+    for text in ("cube", "x=q_x:1:1", "x=none:1:1", "x=q_n:0:1", "x=q_n:1:-1", "x=q_n:a:1"):
         with pytest.raises(Lf3pmError):
             parse_guidance(text)
 
@@ -153,3 +154,26 @@ def test_a_lio_replay_saved_without_its_rest_gets_it_added(tmp_path, monkeypatch
     assert calls == [(("map", "plan.csv", QUICK[1].sensor, 1), {"threads": 1})]
     replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)  # nothing left to do
     assert len(calls) == 1
+
+
+def test_localization_error_fit_counts_its_own_phase(tmp_path):
+    """The fit's progress is a phase of its own (restarted at zero, one step per plan),
+    not a continuation of the replays' count; saved predictors are read, not recomputed."""
+    from types import SimpleNamespace
+
+    from lf3pm.experiments.localization_error import localization_error_fit
+
+    case = SimpleNamespace(name="m", sensor="vlp16")
+    records = [{"case": "m", "pair": k, "plans": {g: {"csv": "unused.csv", "localization": {"ape": 0.01}}
+                                                  for g in ("none", "default")}} for k in range(2)]
+    for pair in records:
+        for name in pair["plans"]:
+            path = tmp_path / "predictors" / "m" / f"{pair['pair']:02d}_{name}.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps({"q_n_mean": 0.1, "degenerate_share": 0.0, "poses": 10}))
+    calls = []
+    localization_error_fit(tmp_path, [case], records, seeds=1, pair_seed=0,
+                           step=lambda label, total, advance=1, restart=False: calls.append((total, advance, restart)))
+    assert calls[0] == (4, 0, True)
+    assert sum(advance for _, advance, _ in calls) == 4 and not any(restart for *_, restart in calls[1:])
+    assert (tmp_path / "localization_error.json").is_file()

@@ -67,6 +67,23 @@ def test_the_turn_price_decides_whether_turning_round_pays(planner):
     assert backwards_share(planner.plan(*ends, robot=robot, metric="q_n", weight=1.0).trajectory.sample(100.0)) > 0.7
 
 
+class WeakDirectionSolm(FieldSolm):
+    """The field with its yaw dependence in q_max only (the weakest direction): q_n,
+    q_min and step_norm are the same at every yaw."""
+
+    def channel(self, name):
+        if name == "q_max":
+            return self._q
+        return np.ones_like(self._q) if name in ("q_n", "q_min", "step_norm") else np.zeros_like(self._q)
+
+
+def test_q_max_guidance_reads_its_own_channel():
+    planner, ends = Planner(WeakDirectionSolm()), ((2.0, 6.0, 0.0), (36.0, 6.0, 0.0))
+    robot = Robot("omni", r_safe=0.05)
+    assert backwards_share(planner.plan(*ends, robot=robot, metric="q_max", weight=1.0).trajectory.sample(100.0)) > 0.7
+    assert backwards_share(planner.plan(*ends, robot=robot, metric="q_n", weight=1.0).trajectory.sample(100.0)) < 0.05
+
+
 def test_yaw_aware_shortcut_keeps_the_turns_and_never_costs_more():
     solm = FieldSolm()
     cost = GridField(solm.channel("q_n") / 3.0, 0.0, 0.0, RES)

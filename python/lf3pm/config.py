@@ -49,7 +49,7 @@ LIO_ODOMETRIES = ("auto", "genz", "dlio")
 
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
-COST_CHANNELS = ("q_n", "q_min", "step_norm", "none")
+COST_CHANNELS = ("q_n", "q_min", "q_max", "step_norm", "none")
 #: The smallest speed, yaw rate or acceleration limit a robot takes (m/s, rad/s, m/s^2,
 #: rad/s^2): slower is no robot, and a 10 m plan at 1e-9 m/s would be 300 years of 100 Hz samples.
 MIN_LIMIT = 1e-3

@@ -29,7 +29,8 @@ def parse_guidance(text: str) -> Guidance:
     except ValueError:
         raise Lf3pmError(f"guidance {text!r}: expected NAME=CHANNEL:POWER:WEIGHT, e.g. cube=q_n:3:1") from None
     if not g.name or g.channel not in COST_CHANNELS or g.channel == "none":
-        raise Lf3pmError(f"guidance {text!r}: channel must be one of q_n, q_min, step_norm")
+        guided = ", ".join(c for c in COST_CHANNELS if c != "none")
+        raise Lf3pmError(f"guidance {text!r}: channel must be one of {guided}")
     if not (math.isfinite(g.power) and 0 < g.power <= 10 and math.isfinite(g.weight) and g.weight >= 0):
         raise Lf3pmError(f"guidance {text!r}: power must be in (0, 10] and weight finite and >= 0")
     return g

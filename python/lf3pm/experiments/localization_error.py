@@ -58,7 +58,9 @@ def localization_error_fit(out: Path, cases, records: list, *, seeds: int, pair_
     maps, q_n, ape, sensors, worlds = [], [], [], set(), {}
     plans = [(pair, name, plan) for pair in records for name, plan in pair["plans"].items()
              if "localization" in plan]
-    for number, (pair, name, plan) in enumerate(plans):
+    if step is not None:
+        step("q_n along the plans (localization-error fit)", len(plans), 0, restart=True)
+    for pair, name, plan in plans:
         case = by_name[pair["case"]]
         path = Path(out) / "predictors" / case.name / f"{pair['pair']:02d}_{name}.json"
         if path.exists():
