@@ -81,6 +81,10 @@ def test_quick_study_end_to_end(tmp_path):
             assert math.isfinite(plan["localization"]["ape"])
             assert ("lio" in plan) == (name in ("none", "default"))
     assert summary["lio_guidance"] == ["none", "default"]
+    # What predicts each replay's error: every channel the planner takes, over the plans replayed so.
+    cal = summary["calibration"]
+    assert set(cal["localization"]) == set(cal["lio"]) == {"q_n", "q_min", "q_max", "step_norm"}
+    assert cal["localization"]["q_n"]["plans"] == 10 and cal["lio"]["q_max"]["plans"] == 4
     # Each LIO replay says whether the odometry held still during its rest, and the
     # comparison from steady starts keeps only the seeds where both plans' did.
     lio_plans = [p["plans"][n]["lio"] for p in summary["pairs"] for n in ("none", "default")]
@@ -177,3 +181,20 @@ def test_localization_error_fit_counts_its_own_phase(tmp_path):
     assert calls[0] == (4, 0, True)
     assert sum(advance for _, advance, _ in calls) == 4 and not any(restart for *_, restart in calls[1:])
     assert (tmp_path / "localization_error.json").is_file()
+
+
+def test_goal_is_not_judged_without_seed_noise():
+    """With one seed per replay "worse beyond seed noise" is NaN: the goal on it is None
+    (the report says n/a), not a failure; with seeds it is judged."""
+    from lf3pm.experiments.benefit import STEADY, _goal
+
+    def comparisons(worse):
+        safe = {"pairs": 10, "median_ratio": 1.0, "median_ratio_ci95": (0.97, 1.03),
+                "share_worse_beyond_noise_and_margin": worse}
+        by_risk = {"by_risk": {"default": {"no_risk": safe}}}
+        return {"localization": {**by_risk, "default": {"pairs": 10, "median_length_overhead": 0.01}},
+                "lio": by_risk, STEADY: by_risk}
+
+    assert _goal(comparisons(math.nan))["lio_no_risk_worse_on_at_most_10pct"] is None
+    assert _goal(comparisons(0.05))["lio_no_risk_worse_on_at_most_10pct"] is True
+    assert _goal(comparisons(0.2))["localization_no_risk_worse_on_at_most_10pct"] is False
