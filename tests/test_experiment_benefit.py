@@ -85,6 +85,7 @@ def test_quick_study_end_to_end(tmp_path):
     cal = summary["calibration"]
     assert set(cal["localization"]) == set(cal["lio"]) == {"q_n", "q_min", "q_max", "step_norm"}
     assert cal["localization"]["q_n"]["plans"] == 10 and cal["lio"]["q_max"]["plans"] == 4
+    assert summary["lio_beyond_bound"]["pairs_replayed"] == 2
     # Each LIO replay says whether the odometry held still during its rest, and the
     # comparison from steady starts keeps only the seeds where both plans' did.
     lio_plans = [p["plans"][n]["lio"] for p in summary["pairs"] for n in ("none", "default")]
@@ -198,3 +199,19 @@ def test_goal_is_not_judged_without_seed_noise():
     assert _goal(comparisons(math.nan))["lio_no_risk_worse_on_at_most_10pct"] is None
     assert _goal(comparisons(0.05))["lio_no_risk_worse_on_at_most_10pct"] is True
     assert _goal(comparisons(0.2))["localization_no_risk_worse_on_at_most_10pct"] is False
+
+
+def test_lio_beyond_bound_lists_the_default_plans_past_it():
+    """Only pairs with both plans replayed by the LIO count; a default-guided plan past the
+    bound is listed with its unguided plan's error, one within it is not."""
+    from lf3pm.experiments.benefit import LIO_BOUND, lio_beyond_bound
+
+    def pair(number, guided, unguided, lio=True):
+        plans = {"none": {"lio": {"ape": unguided}}, "default": {"lio": {"ape": guided}}}
+        if not lio:
+            plans = {name: {} for name in plans}
+        return {"case": "m", "pair": number, "robot": "omni", "at_risk": False, "plans": plans}
+
+    out = lio_beyond_bound([pair(0, LIO_BOUND + 0.01, 0.05), pair(1, LIO_BOUND - 0.01, 2.0), pair(2, 5.0, 5.0, False)])
+    assert out["pairs_replayed"] == 2 and out["bound_m"] == LIO_BOUND
+    assert [(b["pair"], b["guided_m"], b["unguided_m"]) for b in out["pairs"]] == [(0, LIO_BOUND + 0.01, 0.05)]

@@ -260,7 +260,24 @@ def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list
             "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
             "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
             "comparisons": comparisons, "lio_rest": rest_counts(records), "calibration": _calibration(records),
+            "lio_beyond_bound": lio_beyond_bound(records),
             "goal": _goal(comparisons)}
+
+
+#: The bound the issue sets on the LIO's error along a guided plan (m): the report lists
+#: every default-guided plan beyond it, beside its unguided plan, so that where and how
+#: often the bound fails is read off the study, not looked for.
+LIO_BOUND = 0.3
+
+
+def lio_beyond_bound(records: list, bound: float = LIO_BOUND) -> dict:
+    """The pairs whose default-guided plan's LIO APE (median over seeds) exceeds
+    ``bound`` m, with the unguided plan's, among the pairs with both replayed."""
+    both = [r for r in records if "lio" in r["plans"].get("default", {}) and "lio" in r["plans"]["none"]]
+    beyond = [{"case": r["case"], "pair": r["pair"], "robot": r["robot"], "at_risk": r["at_risk"],
+               "guided_m": r["plans"]["default"]["lio"]["ape"], "unguided_m": r["plans"]["none"]["lio"]["ape"]}
+              for r in both if r["plans"]["default"]["lio"]["ape"] > bound]
+    return {"bound_m": bound, "pairs_replayed": len(both), "pairs": beyond}
 
 
 def _calibration(records: list) -> dict:
@@ -428,6 +445,14 @@ def report(summary: dict) -> str:
                       header.replace("| guidance |", "| guidance, pairs |")]
             lines += [row(f"{name}, {label}", c[key]) for name, c in by_risk.items()
                       for key, label in (("at_risk", "at risk"), ("no_risk", "no risk")) if c[key]["pairs"]]
+    beyond = summary.get("lio_beyond_bound")
+    if beyond and beyond["pairs_replayed"]:
+        lines += ["", f"## Default-guided plans whose LIO error exceeds {beyond['bound_m']:g} m "
+                  f"({len(beyond['pairs'])} of {beyond['pairs_replayed']} pairs)", ""]
+        if beyond["pairs"]:
+            lines += ["| map | pair | robot | at risk | LIO APE guided (m) | LIO APE none (m) |", "|---|---|---|---|---|---|"]
+            lines += [f"| {b['case']} | {b['pair']} | {b['robot']} | {'yes' if b['at_risk'] else 'no'} | "
+                      f"{b['guided_m']:.2f} | {b['unguided_m']:.2f} |" for b in beyond["pairs"]]
     for method, title in (("localization", "localization error"), ("lio", "the LIO's error")):
         cal = summary.get("calibration", {}).get(method)
         if not cal:
