@@ -32,7 +32,7 @@ def main() -> None:
     print("| plan | sensor | APE per run (mm) | largest position difference from run 1 (mm) |")
     print("|---|---|---|---|")
     for name in args.plan or ("houses/00_omni_default", "tunnel/00_omni_default"):
-        map_name, plan = name.split("/", 1)
+        map_name, _, plan = name.partition("/")
         case = next((c for c in CASES if c.name == map_name), None)
         csv = args.study / "trajectories" / map_name / f"{plan}.csv"
         if case is None or not csv.is_file():
