@@ -39,11 +39,11 @@ import numpy as np
 from scipy.stats import spearmanr
 
 import lf3pm
-from lf3pm.experiments.benefit import CASES
 from lf3pm.experiments.map_cases import load_case_map
 from lf3pm.replays.lio import GENZ_INIT_POSE_VARIANCE
 from lf3pm.replays.motion import Motion
 from lf3pm.replays.replay import replay_rest
+from study_inputs import study_case
 
 #: GenZ-LIO's own initial variance, then lf3pm's.
 VARIANCES = (1.0, GENZ_INIT_POSE_VARIANCE)
@@ -74,9 +74,7 @@ def main() -> None:
     parser.add_argument("--map-file", type=Path, help="the plans' map, instead of the study's --map")
     parser.add_argument("--trajectories", type=Path, help="the plans' folder, instead of the study's")
     args = parser.parse_args()
-    case = next((c for c in CASES if c.name == args.map), None)
-    if case is None:
-        raise SystemExit(f"unknown map {args.map!r}; the study's: {', '.join(c.name for c in CASES)}")
+    case = study_case(args.map)
     folder = args.trajectories or args.study / "trajectories" / args.map
     if not folder.is_dir():
         raise SystemExit(f"no trajectories in {folder}: run lf3pm experiment benefit -o {args.study} first")

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 import lf3pm
-from lf3pm.experiments.benefit import CASES
 from lf3pm.experiments.map_cases import load_case_map
+from study_inputs import study_case, study_plan
 
 
 def main() -> None:
@@ -33,10 +33,7 @@ def main() -> None:
     print("|---|---|---|---|")
     for name in args.plan or ("houses/00_omni_default", "tunnel/00_omni_default"):
         map_name, _, plan = name.partition("/")
-        case = next((c for c in CASES if c.name == map_name), None)
-        csv = args.study / "trajectories" / map_name / f"{plan}.csv"
-        if case is None or not csv.is_file():
-            raise SystemExit(f"no plan {csv}: run lf3pm experiment benefit -o {args.study} first")
+        case, csv = study_case(map_name), study_plan(args.study, map_name, plan)
         world, _ = load_case_map(case)
         runs = [lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1, odometry=args.odometry)
                 for _ in range(args.runs)]

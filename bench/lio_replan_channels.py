@@ -16,9 +16,9 @@ import json
 from pathlib import Path
 
 import lf3pm
-from lf3pm.experiments.benefit import CASES
 from lf3pm.experiments.guidance import parse_guidance
 from lf3pm.experiments.map_cases import load_case_map
+from study_inputs import study_case
 
 
 def main() -> None:
@@ -35,9 +35,7 @@ def main() -> None:
     from lf3pm.solm import Solm
     from lf3pm.trajectory.robots import Robot
 
-    case = next((c for c in CASES if c.name == args.map), None)
-    if case is None:
-        raise SystemExit(f"unknown map {args.map!r}; the study's: {', '.join(c.name for c in CASES)}")
+    case = study_case(args.map)
     summary = args.study / "summary.json"
     if not summary.is_file():
         raise SystemExit(f"no {summary}: run lf3pm experiment benefit -o {args.study} first")

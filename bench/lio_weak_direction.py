@@ -23,8 +23,8 @@ import numpy as np
 
 import lf3pm
 from lf3pm.errors import PoseError
-from lf3pm.experiments.benefit import CASES
 from lf3pm.experiments.map_cases import load_case_map
+from study_inputs import study_case, study_plan
 
 
 def main() -> None:
@@ -36,14 +36,10 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=2)
     parser.add_argument("--odometry", default="auto", help="genz, dlio or auto (lf3pm replay's --odometry)")
     args = parser.parse_args()
-    case = next((c for c in CASES if c.name == args.map), None)
-    if case is None:
-        raise SystemExit(f"unknown map {args.map!r}; the study's: {', '.join(c.name for c in CASES)}")
+    case = study_case(args.map)
     world, _ = load_case_map(case)
     for guidance in (args.guidance, "none"):
-        csv = args.study / "trajectories" / args.map / f"{args.pair}_{guidance}.csv"
-        if not csv.is_file():
-            raise SystemExit(f"no plan {csv}: run lf3pm experiment benefit -o {args.study} first")
+        csv = study_plan(args.study, args.map, f"{args.pair}_{guidance}")
         result = lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1, odometry=args.odometry)
         error = result.estimate[:, :3, 3] - result.truth[:, :3, 3]
         print(f"\n{args.map} {args.pair} {guidance}, seed {args.seed}, odometry {args.odometry}: "
