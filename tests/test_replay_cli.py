@@ -86,7 +86,8 @@ def test_bad_trajectories(files, tmp_path, kind, match):
     (["--rate", "nan"], "--rate"),
     (["--seeds", "0"], "--seeds"),
     (["--height", "-1"], "--height"),
-    (["--method", "lio", "--odometry", "liosam"], "--odometry must be 'auto', 'genz' or 'dlio'"),
+    (["--method", "lio", "--odometry", "fastlio"], "--odometry must be 'auto', 'genz', 'dlio' or 'liosam'"),
+    (["--method", "lio", "--odometry", "liosam", "--sensor", "mid70"], "liosam needs a spinning sensor"),
     (["--odometry", "dlio"], "--odometry applies to --method lio, not localization"),
 ])
 def test_bad_options(files, args, match):
@@ -109,17 +110,19 @@ def test_lio_unavailable_is_one_line(files):
     assert done.exit_code == 2 and "method lio is not available" in done.stderr
 
 
-def test_lio_with_dlio_in_json(files):
-    """`--method lio --odometry dlio`: the 2 s boxes trajectory after the LIO's rest, noise-free,
-    through DLIO; the JSON names the odometry and its package's version."""
-    pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
-    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio", "--odometry", "dlio",
+@pytest.mark.parametrize("odometry, name", [("dlio", "DLIO"), ("liosam", "LIO-SAM")])
+def test_lio_with_an_evalio_odometry_in_json(files, odometry, name):
+    """`--method lio --odometry dlio|liosam`: the 2 s boxes trajectory after the LIO's
+    rest, noise-free, through DLIO or LIO-SAM; the JSON names the odometry and its
+    package's version."""
+    pytest.importorskip("evalio", reason="evalio (DLIO, LIO-SAM) is not installed: pip install 'lf3pm[lio]'")
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio", "--odometry", odometry,
                   "--noise", 0, "--json")
     assert done.exit_code == 0, done.output
     out = json.loads(done.stdout.strip().splitlines()[-1])
     run = out["runs"][0]
-    assert out["odometry"] == "dlio" and run["versions"]["evalio"] == "0.6.1"
-    assert run["ape"]["rmse"] < 0.05 and run["report"]["odometry"] == "DLIO"
+    assert out["odometry"] == odometry and run["versions"]["evalio"] == "0.6.1"
+    assert run["ape"]["rmse"] < 0.05 and run["report"]["odometry"] == name
 
 
 def test_table_cells_stay_readable_for_failed_runs():

@@ -45,7 +45,7 @@ SPACES = ("r2", "se2", "r3")
 REPLAY_METHODS = ("localization", "lio", "odometry")
 #: The LiDAR-inertial odometries of the ``lio`` replay (lf3pm.replays.lio.ODOMETRIES);
 #: ``auto`` picks by the sensor (lio.choose_odometry).
-LIO_ODOMETRIES = ("auto", "genz", "dlio")
+LIO_ODOMETRIES = ("auto", "genz", "dlio", "liosam")
 
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
@@ -246,8 +246,9 @@ class ReplayConfig(Section):
     imu_rate: float = Field(200.0, gt=0, le=100_000, description="The lio method's IMU samples per second.")
     imu_noise: bool = Field(True, description="The lio method's IMU noise (false: exact samples).")
     odometry: Literal[LIO_ODOMETRIES] = Field(
-        "auto", description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio) or auto "
-                            "(dlio for a spinning sensor, genz for a non-repetitive one: docs/lio.md).")
+        "auto", description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio), liosam "
+                            "(LIO-SAM, from evalio; spinning sensors only) or auto (dlio for a spinning "
+                            "sensor, genz for a non-repetitive one: docs/lio.md).")
 
 
 class KissIcpConfig(Section):

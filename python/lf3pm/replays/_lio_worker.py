@@ -1,12 +1,16 @@
 """Child process of lf3pm.replays.lio: runs one LiDAR-inertial odometry (GenZ-LIO,
-or DLIO from evalio) on the scans the parent streams to it, so that the odometry's
-OpenMP runtime, its console output and a crash stay out of the caller's process.
+or DLIO or LIO-SAM from evalio) on the scans the parent streams to it, so that the
+odometry's OpenMP runtime, its console output and a crash stay out of the caller's process.
 
 Run as a script (no lf3pm import): ``python _lio_worker.py REPLY_FD``.
 Protocol, pickled objects: on stdin ("config", odometry, sensor_range, threads,
-settings), then ("scan", points, begin, end, offsets, imu) per scan and ("done",);
-on REPLY_FD ("ready", version) or ("error", message), then per scan
-("pose", pose, time, status, seconds): the pose and the time it refers to.
+settings, lidar), then ("scan", points, begin, end, offsets, imu) per scan and
+("done", imu) with the IMU samples after the last scan; on REPLY_FD ("ready", version) or ("error", message), then one
+("poses", [(pose, time, status), ...], seconds) per scan and one after "done": the
+poses the odometry finished with that message, in scan order, each with the time it
+refers to (GenZ-LIO and DLIO one per scan; LIO-SAM two scans late, the last two at
+"done"). ``lidar``: {"beams": the beams' elevations (rad), lowest first, or None for a
+non-repetitive sensor; "columns": rays per beam and scan}.
 """
 
 import os
@@ -22,7 +26,7 @@ _GENZ_SECTIONS = ("preprocess", "mapping", "adaptive_voxelization", "hybrid_metr
 class GenZ:
     """GenZ-LIO (PyPI genz-lio): its pose is the IMU's at the scan's end."""
 
-    def __init__(self, sensor_range, threads, settings):
+    def __init__(self, sensor_range, threads, settings, lidar):
         import genz_lio
 
         self.version = genz_lio.__version__
@@ -61,7 +65,7 @@ class GenZ:
 
     def scan(self, points, begin, end, offsets, imu):
         if len(imu) == 0:
-            return None, end, "skipped: no IMU samples"  # GenZ-LIO cannot propagate without them
+            return [(None, end, "skipped: no IMU samples")]  # GenZ-LIO cannot propagate without them
         seeded = self.odometry.map_size > 0
         result = self.odometry.register_scan(points, begin, end, imu, timestamps=offsets)
         if not self.odometry.initialized:
@@ -76,7 +80,10 @@ class GenZ:
             status = "no matches"
         else:
             status = "ok"
-        return np.array(self.odometry.lidar_pose), end, status
+        return [(np.array(self.odometry.lidar_pose), end, status)]
+
+    def finish(self, imu):
+        return []
 
 
 class Dlio:
@@ -86,11 +93,8 @@ class Dlio:
     sensor's there (the state it reports after the scan)."""
 
     _DTYPE = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("t", "<u4")])
-    #: Added to every time given to evalio, whose stamps are unsigned (a replay's rest
-    #: starts before t = 0: those times wrapped around and DLIO diverged to 1e26 m).
-    EPOCH = 1e4
 
-    def __init__(self, sensor_range, threads, settings):
+    def __init__(self, sensor_range, threads, settings, lidar):
         import evalio
         from evalio import pipelines, types
         from evalio._cpp import helpers
@@ -108,42 +112,224 @@ class Dlio:
         self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, 9.81])))
         self.pipeline.set_imu_T_lidar(types.SE3.identity())
         self.pipeline.initialize()
-        kinds = {"x": helpers.DataType.FLOAT64, "y": helpers.DataType.FLOAT64, "z": helpers.DataType.FLOAT64,
-                 "t": helpers.DataType.UINT32}
-        self.fields = [helpers.Field(name=n, datatype=kinds[n], offset=self._DTYPE.fields[n][1]) for n in kinds]
+        self.fields = _fields(helpers, self._DTYPE)
         self.first_imu = None
 
     def scan(self, points, begin, end, offsets, imu):
         types = self.types
         if self.first_imu is None and len(imu):
             self.first_imu = float(imu[0, 0])
-        for row in imu:
-            self.pipeline.add_imu(types.ImuMeasurement(types.Stamp.from_sec(self.EPOCH + row[0]), row[4:7].copy(),
-                                                       row[1:4].copy()))
-        nanoseconds = np.round(offsets * 1e9).astype(np.uint32)
+        _add_imu(self.pipeline, types, imu)
         if len(points) == 0:
-            return None, end, "skipped: too few points"
+            return [(None, end, "skipped: too few points")]
         data = np.empty(len(points), self._DTYPE)
         data["x"], data["y"], data["z"] = points.T
-        data["t"] = nanoseconds
-        meta = self.helpers.PointCloudMetadata(stamp=types.Stamp.from_sec(self.EPOCH + begin), width=len(data),
-                                               height=1, point_step=data.itemsize, row_step=data.nbytes,
-                                               is_bigendian=0, is_dense=1)
-        self.pipeline.add_lidar(self.helpers.pc2_to_evalio(meta, self.fields, data.tobytes()))
+        data["t"] = np.round(offsets * 1e9).astype(np.uint32)
+        self.pipeline.add_lidar(_measurement(self.helpers, types, self.fields, data, begin))
         estimates = self.pipeline.saved_estimates()
-        unique = np.unique(nanoseconds)
+        unique = np.unique(data["t"])
         median = begin + unique[len(unique) // 2] * 1e-9  # DLIO's scan time: its median distinct return time
         if not estimates:
-            return None, median, "skipped: no estimate"
+            return [(None, median, "skipped: no estimate")]
         _, se3 = estimates[-1]
         pose = np.eye(4)
         pose[:3, :3], pose[:3, 3] = se3.rot.to_mat(), se3.trans
         # DLIO takes the IMU for still while it calibrates (imu_calib_time s from its first sample).
         calibrating = self.first_imu is None or median < self.first_imu + self.settings["imu_calib_time"]
-        return pose, median, "initializing" if calibrating else "ok"
+        return [(pose, median, "initializing" if calibrating else "ok")]
+
+    def finish(self, imu):
+        return []
 
 
-BACKENDS = {"genz": GenZ, "dlio": Dlio}
+class _Queued:
+    """A scan LIO-SAM has not reported yet: the time its pose refers to, its status,
+    whether LIO-SAM was given it, its last return and the rotation from its first
+    return to ``time``."""
+
+    def __init__(self, time, status, given, last=None, turn=None):
+        self.time, self.status, self.given, self.last, self.turn = time, status, given, last, turn
+
+
+class LioSam:
+    """LIO-SAM as evalio compiles it: LOAM edge and plane features of a ring-organised
+    scan, matched to a keyframe map, in a factor graph with IMU preintegration (GTSAM).
+
+    Each scan is a LidarMeasurement stamped at its first return, each return carrying
+    its offset from it (ns) and its ring (the beam nearest its elevation). LIO-SAM
+    deskews a scan's rotation only (its translation deskew is commented out in its
+    source), so the position it registers is the scan's mean and refers to the median
+    return time (fitted: +0.05 s from the first return at 10 Hz, docs/lio.md), its
+    rotation to the first return: the replay carries the rotation on to the median
+    time by the scan's gyro samples (``_turn``, as LIO-SAM's deskewing integrates
+    them), so that each pose refers to one time. LIO-SAM processes a scan once two more
+    have arrived (its cloud queue), so a pose comes two scans late; ``finish`` gives it
+    the IMU samples after the last scan and two empty scans, a scan period apart
+    (never processed themselves), to flush the last two.
+
+    Its initialisation divides by |e_z x a| (the still accelerometer's tilt from the
+    vertical), NaN for an exactly level IMU, which a noise-free replay on flat ground
+    gives: lf3pm declares the IMU mounted TILT about x from the LiDAR, rotates the
+    samples into that frame (exact) and turns the estimated IMU poses back into the
+    LiDAR's. Gravity points down (evalio's ``ImuParams.down``): with it up, LIO-SAM took
+    the still accelerometer for a 2 g bias and reset its preintegration every scan."""
+
+    _DTYPE = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("t", "<u4"), ("ring", "u1")])
+    TILT = np.radians(1.0)
+
+    def __init__(self, sensor_range, threads, settings, lidar):
+        import evalio
+        from evalio import pipelines, types
+        from evalio._cpp import helpers
+
+        if not lidar.get("beams"):
+            raise ValueError("LIO-SAM needs a spinning sensor (rings of beams); use genz for a Livox one")
+        self.types, self.helpers = types, helpers
+        self.version = f"{evalio.__version__} (LIO-SAM {pipelines.LioSAM.version()})"
+        self.pipeline = pipelines.LioSAM()
+        settings = dict(settings)
+        noise = settings.pop("imu_densities", {})
+        known = set(pipelines.LioSAM.default_params())
+        unknown = sorted(set(settings) - known)
+        if unknown:
+            raise ValueError(f"unknown LIO-SAM parameter(s) {', '.join(unknown)}; known: imu_densities, "
+                             f"{', '.join(sorted(known))}")
+        # evalio leaves unset fields uninitialised: every parameter is set.
+        self.pipeline.set_params({**pipelines.LioSAM.default_params(), "numberOfCores": int(threads), **settings})
+        self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, -9.81]), **noise))
+        self.pipeline.set_lidar_params(types.LidarParams(num_rows=len(lidar["beams"]), num_columns=lidar["columns"],
+                                                         min_range=sensor_range[0], max_range=sensor_range[1]))
+        c, s = np.cos(self.TILT), np.sin(self.TILT)
+        self.lidar_R_imu = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        half = self.TILT / 2  # imu_T_lidar: the rotation -TILT about x, as a quaternion
+        self.pipeline.set_imu_T_lidar(types.SE3(types.SO3(qx=-np.sin(half), qy=0.0, qz=0.0, qw=np.cos(half)),
+                                                np.zeros(3)))
+        self.pipeline.initialize()
+        self.beams = np.asarray(lidar["beams"], float)
+        self.fields = _fields(helpers, self._DTYPE)
+        self.queue = []  # _Queued, in scan order
+        self.pose = None  # the pose of the last scan LIO-SAM processed (None: none yet)
+        self.imu_span = None  # (first, last) IMU time given
+        self.begins = []  # the stamps of the scans given
+
+    def scan(self, points, begin, end, offsets, imu):
+        self._add_imu(imu)
+        if len(points) == 0:  # not given to LIO-SAM, which reads a scan's last return
+            self.queue.append(_Queued(begin, "skipped: too few points", False))
+            return self._report()
+        data = np.empty(len(points), self._DTYPE)
+        data["x"], data["y"], data["z"] = points.T
+        data["t"] = np.round(offsets * 1e9).astype(np.uint32)
+        elevation = np.arctan2(points[:, 2], np.hypot(points[:, 0], points[:, 1]))
+        data["ring"] = np.abs(elevation[:, None] - self.beams[None, :]).argmin(axis=1)
+        self.pipeline.add_lidar(_measurement(self.helpers, self.types, self.fields, data, begin))
+        self.begins.append(begin)
+        unique = np.unique(data["t"])
+        median = begin + unique[len(unique) // 2] * 1e-9
+        # LIO-SAM drops a scan whose time span the IMU samples do not cover.
+        status = "ok" if self.imu_span is not None and self.imu_span[0] <= begin else \
+            "skipped: no IMU samples before the scan"
+        self.queue.append(_Queued(median, status, True, begin + offsets[-1], _turn(imu, begin, median)))
+        return self._report()
+
+    def finish(self, imu):
+        self._add_imu(imu)
+        results = []
+        if any(queued.given for queued in self.queue):
+            # A scan period apart: LIO-SAM gives the scan it processes the newest stamp,
+            # and its IMU graph failed (underdetermined) on one a millisecond later.
+            period = self.begins[-1] - self.begins[-2] if len(self.begins) > 1 else 0.1
+            for j in (1, 2):
+                stamp = self.types.Stamp.from_sec(EPOCH + self.begins[-1] + j * period)
+                self.pipeline.add_lidar(self.types.LidarMeasurement(stamp))
+                self.queue.append(_Queued(None, "flush", True))
+                results += self._report()
+        return results + self._report(flush=True)
+
+    def _add_imu(self, imu):
+        if not len(imu):
+            return
+        first = imu[0, 0] if self.imu_span is None else self.imu_span[0]
+        self.imu_span = (first, imu[-1, 0])
+        rotated = imu.copy()
+        rotated[:, 1:7] = (imu[:, 1:7].reshape(-1, 2, 3) @ self.lidar_R_imu).reshape(-1, 6)  # R^T v per row
+        _add_imu(self.pipeline, self.types, rotated)
+
+    def _report(self, flush=False):
+        """The scans whose pose is known now: LIO-SAM processes its oldest queued scan
+        when a third is given (``flush``: report the rest at the pose it holds)."""
+        given = [k for k, queued in enumerate(self.queue) if queued.given]
+        processed = given[0] if len(given) >= 3 else None
+        results = []
+        for k, queued in enumerate(list(self.queue)):
+            if k == processed and queued.status == "ok":
+                if self.imu_span[1] < queued.last - 1e-6:
+                    queued.status = "skipped: no IMU samples after the scan"  # LIO-SAM drops it
+                else:
+                    queued.status = "ok" if self.pose is not None else "map seeded"
+                    self.pose = self._estimate()
+                    self.pose[:3, :3] = self.pose[:3, :3] @ queued.turn
+            elif queued.given and k != processed and not flush:
+                break
+            if queued.time is not None:  # not one of finish's empty scans
+                results.append((self.pose, queued.time, queued.status))
+            self.queue.pop(0)
+        return results
+
+    def _estimate(self):
+        """LIO-SAM's LiDAR pose (4, 4) after the scan it processed last."""
+        _, se3 = self.pipeline.saved_estimates()[-1]
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = se3.rot.to_mat() @ self.lidar_R_imu.T, se3.trans
+        return pose
+
+
+def _turn(imu, begin, end):
+    """The rotation (3, 3) of the body from ``begin`` to ``end`` by the gyro rows of
+    ``imu`` (t, accel, gyro), each rate held over the interval up to its sample."""
+    t, gyro = imu[:, 0], imu[:, 4:7]
+    lower = np.concatenate([[t[0] - (t[1] - t[0]) if len(t) > 1 else t[0]], t[:-1]])
+    spans = np.clip(np.minimum(t, end) - np.maximum(lower, begin), 0.0, None)
+    turn = np.eye(3)
+    for rate, span in zip(gyro, spans):
+        if span > 0:
+            turn = turn @ _exp(rate * span)
+    return turn
+
+
+def _exp(v):
+    """Rodrigues' rotation (3, 3) of the rotation vector ``v``."""
+    angle = np.linalg.norm(v)
+    k = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    if angle < 1e-12:
+        return np.eye(3) + k
+    return np.eye(3) + np.sin(angle) / angle * k + (1 - np.cos(angle)) / angle**2 * k @ k
+
+
+def _fields(helpers, dtype):
+    """evalio's description of the structured array ``dtype``'s fields."""
+    kinds = {"<f8": helpers.DataType.FLOAT64, "<u4": helpers.DataType.UINT32, "|u1": helpers.DataType.UINT8}
+    return [helpers.Field(name=name, datatype=kinds[dtype.fields[name][0].str], offset=dtype.fields[name][1])
+            for name in dtype.names]
+
+
+#: Added to every time given to evalio, whose stamps are unsigned (a replay's rest
+#: starts before t = 0: those times wrapped around and DLIO diverged to 1e26 m).
+EPOCH = 1e4
+
+
+def _add_imu(pipeline, types, imu):
+    for row in imu:
+        pipeline.add_imu(types.ImuMeasurement(types.Stamp.from_sec(EPOCH + row[0]), row[4:7].copy(), row[1:4].copy()))
+
+
+def _measurement(helpers, types, fields, data, begin):
+    meta = helpers.PointCloudMetadata(stamp=types.Stamp.from_sec(EPOCH + begin), width=len(data), height=1,
+                                      point_step=data.itemsize, row_step=data.nbytes, is_bigendian=0, is_dense=1)
+    return helpers.pc2_to_evalio(meta, fields, data.tobytes())
+
+
+BACKENDS = {"genz": GenZ, "dlio": Dlio, "liosam": LioSam}
 
 
 def main(reply_fd: int) -> None:
@@ -154,9 +340,9 @@ def main(reply_fd: int) -> None:
         pickle.dump(message, replies, protocol=pickle.HIGHEST_PROTOCOL)
         replies.flush()
 
-    _, odometry, sensor_range, threads, settings = pickle.load(requests)
+    _, odometry, sensor_range, threads, settings, lidar = pickle.load(requests)
     try:
-        backend = BACKENDS[odometry](sensor_range, threads, settings)
+        backend = BACKENDS[odometry](sensor_range, threads, settings, lidar)
     except ImportError as err:
         send(("error", f"the {odometry} odometry is not installed ({err}); pip install 'lf3pm[lio]' "
                        "(wheels for Python 3.8-3.12)"))
@@ -166,19 +352,29 @@ def main(reply_fd: int) -> None:
         return
     send(("ready", backend.version))
     previous = np.eye(4)
+
+    def held(results):
+        """The results with a skipped scan's missing pose replaced by the last one."""
+        nonlocal previous
+        out = []
+        for pose, at, status in results:
+            previous = previous if pose is None else pose
+            out.append((previous, at, status))
+        return out
+
     while True:
         message = pickle.load(requests)
+        start = time.perf_counter()
         if message[0] == "done":
+            send(("poses", held(backend.finish(message[1])), time.perf_counter() - start))
             return
         _, points, begin, end, offsets, imu = message
-        start = time.perf_counter()
         try:
-            pose, at, status = backend.scan(points, begin, end, offsets, imu)
+            results = backend.scan(points, begin, end, offsets, imu)
         except (ValueError, RuntimeError) as err:
             send(("error", f"{odometry} refused the scan ending at {end:.6f} s: {err}"))
             return
-        previous = previous if pose is None else pose  # a skipped scan keeps the last pose
-        send(("pose", previous, at, status, time.perf_counter() - start))
+        send(("poses", held(results), time.perf_counter() - start))
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""LiDAR-inertial odometry on simulated scans and IMU samples. Two odometries,
+"""LiDAR-inertial odometry on simulated scans and IMU samples. Three odometries,
 each fed exactly the same scans and IMU samples (docs/lio.md compares them):
 
 - ``genz`` (default): GenZ-LIO (PyPI ``genz-lio``, pinned 0.1.1, GPL-2.0-only), a
@@ -9,11 +9,12 @@ each fed exactly the same scans and IMU samples (docs/lio.md compares them):
   one change lets the initial covariance be set (default_settings);
 - ``dlio``: DLIO (Direct LiDAR-Inertial Odometry, UCLA VECTR, MIT) as evalio
   (PyPI ``evalio``, pinned 0.6.1, MIT) compiles it: GICP scan-to-map registration
-  with a nonlinear geometric observer, deskewing by IMU integration.
-
-LIO-SAM, which evalio also ships, is not offered: on our VLP-16 streams its 0.6.1
-build raised SIGFPE unless every parameter was set, then extracted no features and
-crashed (docs/lio.md, "Three odometries").
+  with a nonlinear geometric observer, deskewing by IMU integration;
+- ``liosam``: LIO-SAM (BSD-3-Clause) as evalio compiles it: LOAM features of a
+  ring-organised scan matched to a keyframe map, IMU preintegration in a factor
+  graph; spinning sensors only. What the replay does to feed it (a level IMU made
+  its start-up NaN, its poses come two scans late and refer to two times) is in
+  _lio_worker.LioSam and docs/lio.md, "The third: LIO-SAM".
 
 The default, ``auto``, picks by measurement (docs/lio.md, bench/compare_odometries.py):
 DLIO for a spinning sensor (VLP-16: 1-6 mm APE on every structured drive, noise-free
@@ -118,7 +119,8 @@ class Odometry:
 
 #: The odometries by the name ``run_lio(odometry=...)`` and ``--odometry`` take.
 ODOMETRIES = {"genz": Odometry("GenZ-LIO", "genz-lio", "0.1.1", "GPL-2.0-only"),
-              "dlio": Odometry("DLIO", "evalio", "0.6.1", "MIT (evalio and DLIO)")}
+              "dlio": Odometry("DLIO", "evalio", "0.6.1", "MIT (evalio and DLIO)"),
+              "liosam": Odometry("LIO-SAM", "evalio", "0.6.1", "BSD-3-Clause (LIO-SAM), MIT (evalio)")}
 DEFAULT_ODOMETRY = ReplayConfig.model_fields["odometry"].default
 
 
@@ -131,6 +133,9 @@ def choose_odometry(odometry: str, sensor: Sensor) -> str:
         return "dlio" if spinning_rings(sensor) is not None else "genz"
     if odometry not in ODOMETRIES:
         raise Lf3pmError(f"unknown odometry {odometry!r}; use one of auto, {', '.join(ODOMETRIES)}")
+    if odometry == "liosam" and spinning_rings(sensor) is None:
+        raise Lf3pmError(f"liosam needs a spinning sensor (rings of beams); the {sensor.name} has none: "
+                         "use genz or dlio")
     return odometry
 _WORKER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_lio_worker.py")
 #: Factor on the IMU noise variances the filter is told (imu_noise_model). With
@@ -265,6 +270,8 @@ def _settings(odometry: str, sensor: Sensor, imu, params: dict) -> dict:
     field by field within each section)."""
     if odometry == "dlio":
         return {**DLIO_SETTINGS, **params}
+    if odometry == "liosam":
+        return {**LIOSAM_SETTINGS, "imu_densities": imu_densities(imu), **params}
     for section, values in params.items():
         if not isinstance(values, dict):
             raise Lf3pmError(f"GenZ-LIO settings go by section, e.g. mapping={{'voxel_size': 0.5}}; "
@@ -280,6 +287,10 @@ def _settings(odometry: str, sensor: Sensor, imu, params: dict) -> dict:
 #: the replay's 2 s rest (DLIO's 3 s would take the start of the motion for a
 #: still sensor's IMU).
 DLIO_SETTINGS = {"imu_calib_time": 1.0}
+#: lf3pm's LIO-SAM settings (evalio's defaults for the rest): ``mappingProcessInterval``
+#: 0, every scan matched to the map (LIO-SAM's 0.15 s skips every other 10 Hz scan,
+#: which then repeats the pose before it).
+LIOSAM_SETTINGS = {"mappingProcessInterval": 0.0}
 
 
 def default_settings(sensor: Sensor) -> dict:
@@ -326,6 +337,18 @@ def imu_noise_model(imu) -> dict:
     return {key: NOISE_INFLATION * value for key, value in exact.items() if value > 0}
 
 
+def imu_densities(imu) -> dict:
+    """LIO-SAM's IMU noise (evalio's ImuParams: GTSAM's continuous-time densities) for
+    samples made by simulate_imu: their preset's; empty (evalio's defaults) for other
+    IMU data and for a noiseless preset's zero terms."""
+    preset = getattr(imu, "preset", None)
+    if not isinstance(preset, ImuPreset):
+        return {}
+    densities = {"accel": preset.accel_noise_density, "gyro": preset.gyro_noise_density,
+                 "accel_bias": preset.accel_bias_random_walk, "gyro_bias": preset.gyro_bias_random_walk}
+    return {key: value for key, value in densities.items() if value > 0}
+
+
 def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, odometry, settings):
     """Streams the scans to the worker and collects its poses and their times."""
     def request(message):
@@ -351,30 +374,49 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, o
 
     spec = ODOMETRIES[odometry]
     try:
-        request(("config", odometry, (float(sensor.min_range), float(sensor.max_range)), threads, settings))
+        request(("config", odometry, (float(sensor.min_range), float(sensor.max_range)), threads, settings,
+                 lidar_geometry(sensor)))
         _, version = reply("while starting")
         version = version.split()[0]
         if version.split("+")[0] != spec.version:
             raise Lf3pmError(f"{spec.package} {version} is installed; lf3pm's conventions are checked for "
                              f"{spec.version}")
-        times, poses, status, seconds = np.empty(len(scans)), np.empty((len(scans), 4, 4)), [], []
+        results, seconds = [], []
         for k, scan in enumerate(scans):
             points, stamps = _scan_arrays(scan, k, ends[k])
             begin = float(stamps[0]) if len(stamps) else float(ends[k])
             lo = bounds[k - 1] if k else 0
             request(("scan", points, begin, float(ends[k]), stamps - begin,
                      np.column_stack([t[lo:bounds[k]], rows[lo:bounds[k]]])))
-            _, poses[k], times[k], state, spent = reply(f"at scan {k} (ending at {ends[k]:g} s)")
-            status.append(state)
+            _, done, spent = reply(f"at scan {k} (ending at {ends[k]:g} s)")
+            results += done
             seconds.append(spent)
-        request(("done",))
+        request(("done", np.column_stack([t[bounds[-1]:], rows[bounds[-1]:]])))
+        _, done, spent = reply("after the last scan")
+        results += done
+        seconds[-1] += spent
         child.stdin.close()
         child.wait()
-        return times, poses, status, seconds, version
+        if len(results) != len(scans):
+            raise Lf3pmError(f"{spec.name} returned {len(results)} poses for {len(scans)} scans")
+        poses, times, status = zip(*results)
+        return np.array(times), np.array(poses), list(status), seconds, version
     finally:
         if child.poll() is None:
             child.kill()
             child.wait()
+
+
+def lidar_geometry(sensor: Sensor) -> dict:
+    """What a ring-organised odometry (LIO-SAM) needs of ``sensor``: its beams'
+    elevations (rad), lowest first, and rays per beam and scan; beams None for a
+    sensor without rings (Livox)."""
+    rings = spinning_rings(sensor)
+    if rings is None:
+        return {"beams": None, "columns": None}
+    _, elevation = sensor.angles()
+    beams = int(rings.max()) + 1
+    return {"beams": np.sort(elevation[:beams]).tolist(), "columns": sensor.num_rays // beams}
 
 
 def _imu_rows(imu) -> tuple[np.ndarray, np.ndarray]:
