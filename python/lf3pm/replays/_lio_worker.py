@@ -5,12 +5,13 @@ odometry's OpenMP runtime, its console output and a crash stay out of the caller
 Run as a script (no lf3pm import): ``python _lio_worker.py REPLY_FD``.
 Protocol, pickled objects: on stdin ("config", odometry, sensor_range, threads,
 settings, lidar), then ("scan", points, begin, end, offsets, imu) per scan and
-("done", imu) with the IMU samples after the last scan; on REPLY_FD ("ready", version) or ("error", message), then one
-("poses", [(pose, time, status), ...], seconds) per scan and one after "done": the
-poses the odometry finished with that message, in scan order, each with the time it
-refers to (GenZ-LIO and DLIO one per scan; LIO-SAM two scans late, the last two at
-"done"). ``lidar``: {"beams": the beams' elevations (rad), lowest first, or None for a
-non-repetitive sensor; "columns": rays per beam and scan}.
+("done", imu) with the IMU samples after the last scan; on REPLY_FD ("ready",
+version) or ("error", message), then one ("poses", [(pose, time, status), ...],
+seconds) per scan and one after "done": the poses the odometry finished with that
+message, in scan order, each with the time it refers to (GenZ-LIO and DLIO one per
+scan; LIO-SAM two scans late, the last two at "done"). ``lidar``: {"beams": the
+beams' elevations (rad), lowest first, or None for a non-repetitive sensor;
+"columns": rays per beam and scan}.
 """
 
 import os
