@@ -108,6 +108,19 @@ def test_quick_study_end_to_end(tmp_path):
     stamps = [p.stat().st_mtime_ns for p in replays]
     again = subprocess.run(command, capture_output=True, text=True)
     assert again.returncode == 0 and [p.stat().st_mtime_ns for p in replays] == stamps
+    # Another odometry in the same folder: only the LIO replays it changes are run (GenZ-LIO
+    # on the tunnel's VLP-16, beside DLIO's; on the Mid-70 map GenZ-LIO is auto's anyway).
+    bad = subprocess.run(command + ["--odometry", "fastlio"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--odometry must be" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+    other = subprocess.run(command + ["--odometry", "genz"], capture_output=True, text=True)
+    assert other.returncode == 0, other.stderr[-2000:]
+    assert [p.stat().st_mtime_ns for p in replays] == stamps
+    added = sorted(set((out / "replays").rglob("*.json")) - set(replays))
+    assert [p.name for p in added] == ["00_default_lio-genz_0.json", "00_none_lio-genz_0.json"]
+    assert all(p.parent.name == "tunnel" for p in added)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["lio_odometry"] == {"tunnel": "genz", "orientation": "genz"}
+    assert "## LIO (GenZ-LIO: tunnel, orientation)" in (out / "benefit.md").read_text()
 
 
 def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
@@ -121,7 +134,7 @@ def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
 
     csv, replays = tmp_path / "trajectories" / "00_omni_default.csv", tmp_path / "replays"
     replays.mkdir()
-    names = ["00_default_localization_0.json", "00_default_lio_2.json",    # this plan's
+    names = ["00_default_localization_0.json", "00_default_lio_2.json", "00_default_lio-genz_0.json",  # this plan's
              "00_default_x_lio_0.json", "01_default_lio_0.json", "00_none_lio_0.json"]  # others'
     write_plan(line(1.0), csv, replays, "00_default_")
     for name in names:
@@ -129,7 +142,7 @@ def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
     write_plan(line(1.0), csv, replays, "00_default_")  # the same plan again: replays kept
     assert sorted(p.name for p in replays.iterdir()) == sorted(names)
     write_plan(line(0.5), csv, replays, "00_default_")  # another plan: its old replays go
-    assert sorted(p.name for p in replays.iterdir()) == sorted(names[2:])
+    assert sorted(p.name for p in replays.iterdir()) == sorted(names[3:])
     assert csv.read_bytes() == line(0.5).csv_bytes()
 
 
@@ -152,11 +165,12 @@ def test_a_lio_replay_saved_without_its_rest_gets_it_added(tmp_path, monkeypatch
     lio, localization = tmp_path / "00_none_lio_1.json", tmp_path / "00_none_localization_1.json"
     for path in (lio, localization):
         path.write_text(json.dumps(old))
-    tasks = [(QUICK[1], "plan.csv", "lio", 1, lio), (QUICK[1], "plan.csv", "localization", 1, localization)]
+    tasks = [replay_tasks.ReplayTask(QUICK[1], "plan.csv", "lio", 1, lio, {"odometry": "genz"}),
+             replay_tasks.ReplayTask(QUICK[1], "plan.csv", "localization", 1, localization)]
     replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)
     assert json.loads(lio.read_text()) == {**old, "rest": rest}
     assert json.loads(localization.read_text()) == old
-    assert calls == [(("map", "plan.csv", QUICK[1].sensor, 1), {"threads": 1})]
+    assert calls == [(("map", "plan.csv", QUICK[1].sensor, 1), {"threads": 1, "odometry": "genz"})]
     replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)  # nothing left to do
     assert len(calls) == 1
 

@@ -289,6 +289,9 @@ class BenefitConfig(Section):
     pair_seed: int = _seed("the start/goal pairs")
     lio: Literal["all", "default"] = Field("all", description="Plans the LIO replays too: all, or default (the "
                                                               "default's and the unguided one; a shorter run).")
+    odometry: Literal[LIO_ODOMETRIES] = Field(
+        "auto", description="The LIO replays' odometry, as replay.odometry (liosam: on the maps of a spinning "
+                            "sensor, auto's choice on the others); each odometry keeps its own replays.")
 
 
 class GobiConfig(Section):

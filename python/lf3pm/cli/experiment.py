@@ -98,17 +98,18 @@ def experiment_benefit(
         None, metavar="NAME=CHANNEL:POWER:WEIGHT",
         help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
     lio: Optional[str] = option("benefit.lio"),
+    odometry: Optional[str] = option("benefit.odometry"),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
         from lf3pm.experiments import benefit
 
-        study = configure(None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio")).benefit
+        study = configure(None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry")).benefit
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
         with progress_bar() as step:
             benefit.run(out, quick=quick, seeds=study.seeds, workers=study.workers, pair_seed=study.pair_seed,
-                        guidance=candidates, lio=study.lio, progress=step)
+                        guidance=candidates, lio=study.lio, odometry=study.odometry, progress=step)
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")

@@ -41,7 +41,8 @@ from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.localization_error import localization_error_fit
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN, compare
-from lf3pm.experiments.replay_tasks import load_replay, replay_json, replay_summary, run_replays, write_plan
+from lf3pm.experiments.replay_tasks import (ReplayTask, load_replay, replay_json, replay_summary, run_replays,
+                                            write_plan)
 from lf3pm.experiments.risk import AT_RISK_SHARE, RISK_FACTOR, at_risk, risk_share
 from lf3pm.replays.replay_result import REST_SPEED_LIMIT
 
@@ -82,13 +83,16 @@ QUICK = (replace(CASES[0], pairs=1, scene_params={"length": 20.0, "pillars": 8},
 
 def run(out: Path, *, quick: bool = False, seeds: int = DEFAULTS.benefit.seeds, workers: int = DEFAULTS.benefit.workers,
         pair_seed: int = DEFAULTS.benefit.pair_seed, cases: tuple | None = None, guidance: tuple | None = None,
-        lio: str = DEFAULTS.benefit.lio, progress=None) -> dict:
+        lio: str = DEFAULTS.benefit.lio, odometry: str = DEFAULTS.benefit.odometry, progress=None) -> dict:
     """Runs (or resumes) the study into ``out`` and returns the summary. ``guidance``
     replaces :data:`GUIDANCE` (candidates to compare, e.g. when choosing the default).
     ``lio``: which plans the LIO replays too: ``all``, or ``default`` (the one named
-    default and the unguided one: a shorter run)."""
+    default and the unguided one: a shorter run). ``odometry``: the LIO's
+    (:func:`lio_odometry`); the replays of each keep their own JSONs, so that a second
+    odometry's run in the same folder reuses the SOLMs, plans and localization replays."""
     out = Path(out)
-    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio)
+    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio,
+              odometry=odometry)
     cases = cases if cases is not None else (QUICK if quick else CASES)
     guidance = tuple(guidance) if guidance is not None else GUIDANCE
     names = [g.name for g in guidance]
@@ -101,6 +105,7 @@ def run(out: Path, *, quick: bool = False, seeds: int = DEFAULTS.benefit.seeds, 
     started = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     records, tasks = [], []
+    lio_runs = {case.name: lio_odometry(case, odometry) for case in cases}
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
         solm_path = build_case_solm(case, out / "solm" / f"{case.name}.zarr")
@@ -109,12 +114,14 @@ def run(out: Path, *, quick: bool = False, seeds: int = DEFAULTS.benefit.seeds, 
             records.append(pair)
             for name, plan in pair["plans"].items():
                 for method in ("localization", "lio") if name in lio_names else ("localization",):
+                    label, options = (lio_runs[case.name]["label"], {"odometry": lio_runs[case.name]["odometry"]}) \
+                        if method == "lio" else (method, {})
                     for seed in range(seeds):
-                        tasks.append((case, str(out / plan["csv"]), method, seed,
-                                      replay_path(out, case, pair["pair"], name, method, seed)))
+                        tasks.append(ReplayTask(case, str(out / plan["csv"]), method, seed,
+                                                replay_path(out, case, pair["pair"], name, label, seed), options))
         step(f"{case.name}: {len(pairs)} pairs planned", len(cases))
     run_replays(tasks, workers, step)
-    summary = _summarise(out, cases, guidance, lio_names[1:], records, seeds, pair_seed,
+    summary = _summarise(out, cases, guidance, lio_names[1:], lio_runs, records, seeds, pair_seed,
                          time.perf_counter() - started)
     summary["localization_error"] = localization_error_fit(out, cases, records, seeds=seeds, pair_seed=pair_seed,
                                                            step=step)
@@ -214,8 +221,23 @@ def _draw(planner, zone, robot, rng, tries: int = 200):
 
 # --- replays --------------------------------------------------------------------------
 
+def lio_odometry(case: MapCase, odometry: str) -> dict:
+    """The odometry the LIO replays of ``case`` run for the study's ``odometry``
+    (``liosam`` on a sensor without rings: auto's choice) and the label of their JSONs:
+    ``lio`` for auto's choice, else ``lio-<name>``."""
+    from lf3pm.replays.lio import choose_odometry
+    from lf3pm.sensors import get_sensor, spinning_rings
+
+    sensor = get_sensor(case.sensor)
+    if odometry == "liosam" and spinning_rings(sensor) is None:
+        odometry = "auto"
+    chosen, default = choose_odometry(odometry, sensor), choose_odometry("auto", sensor)
+    return {"odometry": chosen, "label": "lio" if chosen == default else f"lio-{chosen}"}
+
+
 def replay_path(out: Path, case: MapCase, pair: int, guidance: str, method: str, seed: int) -> Path:
-    """Where the study keeps one replay's JSON (replay_tasks.replay_task)."""
+    """Where the study keeps one replay's JSON (replay_tasks.replay_task); ``method``: the
+    replay method, or a LIO's label (:func:`lio_odometry`)."""
     return replay_json(out / "replays" / case.name, _plan_prefix(pair, guidance), method, seed)
 
 
@@ -226,16 +248,17 @@ def _plan_prefix(pair: int, guidance: str) -> str:
 
 # --- analysis -------------------------------------------------------------------------
 
-def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list, seeds: int, pair_seed: int,
-               seconds: float) -> dict:
+def _summarise(out: Path, cases, guidance: tuple, lio_names: list, lio_runs: dict, records: list, seeds: int,
+               pair_seed: int, seconds: float) -> dict:
     by_name = {case.name: case for case in cases}
     replay_seconds = 0.0
     for pair in records:
         case = by_name[pair["case"]]
         for name, plan in pair["plans"].items():
             for method in ("localization", "lio") if name in ["none"] + lio_names else ("localization",):
+                label = lio_runs[case.name]["label"] if method == "lio" else method
                 runs = [load_replay(p) for p in
-                        (replay_path(out, case, pair["pair"], name, method, s) for s in range(seeds))
+                        (replay_path(out, case, pair["pair"], name, label, s) for s in range(seeds))
                         if p.exists()]
                 replay_seconds += sum(r["seconds"] for r in runs)
                 if runs:
@@ -256,6 +279,7 @@ def _summarise(out: Path, cases, guidance: tuple, lio_names: list, records: list
                 for kind in sorted({r["robot"] for r in records})}
     return {"experiment": "benefit", "seeds": seeds, "pair_seed": pair_seed, "runtime_s": seconds,
             "lio_guidance": ["none"] + lio_names,
+            "lio_odometry": {name: run["odometry"] for name, run in lio_runs.items()},
             "replay_cpu_s": replay_seconds,
             "failure_ape_m": FAILURE_APE, "cases": [asdict(c) for c in cases],
             "guidance": [asdict(g) for g in (UNGUIDED,) + guidance], "pairs": records,
@@ -387,6 +411,17 @@ def _goal(comparisons: dict) -> dict:
     return goal
 
 
+def _odometry_line(summary: dict) -> str:
+    """Which odometry ran the LIO replays of which maps, e.g. "DLIO: tunnel, houses;
+    GenZ-LIO: gobi"."""
+    from lf3pm.replays.lio import ODOMETRIES
+
+    maps: dict = {}
+    for case, odometry in summary.get("lio_odometry", {}).items():
+        maps.setdefault(ODOMETRIES[odometry].name, []).append(case)
+    return "; ".join(f"{name}: {', '.join(cases)}" for name, cases in maps.items())
+
+
 def report(summary: dict) -> str:
     """The Markdown tables of a summary."""
     def row(name, c):
@@ -418,7 +453,7 @@ def report(summary: dict) -> str:
     lines += [row(g["name"], comps["localization"][g["name"]]) for g in summary["guidance"] if g["name"] != "none"]
     lio_rows = [row(g["name"], comps["lio"][g["name"]]) for g in summary["guidance"] if g["name"] in comps["lio"]]
     if lio_rows:
-        lines += ["", "## LIO (odometry auto: DLIO for spinning sensors, GenZ-LIO for Livox)", "", header] + lio_rows
+        lines += ["", f"## LIO ({_odometry_line(summary)})", "", header] + lio_rows
     rest = summary.get("lio_rest", {})
     if any(v["replays"] for v in rest.values()):
         counts = ", ".join(f"{name} {v['unsteady']} of {v['replays']}" for name, v in rest.items() if v["replays"])

@@ -31,7 +31,8 @@ from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, case_source
 from lf3pm.io import write_points
 from lf3pm.map import load_map
-from lf3pm.experiments.replay_tasks import load_replay, replay_json, replay_summary, run_replays, write_plan
+from lf3pm.experiments.replay_tasks import (ReplayTask, load_replay, replay_json, replay_summary, run_replays,
+                                            write_plan)
 from lf3pm.planner.plan import Planner
 from lf3pm.trajectory.robots import Robot
 from lf3pm.sensors import get_sensor
@@ -113,7 +114,7 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
         results[g.name] = {**plan.summary(), "guidance": asdict(g), "S": along.s, "mde_poses": len(poses),
                            "mde_refused": len(along.refused), "mde": _finite_list(along.mde),
                            "mde_times": times.tolist()}
-        tasks += [(case, str(csv), method, seed, replay_json(out / "replays", f"{g.name}_", method, seed))
+        tasks += [ReplayTask(case, str(csv), method, seed, replay_json(out / "replays", f"{g.name}_", method, seed))
                   for method in METHODS for seed in range(setup.replay_seeds)]
         step("planning and MDE along the plans", len(guidance))
     run_replays(tasks, setup.workers, step)

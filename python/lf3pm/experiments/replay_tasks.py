@@ -1,6 +1,6 @@
 """Many replays of planned trajectories, in worker processes, each saved as it ends.
 
-A task is (MapCase, trajectory CSV, method, seed, JSON path). A worker loads each
+A task is a :class:`ReplayTask`. A worker loads each
 map (and prepares it for registration) once; a replay's summary is written
 atomically to its JSON path, so an interrupted experiment resumes by skipping
 the tasks whose JSON exists. Workers use the spawn start method: small_gicp,
@@ -16,11 +16,25 @@ import re
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.experiments.map_cases import load_case_map
+
+
+class ReplayTask(NamedTuple):
+    """One replay of an experiment: the plan's CSV on the case's map by ``method`` with
+    ``seed``, its JSON written to ``path``; ``options``: further replay arguments (the
+    LIO's odometry)."""
+
+    case: object
+    csv: str
+    method: str
+    seed: int
+    path: Path
+    options: dict = {}
 
 
 def replay_json(replays: Path, prefix: str, method: str, seed: int) -> Path:
@@ -36,7 +50,7 @@ def write_plan(trajectory, csv: Path, replays: Path, prefix: str) -> None:
     and must never score an old plan's replay as the new one's."""
     data = trajectory.csv_bytes()
     if csv.exists() and csv.read_bytes() != data:
-        stale = re.compile(re.escape(prefix) + r"[a-z]+_\d+\.json")
+        stale = re.compile(re.escape(prefix) + r"[a-z]+(?:-[a-z]+)?_\d+\.json")  # method[-odometry]_seed
         for path in replays.glob(f"{glob.escape(prefix)}*.json"):
             if stale.fullmatch(path.name):
                 path.unlink()
@@ -49,8 +63,8 @@ def run_replays(tasks: list, workers: int, step) -> None:
     """Runs the tasks whose JSON is missing, ``workers`` at a time, calling
     step(label, total, advance=1, restart=False) as they end. A LIO replay saved
     before replays recorded their rest gets it added (rest_task)."""
-    todo = [(replay_task, t) for t in tasks if not t[-1].exists()]
-    todo += [(rest_task, t) for t in tasks if t[2] == "lio" and t[-1].exists() and "rest" not in load_replay(t[-1])]
+    todo = [(replay_task, t) for t in tasks if not t.path.exists()]
+    todo += [(rest_task, t) for t in tasks if t.method == "lio" and t.path.exists() and "rest" not in load_replay(t.path)]
     label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
     step(label, len(todo), 0, restart=True)
     if not todo:
@@ -96,9 +110,9 @@ def replay_task(task) -> None:
     written atomically as JSON."""
     from lf3pm.replays.replay import replay
 
-    case, csv, method, seed, path = task
+    case, csv, method, seed, path, options = task
     world, target = _case_map(case)
-    result = replay(world, csv, case.sensor, method, seed, target=target, threads=1)
+    result = replay(world, csv, case.sensor, method, seed, target=target, threads=1, **options)
     errors = np.asarray(result.errors)
     every = max(1, int(round(result.params["rate"])))
     record = {"ape_rmse": result.ape["rmse"], "ape_median": result.ape["median"], "ape_max": result.ape["max"],
@@ -122,10 +136,10 @@ def rest_task(task) -> None:
     of its time."""
     from lf3pm.replays.replay import replay_rest
 
-    case, csv, _, seed, path = task
+    case, csv, _, seed, path, options = task
     world, _ = _case_map(case)
     record = load_replay(path)
-    record["rest"] = replay_rest(world, csv, case.sensor, seed, threads=1)
+    record["rest"] = replay_rest(world, csv, case.sensor, seed, threads=1, **options)
     with atomic_write(path) as fp:
         fp.write(json.dumps(record).encode())
 
