@@ -39,10 +39,10 @@ from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp  # noqa
 import lf3pm  # noqa: E402
 from lf3pm.experiments.gobi import REDUCED  # noqa: E402
 from lf3pm.scenes import build_scene  # noqa: E402
-from lf3pm.replays.lio import ODOMETRIES  # noqa: E402
+from lf3pm.replays.lio import ODOMETRIES, runs_on  # noqa: E402
 from lf3pm.replays.motion import Motion  # noqa: E402
 from lf3pm.replays.trajectory_metrics import time_offset  # noqa: E402
-from lf3pm.sensors import get_sensor, spinning_rings  # noqa: E402
+from lf3pm.sensors import get_sensor  # noqa: E402
 
 RATE = 100.0  # motion samples per second, as a plan's CSV
 
@@ -115,7 +115,7 @@ def main() -> None:
             for label, seed, noise in runs:
                 row = f"{scene:10s} {sensor:7s} {label:10s}"
                 for odometry, _, settings in columns:
-                    if odometry == "liosam" and spinning_rings(get_sensor(sensor)) is None:
+                    if not runs_on(odometry, get_sensor(sensor)):
                         row += f" | {'n/a (no rings)':>34s} {'':7s} {'':7s} {'':7s}"
                         continue
                     result = lf3pm.replay(world, motion, sensor, "lio", seed=seed, odometry=odometry, **noise,

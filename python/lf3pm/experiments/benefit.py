@@ -113,9 +113,10 @@ def run(out: Path, *, quick: bool = False, seeds: int = DEFAULTS.benefit.seeds, 
         for pair in pairs:
             records.append(pair)
             for name, plan in pair["plans"].items():
+                lio_run = lio_runs[case.name]
                 for method in ("localization", "lio") if name in lio_names else ("localization",):
-                    label, options = (lio_runs[case.name]["label"], {"odometry": lio_runs[case.name]["odometry"]}) \
-                        if method == "lio" else (method, {})
+                    label, options = (lio_run["label"], {"odometry": lio_run["odometry"]}) if method == "lio" \
+                        else (method, {})
                     for seed in range(seeds):
                         tasks.append(ReplayTask(case, str(out / plan["csv"]), method, seed,
                                                 replay_path(out, case, pair["pair"], name, label, seed), options))
@@ -223,13 +224,13 @@ def _draw(planner, zone, robot, rng, tries: int = 200):
 
 def lio_odometry(case: MapCase, odometry: str) -> dict:
     """The odometry the LIO replays of ``case`` run for the study's ``odometry``
-    (``liosam`` on a sensor without rings: auto's choice) and the label of their JSONs:
+    (one the sensor cannot feed, LIO-SAM without rings: auto's choice) and the label of their JSONs:
     ``lio`` for auto's choice, else ``lio-<name>``."""
-    from lf3pm.replays.lio import choose_odometry
-    from lf3pm.sensors import get_sensor, spinning_rings
+    from lf3pm.replays.lio import choose_odometry, runs_on
+    from lf3pm.sensors import get_sensor
 
     sensor = get_sensor(case.sensor)
-    if odometry == "liosam" and spinning_rings(sensor) is None:
+    if odometry != "auto" and not runs_on(odometry, sensor):
         odometry = "auto"
     chosen, default = choose_odometry(odometry, sensor), choose_odometry("auto", sensor)
     return {"odometry": chosen, "label": "lio" if chosen == default else f"lio-{chosen}"}

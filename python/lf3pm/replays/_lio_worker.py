@@ -18,8 +18,11 @@ import os
 import pickle
 import sys
 import time
+from collections import deque
+from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 _GENZ_SECTIONS = ("preprocess", "mapping", "adaptive_voxelization", "hybrid_metric", "noise_model")
 
@@ -128,8 +131,7 @@ class Dlio:
         data["t"] = np.round(offsets * 1e9).astype(np.uint32)
         self.pipeline.add_lidar(_measurement(self.helpers, types, self.fields, data, begin))
         estimates = self.pipeline.saved_estimates()
-        unique = np.unique(data["t"])
-        median = begin + unique[len(unique) // 2] * 1e-9  # DLIO's scan time: its median distinct return time
+        median = _median_time(begin, data["t"])  # DLIO's scan time
         if not estimates:
             return [(None, median, "skipped: no estimate")]
         _, se3 = estimates[-1]
@@ -143,13 +145,17 @@ class Dlio:
         return []
 
 
+@dataclass
 class _Queued:
     """A scan LIO-SAM has not reported yet: the time its pose refers to, its status,
     whether LIO-SAM was given it, its last return and the rotation from its first
     return to ``time``."""
 
-    def __init__(self, time, status, given, last=None, turn=None):
-        self.time, self.status, self.given, self.last, self.turn = time, status, given, last, turn
+    time: float | None
+    status: str
+    given: bool
+    last: float | None = None
+    turn: np.ndarray | None = None
 
 
 class LioSam:
@@ -200,18 +206,17 @@ class LioSam:
         self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, -9.81]), **noise))
         self.pipeline.set_lidar_params(types.LidarParams(num_rows=len(lidar["beams"]), num_columns=lidar["columns"],
                                                          min_range=sensor_range[0], max_range=sensor_range[1]))
-        c, s = np.cos(self.TILT), np.sin(self.TILT)
-        self.lidar_R_imu = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-        half = self.TILT / 2  # imu_T_lidar: the rotation -TILT about x, as a quaternion
-        self.pipeline.set_imu_T_lidar(types.SE3(types.SO3(qx=-np.sin(half), qy=0.0, qz=0.0, qw=np.cos(half)),
-                                                np.zeros(3)))
+        mounting = Rotation.from_rotvec([self.TILT, 0.0, 0.0])  # the IMU's axes in the LiDAR's
+        self.lidar_R_imu = mounting.as_matrix()
+        qx, qy, qz, qw = mounting.inv().as_quat()  # imu_T_lidar
+        self.pipeline.set_imu_T_lidar(types.SE3(types.SO3(qx=qx, qy=qy, qz=qz, qw=qw), np.zeros(3)))
         self.pipeline.initialize()
         self.beams = np.asarray(lidar["beams"], float)
         self.fields = _fields(helpers, self._DTYPE)
         self.queue = []  # _Queued, in scan order
         self.pose = None  # the pose of the last scan LIO-SAM processed (None: none yet)
         self.imu_span = None  # (first, last) IMU time given
-        self.begins = []  # the stamps of the scans given
+        self.begins = deque(maxlen=2)  # the stamps of the last two scans given
 
     def scan(self, points, begin, end, offsets, imu):
         self._add_imu(imu)
@@ -225,8 +230,7 @@ class LioSam:
         data["ring"] = np.abs(elevation[:, None] - self.beams[None, :]).argmin(axis=1)
         self.pipeline.add_lidar(_measurement(self.helpers, self.types, self.fields, data, begin))
         self.begins.append(begin)
-        unique = np.unique(data["t"])
-        median = begin + unique[len(unique) // 2] * 1e-9
+        median = _median_time(begin, data["t"])
         # LIO-SAM drops a scan whose time span the IMU samples do not cover.
         status = "ok" if self.imu_span is not None and self.imu_span[0] <= begin else \
             "skipped: no IMU samples before the scan"
@@ -288,23 +292,22 @@ class LioSam:
 def _turn(imu, begin, end):
     """The rotation (3, 3) of the body from ``begin`` to ``end`` by the gyro rows of
     ``imu`` (t, accel, gyro), each rate held over the interval up to its sample."""
+    if not len(imu):
+        return np.eye(3)
     t, gyro = imu[:, 0], imu[:, 4:7]
     lower = np.concatenate([[t[0] - (t[1] - t[0]) if len(t) > 1 else t[0]], t[:-1]])
     spans = np.clip(np.minimum(t, end) - np.maximum(lower, begin), 0.0, None)
-    turn = np.eye(3)
-    for rate, span in zip(gyro, spans):
-        if span > 0:
-            turn = turn @ _exp(rate * span)
-    return turn
+    turn = Rotation.identity()
+    for step in Rotation.from_rotvec(gyro * spans[:, None]):
+        turn = turn * step  # body-frame increments compose on the right
+    return turn.as_matrix()
 
 
-def _exp(v):
-    """Rodrigues' rotation (3, 3) of the rotation vector ``v``."""
-    angle = np.linalg.norm(v)
-    k = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    if angle < 1e-12:
-        return np.eye(3) + k
-    return np.eye(3) + np.sin(angle) / angle * k + (1 - np.cos(angle)) / angle**2 * k @ k
+def _median_time(begin, nanoseconds):
+    """A scan's median distinct return time (s) from its first return ``begin`` and the
+    returns' offsets from it (ns)."""
+    unique = np.unique(nanoseconds)
+    return begin + unique[len(unique) // 2] * 1e-9
 
 
 def _fields(helpers, dtype):

@@ -133,10 +133,19 @@ def choose_odometry(odometry: str, sensor: Sensor) -> str:
         return "dlio" if spinning_rings(sensor) is not None else "genz"
     if odometry not in ODOMETRIES:
         raise Lf3pmError(f"unknown odometry {odometry!r}; use one of auto, {', '.join(ODOMETRIES)}")
-    if odometry == "liosam" and spinning_rings(sensor) is None:
-        raise Lf3pmError(f"liosam needs a spinning sensor (rings of beams); the {sensor.name} has none: "
+    if not runs_on(odometry, sensor):
+        raise Lf3pmError(f"{odometry} needs a spinning sensor (rings of beams); the {sensor.name} has none: "
                          "use genz or dlio")
     return odometry
+
+
+#: Odometries that organise each scan by rings (LIO-SAM's range image).
+RING_ODOMETRIES = ("liosam",)
+
+
+def runs_on(odometry: str, sensor: Sensor) -> bool:
+    """Whether ``odometry`` (a key of ODOMETRIES) can take ``sensor``'s scans."""
+    return odometry not in RING_ODOMETRIES or spinning_rings(sensor) is not None
 _WORKER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_lio_worker.py")
 #: Factor on the IMU noise variances the filter is told (imu_noise_model). With
 #: the exact ones it trusted the IMU over its biased matches in the open desert
@@ -164,7 +173,7 @@ TRACKING = ("ok", "map seeded")
 @dataclass(frozen=True)
 class LioEstimate:
     """The odometry's estimate per scan: ``poses`` (M, 4, 4) sensor-to-world at
-    ``times`` (M,) (GenZ-LIO: each scan's end; DLIO: each scan's median return
+    ``times`` (M,) (GenZ-LIO: each scan's end; DLIO and LIO-SAM: each scan's median return
     time), anchored so that the odometry's first pose is the true initial one.
     ``status[k]``: "initializing" (the odometry is still taking the IMU for a still
     one's), "map seeded", "ok", "rejected" (the filter rolled the update back), "no

@@ -48,7 +48,7 @@ class ReplayResult:
     """A replay of ``method`` with ``sensor`` under ``seed``.
 
     ``times`` (M,): the times the estimate refers to (s; the scans' ends, but for
-    an odometry that estimates each scan at another time, DLIO's median return
+    an odometry that estimates each scan at another time, DLIO's and LIO-SAM's median return
     time); ``truth``, ``estimate`` (M, 4, 4): sensor-to-world poses there; ``hits`` (M,): returns per scan;
     ``skipped``: indices of the scans the estimator did not use (too few
     points; the estimate kept its prediction); ``degenerate_directions`` (M,):
@@ -164,7 +164,7 @@ class ReplayResult:
 
 def estimate_times(run: Estimate, scans) -> tuple[np.ndarray, np.ndarray]:
     """The times ``run``'s poses refer to on the ScanStream ``scans`` (the scans' ends,
-    unless the estimator gives its own: DLIO's median return times) and the true poses
+    unless the estimator gives its own: DLIO's and LIO-SAM's median return times) and the true poses
     there."""
     if run.times is None or np.array_equal(run.times, scans.times):
         return scans.times, scans.truth
