@@ -412,7 +412,7 @@ def _goal(comparisons: dict) -> dict:
     return goal
 
 
-def _odometry_line(summary: dict) -> str:
+def odometry_line(summary: dict) -> str:
     """Which odometry ran the LIO replays of which maps, e.g. "DLIO: tunnel, houses;
     GenZ-LIO: gobi"."""
     from lf3pm.replays.lio import ODOMETRIES
@@ -454,7 +454,7 @@ def report(summary: dict) -> str:
     lines += [row(g["name"], comps["localization"][g["name"]]) for g in summary["guidance"] if g["name"] != "none"]
     lio_rows = [row(g["name"], comps["lio"][g["name"]]) for g in summary["guidance"] if g["name"] in comps["lio"]]
     if lio_rows:
-        lines += ["", f"## LIO ({_odometry_line(summary)})", "", header] + lio_rows
+        lines += ["", f"## LIO ({odometry_line(summary)})", "", header] + lio_rows
     rest = summary.get("lio_rest", {})
     if any(v["replays"] for v in rest.values()):
         counts = ", ".join(f"{name} {v['unsteady']} of {v['replays']}" for name, v in rest.items() if v["replays"])

@@ -76,7 +76,10 @@ def scatter_figure(summary: dict, path: Path) -> None:
 
 
 def ratio_figure(summary: dict, path: Path) -> None:
-    """Per map, the ratio APE(default) / APE(none) of every pair (localization and LIO)."""
+    """Per map, the ratio APE(default) / APE(none) of every pair (localization and LIO,
+    the legend naming the LIO's odometry per map)."""
+    from lf3pm.experiments.benefit import odometry_line
+
     if not any(g["name"] == "default" for g in summary["guidance"]):
         return
     plt = _plt()
@@ -87,8 +90,10 @@ def ratio_figure(summary: dict, path: Path) -> None:
         for number, case in enumerate(cases):
             r = np.array([b / max(a, 1e-4) for c, a, b in rows if c == case])
             if r.size:
+                label = method if method == "localization" or "lio_odometry" not in summary else \
+                    f"LIO ({odometry_line(summary)})"
                 ax.scatter(np.full(r.size, number + offset), r, s=16, color=colour,
-                           label=method if number == 0 else None)
+                           label=label if number == 0 else None)
                 ax.plot([number + offset - 0.1, number + offset + 0.1], [np.median(r)] * 2, color=colour, lw=2)
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_yscale("log")
