@@ -50,6 +50,15 @@ def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
     assert np.max(np.hypot(data[:, 4], data[:, 5])) <= 1.02 * 0.7
 
 
+def test_the_composite_channel_plans_from_the_command_line(boxes_solm, tmp_path):
+    csv = tmp_path / "traj.csv"
+    done = run_plan("--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57,
+                    "--r-safe", 0.05, "--metric", "q_n_q_min", "-o", csv)
+    assert done.returncode == 0, done.stderr
+    data = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert np.allclose(data[-1, 1:3], (6.2, 2.2), atol=1e-6)
+
+
 @pytest.mark.parametrize("args, needle", [
     (("--start", 50, 50, 0, "--goal", 6.2, 2.2, 0), "outside"),
     (("--start", -4.0, -4.0, 0, "--goal", 6.2, 2.2, 0), "obstacle"),

@@ -263,6 +263,31 @@ def test_cost_layer_is_normalised_capped_and_scale_free():
         cost_from_values(np.full((2, 2), np.nan))
 
 
+def test_composite_cost_is_the_worse_of_its_parts_each_relative_to_its_median():
+    rng = np.random.default_rng(6)
+    q_n, q_min = rng.lognormal(size=(2, 3, 8, 8))
+    q_n[0, 0, 0], q_min[0, 1, 1], q_n[1, 2, 2] = np.inf, np.inf, np.nan
+    q_min[1, 2, 2] = np.nan
+    degenerate = np.zeros(q_n.shape, bool)
+    degenerate[2, 3, 3] = True
+    arrays = {"q_n": q_n, "q_min": q_min, "degenerate": degenerate}
+    solm = SimpleNamespace(grid_spec=SimpleNamespace(space="se2"), channel=arrays.__getitem__)
+    layer = cost_from_solm(solm, "q_n_q_min")
+    usable = np.isfinite(q_n) & np.isfinite(q_min) & ~degenerate
+    # float64 reference: each part over its own median of usable-for-it cells, the larger taken
+    worse = np.maximum(q_n / np.median(q_n[np.isfinite(q_n) & ~degenerate]),
+                       q_min / np.median(q_min[np.isfinite(q_min) & ~degenerate]))
+    expected = np.minimum(worse / np.median(worse[usable]), layer.cap)
+    np.testing.assert_allclose(layer.cost[usable], expected[usable], rtol=1e-12)
+    assert layer.cost[0, 0, 0] == layer.cost[0, 1, 1] == layer.cost[2, 3, 3] == layer.cap
+    assert np.isnan(layer.cost[1, 2, 2]) and layer.filled[1, 2, 2] == layer.cap
+    # below the cap, never cheaper (before the final normalisation) than either part alone
+    uncapped = usable & (layer.cost < layer.cap)
+    for part in ("q_n", "q_min"):
+        alone = cost_from_solm(solm, part).cost[uncapped]
+        assert (layer.cost[uncapped] * layer.scale >= alone * (1 - 1e-12)).all()
+
+
 @pytest.fixture(scope="module")
 def blocked_map():
     mask = np.zeros((10, 12), bool)

@@ -49,7 +49,10 @@ LIO_ODOMETRIES = ("auto", "genz", "dlio", "liosam")
 
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
-COST_CHANNELS = ("q_n", "q_min", "q_max", "step_norm", "none")
+COST_CHANNELS = ("q_n", "q_min", "q_max", "step_norm", "q_n_q_min", "none")
+#: Cost channels made of SOLM channels: each part relative to its own map median, the larger
+#: taken per cell (planner/cost_map.py).
+COMPOSITE_CHANNELS = {"q_n_q_min": ("q_n", "q_min")}
 #: The smallest speed, yaw rate or acceleration limit a robot takes (m/s, rad/s, m/s^2,
 #: rad/s^2): slower is no robot, and a 10 m plan at 1e-9 m/s would be 300 years of 100 Hz samples.
 MIN_LIMIT = 1e-3

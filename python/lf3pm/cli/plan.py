@@ -30,7 +30,8 @@ def plan(
     config: Optional[Path] = CONFIG_OPTION,
     robot: Optional[str] = option("robot.kind", help="omni, diff (differential drive) or car."),
     metric: Optional[str] = option("guidance.metric", help="SOLM channel guiding the plan: q_n, q_min, "
-                                                           "q_max, step_norm or none."),
+                                                           "q_max, step_norm, q_n_q_min (the worse of q_n "
+                                                           "and q_min per cell) or none."),
     weight: Optional[float] = option("guidance.weight", help="lambda: an edge through cells of cost c costs "
                                                              "length (1 + lambda c); a median cell has c = 1 "
                                                              "(docs/benefit.md)."),

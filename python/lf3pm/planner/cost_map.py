@@ -18,6 +18,12 @@ Transform: the normalised channel is raised to ``power`` (before the cap), so th
 the cost can separate a near-degenerate view from a good one as strongly as
 localization error does (docs/benefit.md measures which channel and power do).
 
+Composite ``q_n_q_min``: per cell the larger of q_n / median(q_n) and q_min /
+median(q_min). q_n predicts the error of localization against the map; q_min is the
+view's weakest direction (1 / sqrt of the smallest eigenvalue of A^T A), along which an
+odometry, which has only its own map, drifts (docs/lio.md, "Drift along the view's
+weakest direction"). A cell is as costly as the worse of the two says.
+
 Channel ``none`` gives zero cost: the planner then finds shortest paths.
 """
 
@@ -29,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import libm
-from lf3pm.config import COST_CHANNELS, DEFAULTS
+from lf3pm.config import COMPOSITE_CHANNELS, COST_CHANNELS, DEFAULTS
 from lf3pm.errors import Lf3pmError
 
 
@@ -92,6 +98,17 @@ def cost_from_solm(solm, channel: str = DEFAULTS.guidance.metric, *, power: floa
         return cost_from_values(np.zeros(solm.grid_spec.shape), "none")
     if channel not in COST_CHANNELS:
         raise Lf3pmError(f"unknown cost channel {channel!r}; use one of {', '.join(COST_CHANNELS)}")
-    return cost_from_values(solm.channel(channel), channel,
-                            degenerate=np.asarray(solm.channel("degenerate")).astype(bool), power=power,
-                            cap_percentile=cap_percentile)
+    degenerate = np.asarray(solm.channel("degenerate")).astype(bool)
+    if channel in COMPOSITE_CHANNELS:
+        values = np.maximum.reduce([relative_to_median(solm.channel(part), part, degenerate)
+                                    for part in COMPOSITE_CHANNELS[channel]])
+    else:
+        values = solm.channel(channel)
+    return cost_from_values(values, channel, degenerate=degenerate, power=power, cap_percentile=cap_percentile)
+
+
+def relative_to_median(values, channel: str, degenerate=None) -> np.ndarray:
+    """``values`` divided by the scale cost_from_values normalises them by (their median
+    over the finite, non-degenerate cells); NaN and +inf kept."""
+    scale = cost_from_values(values, channel, degenerate=degenerate, power=1.0).scale
+    return np.asarray(values, dtype=np.float64) / scale
