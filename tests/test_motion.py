@@ -9,7 +9,7 @@ import lf3pm
 from analytic_scenes import grid_plane
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.ground import smooth_ground
-from lf3pm.replays.motion import Motion
+from lf3pm.replays.motion import Motion, quintic_hermite
 from lf3pm.trajectory.trajectory import Trajectory, read_csv
 from lf3pm.config import DEFAULT_HEIGHT
 from lf3pm.terrain import body_blocked
@@ -57,6 +57,22 @@ def test_motion_reproduces_the_planner_cubic(floor, spline, tmp_path):
     pose = motion.pose(t[:3])
     np.testing.assert_allclose(pose[:, :3, 3], motion.position(t[:3]))
     np.testing.assert_allclose(np.arctan2(pose[:, 1, 0], pose[:, 0, 0]), motion.yaw(t[:3]), atol=1e-12)
+
+
+def test_quintic_hermite_matches_scipys_bernstein_construction():
+    from scipy.interpolate import BPoly
+
+    rng = np.random.default_rng(7)
+    t = np.cumsum(np.r_[0.3, rng.uniform(0.005, 0.05, 400)])
+    p, v, a = rng.normal(size=(3, len(t)))
+    ours = quintic_hermite(t, p, v, a)
+    reference = BPoly.from_derivatives(t, np.column_stack([p, v, a]))
+    inside = np.sort(rng.uniform(t[0], t[-1], 2000))
+    for k, scale in enumerate((1.0, 1.0 / 0.005, 1.0 / 0.005**2)):
+        # Both are float64 polynomials on intervals of h >= 5 ms: a k-th derivative carries
+        # rounding of about eps x value scale / h^k.
+        np.testing.assert_allclose(ours(inside, k), reference(inside, k), rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(ours(t[:-1], k), (p, v, a)[k][:-1], rtol=0, atol=1e-12 * scale)
 
 
 def test_motion_is_c2_and_its_derivatives_agree(floor, spline):

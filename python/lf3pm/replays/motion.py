@@ -3,7 +3,7 @@
 ``lf3pm plan`` writes t, x, y, yaw, vx, vy, omega at 100 Hz, exact samples of
 a piecewise-cubic (MINCO) trajectory. Between two samples x, y and yaw are
 quintic Hermite polynomials matching the value, the rate and the second
-derivative at both samples (scipy ``BPoly.from_derivatives``), so the motion is
+derivative at both samples (``quintic_hermite``), so the motion is
 C2 and an accelerometer is defined everywhere. The second derivatives at the
 samples are the second-order finite differences of the given rates
 (``numpy.gradient``, exact for the quadratic rates of a cubic piece), so the
@@ -36,6 +36,31 @@ from lf3pm.config import DEFAULT_HEIGHT
 Z_KNOT_RATE = 100.0
 
 
+def quintic_hermite(t, p, v, a):
+    """The piecewise quintic (scipy ``PPoly``, power basis) through values ``p``, rates
+    ``v`` and second derivatives ``a`` at the increasing knots ``t``. Closed form per
+    interval: scipy's ``BPoly.from_derivatives`` (then ``PPoly.from_bernstein_basis``)
+    builds the same polynomials one interval at a time in Python, 0.32 s against 0.4 ms
+    for 5,000 knots (a 50 s plan); coefficients agree to 3e-8 relative, values to 2e-14
+    (tests/test_motion.py)."""
+    from scipy.interpolate import PPoly
+
+    t, p, v, a = (np.asarray(c, dtype=np.float64) for c in (t, p, v, a))
+    h = np.diff(t)
+    # The start fixes the terms up to s^2; what that quadratic misses at the interval's end
+    # in value, rate and acceleration (d, dv, da, scaled by h) fixes h^3 c3, h^4 c4 and
+    # h^5 c5 through a 3 x 3 system solved by hand. PPoly rows: highest power first.
+    d = p[1:] - p[:-1] - v[:-1] * h - 0.5 * a[:-1] * h * h
+    dv = (v[1:] - v[:-1] - a[:-1] * h) * h
+    da = (a[1:] - a[:-1]) * h * h
+    c = np.empty((6, len(h)))
+    c[0] = (6.0 * d - 3.0 * dv + 0.5 * da) / h**5
+    c[1] = (-15.0 * d + 7.0 * dv - da) / h**4
+    c[2] = (10.0 * d - 4.0 * dv + 0.5 * da) / h**3
+    c[3], c[4], c[5] = 0.5 * a[:-1], v[:-1], p[:-1]
+    return PPoly(c, t)
+
+
 class Motion:
     """A C2 sensor trajectory (see the module docstring). Times in seconds,
     world frame, z up; every method takes an array of times and clamps it to
@@ -45,27 +70,22 @@ class Motion:
     """
 
     def __init__(self, t, x, y, yaw, vx, vy, omega, ground: SmoothGround, height: float):
-        from scipy.interpolate import BPoly, PPoly
-
         t, _ = check_trajectory(t, np.column_stack([x, y, np.zeros_like(np.asarray(x, float)), yaw]))
         channels = [np.asarray(c, dtype=np.float64) for c in (x, y, np.unwrap(np.asarray(yaw, float)))]
         rates = [np.asarray(c, dtype=np.float64) for c in (vx, vy, omega)]
         if any(r.shape != t.shape or not np.all(np.isfinite(r)) for r in rates):
             raise Lf3pmError("the trajectory's rates must be finite, one per sample")
         edge = 2 if len(t) > 2 else 1
-        # Built in Bernstein form, evaluated in the power basis (ten times faster).
-        self._polys = [PPoly.from_bernstein_basis(
-            BPoly.from_derivatives(t, np.column_stack([p, v, np.gradient(v, t, edge_order=edge)])))
-            for p, v in zip(channels, rates)]
+        self._polys = [quintic_hermite(t, p, v, np.gradient(v, t, edge_order=edge)) for p, v in zip(channels, rates)]
         self.t0, self.t1 = float(t[0]), float(t[-1])
         self.samples = t
         self.ground = ground
         self.height = float(height)
-        self._polys.insert(2, self._height_poly(BPoly, PPoly))   # channels x, y, z, yaw
+        self._polys.insert(2, self._height_poly())   # channels x, y, z, yaw
         self._rates = [poly.derivative(1) for poly in self._polys]
         self._accels = [poly.derivative(2) for poly in self._polys]
 
-    def _height_poly(self, BPoly, PPoly):
+    def _height_poly(self):
         """z(t) = g(x(t), y(t)) + height as a quintic Hermite polynomial through its
         exact value, rate and acceleration (chain rule) at the samples and every
         10 ms between: C2, within about (10 ms)^6 z^(6) of the composition, and
@@ -80,8 +100,7 @@ class Motion:
         g, gx, gy, gxx, gxy, gyy = self.ground.derivatives(x, y)
         z_rate = gx * vx + gy * vy
         z_accel = gxx * vx * vx + 2.0 * gxy * vx * vy + gyy * vy * vy + gx * ax + gy * ay
-        return PPoly.from_bernstein_basis(
-            BPoly.from_derivatives(knots, np.column_stack([g + self.height, z_rate, z_accel])))
+        return quintic_hermite(knots, g + self.height, z_rate, z_accel)
 
     @classmethod
     def from_arrays(cls, t, x, y, yaw, vx=None, vy=None, omega=None, *, map: Map,
