@@ -122,6 +122,28 @@ def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path)
     np.testing.assert_allclose(grad, num, rtol=1e-4)
 
 
+def test_the_obstacle_mask_sees_a_thin_pole_only_on_cells_the_radius_covers(tmp_path):
+    # A floor and a pole 1.5 m tall, 0.57 m from the nearest centre of a 1 m grid and 0.14 m
+    # from one of a 0.4 m grid (robot radius 0.3 m: cells up to 0.42 m are covered).
+    xs = np.arange(-2.0, 2.001, 0.1)
+    floor = np.array([(x, y, 0.0) for x in xs for y in xs])
+    pole = np.array([(0.9, 0.9, z) for z in np.arange(0.05, 1.5, 0.05)])
+    world, sensor = lf3pm.load_map(np.vstack([floor, pole])), lf3pm.get_sensor("vlp16")
+    blocked = {}
+    for res in (1.0, 0.4):
+        grid = make_grid(world, "r2", res, bounds=(-2, -2, 2, 2), height=1.0)
+        if res > 0.3 * np.sqrt(2):
+            with pytest.warns(UserWarning, match="thin obstacle .* use --res 0.42 or less"):
+                build_solm(world, sensor, grid, tmp_path / f"{res}.zarr", noise=0.0)
+        else:
+            build_solm(world, sensor, grid, tmp_path / f"{res}.zarr", noise=0.0)
+        solm = Solm.open(tmp_path / f"{res}.zarr")
+        x, y = solm.grid()
+        cell = np.argmin(np.maximum(np.abs(x - 0.9), np.abs(y - 0.9)))  # the cell holding the pole
+        blocked[res] = bool(solm.channel("obstacle").ravel()[cell])
+    assert blocked == {1.0: False, 0.4: True}
+
+
 @pytest.mark.parametrize("kwargs,needle", [
     ({"bounds": (100, 100, 110, 110)}, "outside"),
     ({"res": 0.0}, "solm.res must be greater than 0"),

@@ -4,6 +4,7 @@ resumable (see store.py)."""
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -74,6 +75,11 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
                              "2D cell index * yaw_bins + sector)", "tile": tile,
              "yaw_reuse": layout.yaw_reuse, "ray_stride": layout.ray_stride}
     ground_robot = grid.space != "r3"
+    if ground_robot and 0 < job.robot_radius < grid.res / math.sqrt(2):
+        warnings.warn(f"{out}: cells of {grid.res:g} m are wider than the obstacle mask sees: it probes the robot "
+                      f"body at each cell's centre within {job.robot_radius:g} m, so a thin obstacle (a trunk, "
+                      f"a pole, a bush) off-centre leaves its cell free; use --res {job.robot_radius * math.sqrt(2):.2f} "
+                      f"or less on maps with thin obstacles (docs/solm.md, Masks)", UserWarning, stacklevel=2)
     if engine == "ray":
         from lf3pm.solm.cluster import connect
 
