@@ -72,7 +72,20 @@ def test_quintic_hermite_matches_scipys_bernstein_construction():
         # Both are float64 polynomials on intervals of h >= 5 ms: a k-th derivative carries
         # rounding of about eps x value scale / h^k.
         np.testing.assert_allclose(ours(inside, k), reference(inside, k), rtol=0, atol=1e-12 * scale)
-        np.testing.assert_allclose(ours(t[:-1], k), (p, v, a)[k][:-1], rtol=0, atol=1e-12 * scale)
+        # Each piece at its own right end (a PPoly at a knot reads the next piece).
+        ends = [np.polyval(np.polyder(ours.c[:, i], k), h) for i, h in enumerate(np.diff(t))]
+        np.testing.assert_allclose(ends, (p, v, a)[k][1:], rtol=0, atol=1e-12 * scale)
+
+
+def test_motion_in_unix_time_equals_the_motion_from_zero(floor, spline):
+    s = trajectory_of(spline).sample(100.0)
+    rates = (s["vx"], s["vy"], s["omega"])
+    at_zero = Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], *rates, map=floor)
+    offset = 1.7e9  # s: a stamp of 2023; float64 keeps 2.4e-7 s there
+    in_unix = Motion.from_arrays(s["t"] + offset, s["x"], s["y"], s["yaw"], *rates, map=floor)
+    times = np.linspace(0.0, s["t"][-1], 157)
+    # Positions move by the rounding of the stamps times the speed (< 2 m/s): well under 1e-5 m.
+    np.testing.assert_allclose(in_unix.pose(times + offset), at_zero.pose(times), rtol=0, atol=1e-5)
 
 
 def test_motion_is_c2_and_its_derivatives_agree(floor, spline):

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lf3pm.config import COMPOSITE_CHANNELS
 from lf3pm.solm.figures import save_figure
 
 _MARKERS = "osD^vP*X"
@@ -124,7 +125,8 @@ def example_figures(cases, summary: dict, out: Path) -> None:
         solm = Solm.open(out / "solm" / f"{case.name}.zarr")
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 9), dpi=110, gridspec_kw={"height_ratios": [3, 1]})
         channel = next(g["channel"] for g in summary["guidance"] if g["name"] == "default")
-        draw_heat_map(fig, top, solm, channel=channel, reduce="min")
+        # A composite cost channel is no SOLM channel: drawn over its first part.
+        draw_heat_map(fig, top, solm, channel=COMPOSITE_CHANNELS.get(channel, (channel,))[0], reduce="min")
         for name, colour in (("none", "white"), ("default", "tab:red")):
             plan = pair["plans"][name]
             t, x, y, yaw = (read_csv(out / plan["csv"])[k] for k in ("t", "x", "y", "yaw"))

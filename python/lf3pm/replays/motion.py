@@ -92,7 +92,10 @@ class Motion:
         as fast to evaluate as x and y (a ground spline per ray is not)."""
         grid = self.t0 + np.arange(int(np.floor((self.t1 - self.t0) * Z_KNOT_RATE)) + 1) / Z_KNOT_RATE
         knots = np.unique(np.concatenate([self.samples, grid]))
-        knots = knots[np.r_[True, np.diff(knots) > 1e-9 * max(1.0, abs(self.t1))]]
+        # Knots closer than rounding merge; the tolerance follows the span, not the clock
+        # (stamps in Unix time would otherwise merge every knot).
+        merge = max(1e-9 * max(1.0, self.t1 - self.t0), 64 * np.finfo(float).eps * max(abs(self.t0), abs(self.t1)))
+        knots = knots[np.r_[True, np.diff(knots) > merge]]
         knots[-1] = self.t1
         (x, y), (vx, vy), (ax, ay) = ([p(knots) for p in polys[:2]] for polys in
                                       (self._polys, [q.derivative(1) for q in self._polys],
