@@ -1,13 +1,13 @@
 """How close do a benefit study's plans pass to the map's points, in the robot body's height band?
 
-The SOLM's obstacle mask probes the robot body (a vertical segment from the floor
-clearance, 0.2 m, up to the sensor, radius ``--robot-radius``) at each cell's centre only,
-and the planner's ESDF keeps ``r_safe`` from the blocked cells. A thin obstacle (a trunk, a
-pole) more than the radius from every centre leaves its cell free (docs/design.md, "Open
-items"). This bench measures what that costs: for every plan CSV of a study, sampled at
-10 Hz, the smallest horizontal distance from the sensor's axis to a map point between
-0.8 m below the sensor (the floor clearance for the default 1 m height) and the sensor,
-and lists the plans that come closer than ``--radius``::
+The planner keeps the body (radius ``--robot-radius``) plus ``r_safe`` off the SOLM's
+occupancy layer (docs/solm.md, "Occupancy layer"); before that layer its ESDF came from the
+coarse obstacle mask, which probes the body at cell centres only and missed thin obstacles
+between them (on the gobi's 1 m cells, plans passed 1-5 cm from bushes). This bench checks
+a study's plans against the map itself: for every plan CSV, sampled at 10 Hz, the smallest
+horizontal distance from the sensor's axis to a map point between 0.8 m below the sensor
+(the floor clearance for the default 1 m height) and the sensor, and lists the plans that
+come closer than ``--radius``::
 
     .venv/bin/python bench/plan_clearance.py --study out/b2
 """

@@ -24,11 +24,15 @@ class FieldSolm:
 
     def __init__(self):
         self.grid_spec = SolmGrid("se2", 0.0, 0.0, RES, NX, NY, yaw_bins=BINS)
+        self.attrs = {"robot_radius": 0.3}
         yaws = np.arange(BINS) * 2 * math.pi / BINS
         self._q = np.broadcast_to((1 + 2 * (1 + np.cos(yaws)))[:, None, None], (BINS, NY, NX)).copy()
 
     def channel(self, name):
         return self._q if name in ("q_n", "q_min", "step_norm") else np.zeros((BINS, NY, NX))
+
+    def occupancy(self):
+        return np.zeros((NY, NX), bool), 1
 
 
 def backwards_share(samples) -> float:

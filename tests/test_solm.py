@@ -16,6 +16,8 @@ from lf3pm.io import write_points
 from lf3pm.pose import pose_matrix
 from lf3pm.solm import Solm, build_solm, make_grid
 from lf3pm.solm.ray_thinning import thin_rays
+from lf3pm.terrain import occupied_cells
+from lf3pm.planner.esdf import Esdf
 from lf3pm.scenes import build_scene
 
 BOUNDS = (-3.5, -3.5, 3.5, 3.5)
@@ -98,7 +100,9 @@ def test_query_interpolates_and_its_gradient_matches_finite_differences(built):
     xs, ys, yaws = solm.grid()
     k, iy, ix = np.argwhere(np.isfinite(q))[0]
     assert solm.query(xs[k, iy, ix], ys[k, iy, ix], yaws[k, iy, ix])[0] == pytest.approx(q[k, iy, ix])
-    assert solm.query(0.1, 0.2, 0.3)[0] == pytest.approx(solm.query(0.1, 0.2, 0.3 + 2 * np.pi)[0])
+    cx, cy = xs[k, iy, ix], ys[k, iy, ix]
+    assert np.isfinite(solm.query(cx, cy, 0.3)[0])
+    assert solm.query(cx, cy, 0.3)[0] == pytest.approx(solm.query(cx, cy, 0.3 + 2 * np.pi)[0])
 
 
 def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path):
@@ -122,26 +126,49 @@ def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path)
     np.testing.assert_allclose(grad, num, rtol=1e-4)
 
 
-def test_the_obstacle_mask_sees_a_thin_pole_only_on_cells_the_radius_covers(tmp_path):
-    # A floor and a pole 1.5 m tall, 0.57 m from the nearest centre of a 1 m grid and 0.14 m
-    # from one of a 0.4 m grid (robot radius 0.3 m: cells up to 0.42 m are covered).
-    xs = np.arange(-2.0, 2.001, 0.1)
+@pytest.mark.parametrize("res", [1.0, 0.25])
+def test_occupied_cells_equal_a_cell_by_cell_reference(res):
+    rng = np.random.default_rng(11)
+    points = np.column_stack([rng.uniform(-1, 4, 3000), rng.uniform(-1, 3, 3000), rng.uniform(-0.5, 2.5, 3000)])
+    nx, ny = int(3 / res), int(2 / res)
+    bottom = rng.uniform(0.0, 1.0, (ny, nx))
+    top = bottom + rng.uniform(0.0, 0.8, (ny, nx))
+    bottom[0, 0] = np.inf  # an unknown cell is never occupied
+    occupied = occupied_cells(points, 0.0, 0.0, res, bottom, top)
+    reference = np.zeros_like(occupied)
+    for j, i in np.ndindex(*occupied.shape):
+        inside = ((points[:, 0] >= i * res) & (points[:, 0] < (i + 1) * res)
+                  & (points[:, 1] >= j * res) & (points[:, 1] < (j + 1) * res))
+        reference[j, i] = np.any(inside & (points[:, 2] >= bottom[j, i]) & (points[:, 2] <= top[j, i]))
+    np.testing.assert_array_equal(occupied, reference)
+    assert occupied.any() and not occupied[0, 0]
+
+
+def test_the_planner_keeps_the_body_off_thin_poles_between_cell_centres(tmp_path):
+    # A floor and poles at random spots, most more than the robot radius from every
+    # centre of a 1 m grid (the obstacle mask, probing the body at centres, misses
+    # them): wherever the planner's ESDF says the body is clear, no pole is within the radius.
+    rng = np.random.default_rng(7)
+    xs = np.arange(-3.0, 3.001, 0.1)
     floor = np.array([(x, y, 0.0) for x in xs for y in xs])
-    pole = np.array([(0.9, 0.9, z) for z in np.arange(0.05, 1.5, 0.05)])
-    world, sensor = lf3pm.load_map(np.vstack([floor, pole])), lf3pm.get_sensor("vlp16")
-    blocked = {}
-    for res in (1.0, 0.4):
-        grid = make_grid(world, "r2", res, bounds=(-2, -2, 2, 2), height=1.0)
-        if res > 0.3 * np.sqrt(2):
-            with pytest.warns(UserWarning, match="thin obstacle .* use --res 0.42 or less"):
-                build_solm(world, sensor, grid, tmp_path / f"{res}.zarr", noise=0.0)
-        else:
-            build_solm(world, sensor, grid, tmp_path / f"{res}.zarr", noise=0.0)
-        solm = Solm.open(tmp_path / f"{res}.zarr")
-        x, y = solm.grid()
-        cell = np.argmin(np.maximum(np.abs(x - 0.9), np.abs(y - 0.9)))  # the cell holding the pole
-        blocked[res] = bool(solm.channel("obstacle").ravel()[cell])
-    assert blocked == {1.0: False, 0.4: True}
+    spots = rng.uniform(-2.8, 2.8, (8, 2))
+    poles = np.array([(px, py, z) for px, py in spots for z in np.arange(0.3, 1.5, 0.05)])
+    world, sensor = lf3pm.load_map(np.vstack([floor, poles])), lf3pm.get_sensor("vlp16")
+    radius = 0.3
+    grid = make_grid(world, "r2", 1.0, bounds=(-3, -3, 3, 3), height=1.0)
+    build_solm(world, sensor, grid, tmp_path / "s.zarr", noise=0.0, robot_radius=radius, ray_stride=8)
+    solm = Solm.open(tmp_path / "s.zarr")
+    occupied, k = solm.occupancy()
+    assert k == 10 and occupied.shape == (60, 60)
+    # Each pole marks exactly the occupancy cell it stands in; the floor marks none.
+    cells = {(int(np.floor((py + 3) * k)), int(np.floor((px + 3) * k))) for px, py in spots}
+    assert {tuple(c) for c in np.argwhere(occupied)} == cells
+    esdf = Esdf.from_solm(solm)
+    px, py = rng.uniform(-3, 3, (2, 20000))
+    clearance = esdf.distance(px, py)[0]
+    true = np.min(np.hypot(px[:, None] - spots[:, 0], py[:, None] - spots[:, 1]), axis=1) - radius
+    assert np.all(clearance <= true + 1e-9)
+    assert np.mean(clearance >= 0) > 0.3  # and it leaves room to move
 
 
 @pytest.mark.parametrize("kwargs,needle", [
@@ -178,7 +205,7 @@ def test_se2_yaw_reuse_is_close_to_exact_per_yaw_evaluation(boxes, tmp_path):
     mid70 = lf3pm.get_sensor("mid70")
     # 36 bins: the Mid-70's 70 degrees span 7 sectors of 10 degrees (with 12 bins the
     # 3 summed sectors span 90 degrees, and the p95 error reaches 49 %).
-    grid = make_grid(world, "se2", 1.0, bounds=(-1.5, -1.5, 1.5, 1.5), yaw_bins=36, height=1.0)
+    grid = make_grid(world, "se2", 0.5, bounds=(-0.75, -0.75, 0.75, 0.75), yaw_bins=36, height=1.0)
     build_solm(world, mid70, grid, tmp_path / "exact.zarr", noise=0.0)
     build_solm(world, mid70, grid, tmp_path / "reuse.zarr", noise=0.0, yaw_reuse=True)
     exact = Solm.open(tmp_path / "exact.zarr").channel("q_n")

@@ -158,7 +158,7 @@ def run_cli(*args):
 def test_an_unreachable_cluster_is_one_line(tmp_path, address, message):
     path = tmp_path / "boxes.npy"
     np.save(path, lf3pm.build_scene("boxes").points)
-    done = run_cli("solm", "build", path, "-o", tmp_path / "s.zarr", "--res", "0.4", "--engine", "ray",
+    done = run_cli("solm", "build", path, "-o", tmp_path / "s.zarr", "--res", "2", "--engine", "ray",
                    "--address", address)
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr

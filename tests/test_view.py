@@ -181,7 +181,7 @@ def test_a_clicked_cell_is_evaluated_at_its_best_yaw(app):
 def test_plans_between_clicked_poses_with_and_without_guidance(app):
     app._guarded(app.plan_between)
     assert app.status.startswith("error: set a start and a goal")
-    app._start, app._goal = np.array([-3.0, 1.0]), np.array([3.0, 1.0])  # the free row y = 1
+    app._start, app._goal = np.array([-3.0, 3.0]), np.array([3.0, 3.0])  # the row clear of boxes, y = 3
     out = app.plan_between()
     assert set(out) == {"default guidance", "none (shortest)"}
     for summary in out.values():

@@ -83,13 +83,13 @@ void bind_hybrid_search(nb::module_& m) {
       "curvature, length) from `start`, integrated exactly.");
   m.def(
       "hybrid_search",
-      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, nb::handle start, nb::handle goal,
-         const HybridParams& p) {
+      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cells, const lf3pm::GridField* cost, nb::handle start,
+         nb::handle goal, const HybridParams& p) {
         const lf3pm::Pose2 a = pose(start), b = pose(goal);
         lf3pm::HybridResult r;
         {
           nb::gil_scoped_release release;
-          r = lf3pm::hybrid_search(esdf, cost, a, b, p);
+          r = lf3pm::hybrid_search(esdf, cells, cost, a, b, p);
         }
         std::vector<double> seg;
         for (const auto& s : r.segments) seg.insert(seg.end(), {s.curvature, s.length});
@@ -105,18 +105,19 @@ void bind_hybrid_search(nb::module_& m) {
         out["relaxed_cells"] = r.relaxed_cells;
         return out;
       },
-      "esdf"_a, "cost"_a.none(), "start"_a, "goal"_a, "params"_a,
-      "Hybrid-A* forward search for a car (cpp/lf3pm/planner/hybrid_search.hpp) on GridField ESDF and cost (or None). Returns "
+      "esdf"_a, "cells"_a.none(), "cost"_a.none(), "start"_a, "goal"_a, "params"_a,
+      "Hybrid-A* forward search for a car (cpp/lf3pm/planner/hybrid_search.hpp) on GridField ESDF, the search's cells "
+      "(a GridField bounding the ESDF per cell, or None: the ESDF's) and cost (or None). Returns "
       "a dict: found, reason, segments (K x 2: signed curvature, length, from the start), length, cost, expanded, "
       "analytic_tries, relaxed_cells.");
   m.def(
       "hybrid_heuristic",
-      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cost, Poses poses, nb::handle goal,
-         const HybridParams& p) {
+      [](const lf3pm::GridField& esdf, const lf3pm::GridField* cells, const lf3pm::GridField* cost, Poses poses,
+         nb::handle goal, const HybridParams& p) {
         std::vector<lf3pm::Pose2> q(poses.shape(0));
         for (std::size_t i = 0; i < q.size(); ++i) q[i] = {poses(i, 0), poses(i, 1), poses(i, 2)};
-        auto h = lf3pm::hybrid_heuristic(esdf, cost, q, pose(goal), p);
+        auto h = lf3pm::hybrid_heuristic(esdf, cells, cost, q, pose(goal), p);
         return to_numpy(std::move(h));
       },
-      "esdf"_a, "cost"_a.none(), "poses"_a, "goal"_a, "params"_a, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
+      "esdf"_a, "cells"_a.none(), "cost"_a.none(), "poses"_a, "goal"_a, "params"_a, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
 }

@@ -14,16 +14,36 @@ from lf3pm.map import Map
 _CHUNK = 1 << 20
 
 
-def column_minimum(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: int) -> np.ndarray:
-    """Lowest z of the points in each (ny, nx) column of edge ``cell`` from (x0, y0);
-    inf where a column holds no point."""
-    ground = np.full((ny, nx), np.inf)
+def _binned(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: int):
+    """Chunk by chunk, the (row, column, z) of the points inside the (ny, nx) columns of
+    edge ``cell`` from (x0, y0)."""
     for start in range(0, len(points), _CHUNK):
         part = points[start:start + _CHUNK]
         ij = np.floor((part[:, :2] - [x0, y0]) / cell).astype(np.int64)
         inside = (ij[:, 0] >= 0) & (ij[:, 0] < nx) & (ij[:, 1] >= 0) & (ij[:, 1] < ny)
-        np.minimum.at(ground, (ij[inside, 1], ij[inside, 0]), part[inside, 2])
+        yield ij[inside, 1], ij[inside, 0], part[inside, 2]
+
+
+def column_minimum(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: int) -> np.ndarray:
+    """Lowest z of the points in each (ny, nx) column of edge ``cell`` from (x0, y0);
+    inf where a column holds no point."""
+    ground = np.full((ny, nx), np.inf)
+    for j, i, z in _binned(points, x0, y0, cell, nx, ny):
+        np.minimum.at(ground, (j, i), z)
     return ground
+
+
+def occupied_cells(points: np.ndarray, x0: float, y0: float, cell: float, bottom: np.ndarray,
+                   top: np.ndarray) -> np.ndarray:
+    """(ny, nx) bool: the columns of edge ``cell`` from (x0, y0) that hold a map point
+    between ``bottom`` and ``top`` ((ny, nx) arrays, metres; inf or NaN: never). Exact:
+    a point off every column's centre (a thin pole, a bush's stem) still marks its own."""
+    ny, nx = bottom.shape
+    occupied = np.zeros((ny, nx), bool)
+    for j, i, z in _binned(points, x0, y0, cell, nx, ny):
+        hit = (z >= bottom[j, i]) & (z <= top[j, i])
+        occupied[j[hit], i[hit]] = True
+    return occupied
 
 
 def body_blocked(world: Map, x, y, z_low, z_high, radius: float) -> np.ndarray:
@@ -39,3 +59,4 @@ def body_blocked(world: Map, x, y, z_low, z_high, radius: float) -> np.ndarray:
         _, dist = world.index.nearest(np.ascontiguousarray(probes), 1, radius)
         blocked |= np.isfinite(dist[:, 0]).reshape(x.shape)
     return blocked
+

@@ -25,9 +25,12 @@ struct Node {
 
 class Search {
  public:
-  Search(const GridField& esdf, const GridField* cost, const Pose2& goal, const HybridParams& p)
-      : esdf_(esdf), cost_(cost && !cost->empty() ? cost : nullptr), goal_(goal), p_(p) {
+  Search(const GridField& esdf, const GridField* cells, const GridField* cost, const Pose2& goal,
+         const HybridParams& p)
+      : esdf_(esdf), cells_(cells ? *cells : esdf), cost_(cost && !cost->empty() ? cost : nullptr), goal_(goal), p_(p) {
     if (esdf.empty() || esdf.layers() != 1) throw std::invalid_argument("hybrid search: the ESDF needs one layer");
+    if (cells_.empty() || cells_.layers() != 1)
+      throw std::invalid_argument("hybrid search: the search's cells need one layer");
     if (!(p.radius > 0.0) || !std::isfinite(p.radius))
       throw std::invalid_argument("hybrid search: the turning radius must be positive and finite");
     if (p.yaw_bins < 4) throw std::invalid_argument("hybrid search: yaw_bins must be >= 4");
@@ -37,10 +40,10 @@ class Search {
       throw std::invalid_argument("hybrid search: heuristic_weight must be >= 1");
     if (!(p.step >= 0.0) || !(p.sample_step >= 0.0) || p.analytic_every < 1)
       throw std::invalid_argument("hybrid search: step and sample_step must be >= 0, analytic_every >= 1");
-    nx_ = esdf.nx(), ny_ = esdf.ny(), x0_ = esdf.x0(), y0_ = esdf.y0(), res_ = esdf.res();
+    nx_ = cells_.nx(), ny_ = cells_.ny(), x0_ = cells_.x0(), y0_ = cells_.y0(), res_ = cells_.res();
     if (cost_ && (cost_->nx() != nx_ || cost_->ny() != ny_ || cost_->x0() != x0_ || cost_->y0() != y0_ ||
                   cost_->res() != res_))
-      throw std::invalid_argument("hybrid search: the cost and the ESDF grids differ");
+      throw std::invalid_argument("hybrid search: the cost and the search's grids differ");
     step_ = p.step > 0.0 ? p.step : std::sqrt(2.0) * res_;
     ds_ = p.sample_step > 0.0 ? p.sample_step : 0.25 * res_;
     double cmin = 0.0;
@@ -214,7 +217,7 @@ class Search {
     // its neighbours a (along x) and b (along y) and d (diagonal), with the cell's weight
     // at least 1/4: bilinear, so its largest value is at one of the quadrant's corners.
     std::vector<std::uint8_t> open(std::size_t(nx_) * ny_, 0);
-    auto v = [&](int i, int j) { return esdf_.at(0, std::clamp(j, 0, ny_ - 1), std::clamp(i, 0, nx_ - 1)); };
+    auto v = [&](int i, int j) { return cells_.at(0, std::clamp(j, 0, ny_ - 1), std::clamp(i, 0, nx_ - 1)); };
     for (int j = 0; j < ny_; ++j)
       for (int i = 0; i < nx_; ++i)
         for (const int si : {-1, 1})
@@ -275,6 +278,7 @@ class Search {
   }
 
   const GridField& esdf_;
+  const GridField& cells_;
   const GridField* cost_;
   Pose2 goal_;
   HybridParams p_;
@@ -287,15 +291,15 @@ class Search {
 
 }  // namespace
 
-HybridResult hybrid_search(const GridField& esdf, const GridField* cost, const Pose2& start, const Pose2& goal,
-                           const HybridParams& params) {
-  Search search(esdf, cost, goal, params);
+HybridResult hybrid_search(const GridField& esdf, const GridField* cells, const GridField* cost, const Pose2& start,
+                           const Pose2& goal, const HybridParams& params) {
+  Search search(esdf, cells, cost, goal, params);
   return search.run(start);
 }
 
-std::vector<double> hybrid_heuristic(const GridField& esdf, const GridField* cost, const std::vector<Pose2>& poses,
-                                     const Pose2& goal, const HybridParams& params) {
-  const Search search(esdf, cost, goal, params);
+std::vector<double> hybrid_heuristic(const GridField& esdf, const GridField* cells, const GridField* cost,
+                                     const std::vector<Pose2>& poses, const Pose2& goal, const HybridParams& params) {
+  const Search search(esdf, cells, cost, goal, params);
   std::vector<double> h(poses.size());
   for (std::size_t i = 0; i < poses.size(); ++i) h[i] = search.heuristic(poses[i]);
   return h;

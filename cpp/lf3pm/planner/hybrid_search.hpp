@@ -74,15 +74,20 @@ struct HybridResult {
   std::uint64_t relaxed_cells = 0;    ///< x-y cells the heuristic's backward pass reached
 };
 
-/// Least-cost forward path from `start` to `goal`. `esdf`: one layer; `cost`: one layer
-/// or periodic yaw layers on the same x-y grid, or nullptr (no perception cost).
+/// Least-cost forward path from `start` to `goal`. `esdf`: one layer, the clearance every
+/// sample must keep; `cells`: the search's x-y grid, one layer whose value in each cell is
+/// at least the ESDF anywhere in it (the heuristic's open cells), or nullptr: the ESDF's
+/// own grid and values (an ESDF finer than the search's cells needs a bound);
+/// `cost`: one layer or periodic yaw layers on the search's grid, or nullptr (no
+/// perception cost).
 /// Throws std::invalid_argument on bad input (radius, bins, mismatched grids, a start or
 /// goal off the grid or closer than `clearance` to an obstacle).
-HybridResult hybrid_search(const GridField& esdf, const GridField* cost, const Pose2& start, const Pose2& goal,
-                           const HybridParams& params);
+HybridResult hybrid_search(const GridField& esdf, const GridField* cells, const GridField* cost, const Pose2& start,
+                           const Pose2& goal, const HybridParams& params);
 
 /// h at each of `poses` for `goal` (same arguments): for tests.
-std::vector<double> hybrid_heuristic(const GridField& esdf, const GridField* cost, const std::vector<Pose2>& poses,
+std::vector<double> hybrid_heuristic(const GridField& esdf, const GridField* cells, const GridField* cost,
+                                     const std::vector<Pose2>& poses,
                                      const Pose2& goal, const HybridParams& params);
 
 /// Poses every `spacing` metres (and at each segment's end) along `segments` from

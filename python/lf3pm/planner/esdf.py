@@ -66,9 +66,11 @@ there) are blocked by default, ``unknown="obstacle"``: the field then keeps the
 robot away from them like from an obstacle and they are not traversable.
 ``unknown="free"`` treats them as free ground.
 
-A SOLM's obstacle mask already holds every cell whose robot body (of the
-build's ``robot_radius``) would touch the map, so ``r_safe`` in
-:meth:`Esdf.traversable` is an extra margin on top of it.
+A SOLM's obstacle mask holds the cells whose square holds a map point in the
+robot body's height band (wherever in the square: a thin pole off the centre
+still blocks). :meth:`Esdf.from_solm` subtracts the build's ``robot_radius``
+from the field, so its values are the body's clearance, never more than the
+true one, and ``r_safe`` in :meth:`Esdf.traversable` is a margin beyond the body.
 """
 
 from __future__ import annotations
@@ -76,7 +78,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import distance_transform_edt
+from scipy.ndimage import distance_transform_edt, maximum_filter
 
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid_field import GridField, bilinear
@@ -91,31 +93,41 @@ _BLOCKED_HEADSTART = 1.0     # cells blocked centres start below what they need 
 
 
 class Esdf:
-    """Signed distance field on the cells x0 + (i + 0.5) res, y0 + (j + 0.5) res.
+    """Signed distance field over the cells x0 + (i + 0.5) res, y0 + (j + 0.5) res.
 
-    Attributes: ``x0, y0, res, nx, ny``; ``values`` (ny, nx) float64 metres;
-    ``obstacle`` and ``unknown`` (ny, nx) bool masks; ``unknown_policy``.
+    Attributes: ``x0, y0, res, nx, ny``; ``values`` (ny, nx) float64 metres at the
+    cells' centres, the clearance of a round body of ``body_radius`` (the distance
+    less the radius); ``obstacle`` and ``unknown`` (ny, nx) bool masks;
+    ``unknown_policy``; ``field_res``, the edge of the cells the field itself is
+    interpolated between: ``res``, or finer when built from a SOLM's occupancy
+    (:meth:`from_solm`), whose values at the centres are then samples of it.
     """
 
     def __init__(self, values, obstacle, unknown, x0: float, y0: float, res: float,
-                 unknown_policy: str = "obstacle"):
-        self.values = np.asarray(values, dtype=np.float64)
+                 unknown_policy: str = "obstacle", body_radius: float = 0.0, field=None):
+        self.body_radius = float(body_radius)
         self.obstacle = np.asarray(obstacle, dtype=bool)
         self.unknown = np.asarray(unknown, dtype=bool)
-        self.ny, self.nx = self.values.shape
+        self.ny, self.nx = self.obstacle.shape
         self.x0, self.y0, self.res = float(x0), float(y0), float(res)
         self.unknown_policy = unknown_policy
+        # The field: (values, cell edge) on a grid from (x0, y0); the centres' values by default.
+        self._field, self.field_res = (np.asarray(values, dtype=np.float64), self.res) if field is None else field
+        self.values = np.asarray(values, dtype=np.float64) if field is None else self.distance(*self.centres())[0]
 
     @classmethod
     def from_mask(cls, mask, x0: float, y0: float, res: float, *, unknown=None,
-                  unknown_policy: str = "obstacle") -> "Esdf":
+                  unknown_policy: str = "obstacle", body_radius: float = 0.0) -> "Esdf":
         """The field of the (ny, nx) obstacle ``mask`` (True = obstacle), with an
-        optional (ny, nx) ``unknown`` mask handled by ``unknown_policy``."""
+        optional (ny, nx) ``unknown`` mask handled by ``unknown_policy``, for a round
+        body of ``body_radius`` (its values are the distance less the radius)."""
         mask = np.asarray(mask, dtype=bool)
         if mask.ndim != 2 or mask.size == 0:
             raise Lf3pmError(f"an ESDF needs a non-empty 2-D obstacle mask, got shape {mask.shape}")
         if not (res > 0 and np.isfinite(res)):
             raise Lf3pmError(f"ESDF cell size must be > 0, got {res}")
+        if not (body_radius >= 0 and np.isfinite(body_radius)):
+            raise Lf3pmError(f"body radius must be a number >= 0 m, got {body_radius}")
         if unknown_policy not in UNKNOWN_POLICIES:
             raise Lf3pmError(f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, "
                              f"got {unknown_policy!r}")
@@ -128,13 +140,16 @@ class Esdf:
         elif blocked.all():
             values = np.full(mask.shape, -np.inf)
         else:
-            values = _conservative_values(blocked) * res
-        return cls(values, mask, unknown, x0, y0, res, unknown_policy)
+            values = _conservative_values(blocked) * res - body_radius
+        return cls(values, mask, unknown, x0, y0, res, unknown_policy, body_radius)
 
     @classmethod
     def from_solm(cls, solm, *, unknown_policy: str = "obstacle") -> "Esdf":
-        """The field of a SOLM's obstacle and unknown masks (se2: a cell is blocked
-        when any yaw bin is; the robot body is round, so all bins agree)."""
+        """The body's clearance on a SOLM: the field of its occupancy layer (the
+        cells, k times finer than the SOLM's, holding a map point in the body's
+        height band) and, by ``unknown_policy``, its unknown cells, less its robot
+        radius. The SOLM's own cells are not traversable where its ``obstacle`` mask
+        is set (se2: in any yaw bin; the body is round, so all bins agree)."""
         g = solm.grid_spec
         if g.space not in ("r2", "se2"):
             raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {g.space}")
@@ -142,26 +157,51 @@ class Esdf:
         unknown = np.asarray(solm.channel("unknown")).astype(bool)
         if obstacle.ndim == 3:
             obstacle, unknown = obstacle.any(axis=0), unknown.any(axis=0)
-        return cls.from_mask(obstacle, g.x0, g.y0, g.res, unknown=unknown,
-                             unknown_policy=unknown_policy)
+        if unknown_policy not in UNKNOWN_POLICIES:
+            raise Lf3pmError(f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, "
+                             f"got {unknown_policy!r}")
+        occupied, k = solm.occupancy()
+        radius = float(solm.attrs["robot_radius"])
+        fine = cls.from_mask(occupied, g.x0, g.y0, g.res / k, unknown=np.kron(unknown, np.ones((k, k), bool)),
+                             unknown_policy=unknown_policy, body_radius=radius)
+        return cls(None, obstacle, unknown, g.x0, g.y0, g.res, unknown_policy, radius,
+                   field=(fine.values, fine.res))
+
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """(x, y) of the cells' centres, arrays of shape (ny, nx)."""
+        xs = self.x0 + (np.arange(self.nx) + 0.5) * self.res
+        ys = self.y0 + (np.arange(self.ny) + 0.5) * self.res
+        return tuple(np.meshgrid(xs, ys))
 
     def distance(self, x, y):
-        """Bilinear interpolation between cell centres at (x, y), vectorised:
-        (distance, gradient) with the gradient's last axis d/dx, d/dy. Positions
-        outside the centres are clamped to the border (zero gradient across it)."""
+        """Bilinear interpolation of the field at (x, y), vectorised: (clearance,
+        gradient) with the gradient's last axis d/dx, d/dy. Positions outside the
+        field's centres are clamped to its border (zero gradient across it)."""
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        v = self.values
+        v = self._field
         if not np.isfinite(v[0, 0]):  # no free or no blocked cell: a constant field
             shape = np.broadcast(x, y).shape
             return np.full(shape, v[0, 0]), np.zeros(shape + (2,))
-        value, ddx, ddy = bilinear(v, x, y, self.x0, self.y0, self.res)
+        value, ddx, ddy = bilinear(v, x, y, self.x0, self.y0, self.field_res)
         return value, np.stack([ddx, ddy], axis=-1)
 
     def grid_field(self) -> GridField:
-        """The values as a :class:`GridField` for the C++ core (same interpolation),
+        """The field as a :class:`GridField` for the C++ core (same interpolation),
         +-inf (no blocked or no free cell) clamped to +-1 km: the core needs finite
         values, and beyond that distance clearance never matters."""
-        return GridField(np.clip(self.values, -_FAR, _FAR), self.x0, self.y0, self.res)
+        return GridField(np.clip(self._field, -_FAR, _FAR), self.x0, self.y0, self.field_res)
+
+    def cell_bounds(self) -> GridField | None:
+        """A GridField on the cells whose value in each is at least the field anywhere
+        in it (the hybrid search's open cells), or None when the field lives on the
+        cells themselves. Within a cell the field interpolates the field centres in
+        it and those one beyond: the bound is their largest."""
+        if self.field_res == self.res:
+            return None
+        k = round(self.res / self.field_res)
+        near = maximum_filter(self._field, size=3, mode="nearest")
+        bound = near.reshape(self.ny, k, self.nx, k).max(axis=(1, 3))
+        return GridField(np.clip(bound, -_FAR, _FAR), self.x0, self.y0, self.res)
 
     def traversable(self, r_safe: float = 0.0) -> np.ndarray:
         """(ny, nx) bool: cells not blocked whose value is at least ``r_safe`` metres."""
@@ -177,8 +217,10 @@ class Esdf:
         if self.unknown[iy, ix] and self.unknown_policy == "obstacle":
             return "on unknown ground (no map under the cell)"
         if self.values[iy, ix] < r_safe:
-            return (f"{self.values[iy, ix]:.2f} m from an obstacle or unknown ground, "
-                    f"closer than r_safe = {r_safe:g} m")
+            within = (f"the robot radius {self.body_radius:g} m + r_safe {r_safe:g} m" if self.body_radius > 0
+                      else f"r_safe = {r_safe:g} m")
+            return (f"{self.values[iy, ix] + self.body_radius:.2f} m from an obstacle or unknown ground, "
+                    f"closer than {within}")
         return None
 
 

@@ -112,8 +112,12 @@ class Planner:
             # an SE(2) SOLM keeps the front end's yaws (the sensor's heading is the plan there);
             # otherwise the yaw is the direction of travel.
             oriented = robot.kind == "omni" and cost is not None and cost.yaw_bins > 1
+            # Samples every quarter SOLM cell, not every quarter of the finer ESDF cell: near a
+            # pole the field dips between samples 0.25-0.375 m apart by 1-3 cm at most, which the
+            # optimiser's margin covers, and the optimiser keeps the clearance itself.
             keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + ESDF_MARGIN, cost, weight,
-                                 yaw="interpolate" if oriented else "travel", turn_radius=turn_radius)
+                                 step=self.esdf.res / 4, yaw="interpolate" if oriented else "travel",
+                                 turn_radius=turn_radius)
             waypoints, corners = waypoints[keep], True
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
                                      rho_T=rho_T, esdf_margin=ESDF_MARGIN, piece_length=piece_length,

@@ -4,7 +4,6 @@ resumable (see store.py)."""
 from __future__ import annotations
 
 import math
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, MapPoints
 from lf3pm.sensors import Sensor, as_sensor
 from lf3pm.solm.grid import SolmGrid
+from lf3pm.solm.occupancy import grid_occupancy, occupancy_factor
 from lf3pm.solm.store import CHANNELS, TILE, check_new_store, open_or_create, tiles_shape
 from lf3pm.solm.tiles import compute_tile, crop_margin, make_job, write_tile
 from lf3pm.terrain import column_minimum
@@ -75,11 +75,8 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
                              "2D cell index * yaw_bins + sector)", "tile": tile,
              "yaw_reuse": layout.yaw_reuse, "ray_stride": layout.ray_stride}
     ground_robot = grid.space != "r3"
-    if ground_robot and 0 < job.robot_radius < grid.res / math.sqrt(2):
-        warnings.warn(f"{out}: cells of {grid.res:g} m are wider than the obstacle mask sees: it probes the robot "
-                      f"body at each cell's centre within {job.robot_radius:g} m, so a thin obstacle (a trunk, "
-                      f"a pole, a bush) off-centre leaves its cell free; use --res {job.robot_radius * math.sqrt(2):.2f} "
-                      f"or less on maps with thin obstacles (docs/solm.md, Masks)", UserWarning, stacklevel=2)
+    if ground_robot:
+        attrs["occupancy_factor"] = occupancy_factor(grid)
     if engine == "ray":
         from lf3pm.solm.cluster import connect
 
@@ -90,6 +87,8 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
     if ground_robot:
         group["ground_z"][...] = np.where(np.isfinite(ground), ground, np.nan).astype(np.float32)
+        group["occupied"][...] = grid_occupancy(world.points, grid, ground, job.robot_radius,
+                                                job.floor_clearance).astype(np.uint8)
     done = group["done"][...]
     ty_n, tx_n = tiles_shape(grid.ny, grid.nx, tile)
     todo = [(ty, tx) for ty in range(ty_n) for tx in range(tx_n) if not done[ty, tx]]

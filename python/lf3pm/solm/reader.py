@@ -50,6 +50,16 @@ class Solm:
             raise Lf3pmError(f"unknown channel {name!r}; channels: {', '.join(self.channels)}")
         return self._group[name][...]
 
+    def occupancy(self) -> tuple[np.ndarray, int]:
+        """The occupancy layer of a ground robot's SOLM (occupancy.py): a (ny k, nx k)
+        bool array, True where a cell holds a map point in the body's height band, and k."""
+        k = self.attrs.get("occupancy_factor")
+        if k is None:
+            raise Lf3pmError("this SOLM has no occupancy layer, which the planner needs to keep the robot off "
+                             "thin obstacles (an older build, or an r3 grid): build it again "
+                             "into a new store")
+        return self._group["occupied"][...].astype(bool), int(k)
+
     def grid(self) -> tuple:
         """Cell-centre coordinates as arrays of the channels' shape: (x, y) for r2,
         (x, y, yaw) for se2, (x, y, z) for r3."""

@@ -1,7 +1,8 @@
 """SOLM storage: a Zarr group, chunked and compressed, written tile by tile.
 
 Layout: one array per channel (float32; NaN where a cell was not evaluated:
-unknown ground or an obstacle) and per mask (uint8), ``ground_z`` for ground
+unknown ground or an obstacle) and per mask (uint8), ``ground_z`` and
+``occupied`` (occupancy.py, on cells ``occupancy_factor`` times finer) for ground
 robots, and ``done``, one flag per tile set only after the tile's data are
 written. An interrupted build (Ctrl-C or kill -9) therefore loses at most the
 tile in flight, and a rerun recomputes exactly the tiles without a flag. The
@@ -79,6 +80,9 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
         if ground:
             group.create_array("ground_z", shape=shape[-2:], chunks=(tile, tile), dtype="float32",
                                fill_value=np.nan)
+            k = int(attrs["occupancy_factor"])
+            group.create_array("occupied", shape=(shape[-2] * k, shape[-1] * k), chunks=(tile * k, tile * k),
+                               dtype="uint8", fill_value=0)
         tiles = tiles_shape(*shape[-2:], tile)
         group.create_array("done", shape=tiles, chunks=tiles, dtype="uint8", fill_value=0)
         group["done"][...] = np.zeros(tiles, np.uint8)
