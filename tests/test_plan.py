@@ -109,3 +109,29 @@ def test_csv_velocities_are_the_derivatives_of_its_positions(planner, tmp_path):
         for p, v, limit in ((x, vx, robot.amax_lon), (y, vy, robot.amax_lon), (np.unwrap(yaw), omega, robot.alpha_max)):
             fd = (p[2:] - p[:-2]) / (t[2:] - t[:-2])
             assert np.max(np.abs(fd[:-1] - v[1:-2])) <= 0.01 * limit
+
+
+@pytest.mark.parametrize("kind", ["omni", "car"])
+def test_plans_keep_the_body_off_thin_poles_between_cell_centres(tmp_path, kind):
+    """Poles 0.1 m beside the straight line through a row of 1 m cells' centres, and
+    more than the robot radius (0.3 m) from every centre: the SOLM's obstacle mask
+    leaves their cells free, so only the occupancy layer keeps the plan off them (a
+    plan from the mask alone drove straight through). Every 100 Hz sample keeps the
+    radius plus r_safe from every pole."""
+    import lf3pm
+    from lf3pm.solm import build_solm, make_grid
+
+    xs = np.arange(0.0, 16.001, 0.1)
+    floor = np.array([(x, y, 0.0) for x in xs for y in np.arange(-3.0, 3.001, 0.1)])
+    poles_xy = np.array([(4.0, 0.4), (8.0, 0.6), (12.0, 0.4)])
+    poles = np.array([(px, py, z) for px, py in poles_xy for z in np.arange(0.3, 1.5, 0.05)])
+    world = lf3pm.load_map(np.vstack([floor, poles]))
+    grid = make_grid(world, "r2", 1.0, bounds=(0, -3, 16, 3), height=1.0)
+    build_solm(world, "vlp16", grid, tmp_path / "poles.zarr", noise=0.0, ray_stride=8)
+    solm = Solm.open(tmp_path / "poles.zarr")
+    assert not solm.channel("obstacle").any()  # the centres' body probes miss every pole
+    robot = Robot(kind, min_turn_radius=0.5 if kind == "car" else 0.0, r_safe=0.05)
+    plan = Planner(solm).plan((0.5, 0.5, 0.0), (15.5, 0.5, 0.0), robot=robot, metric="none")
+    s = assert_kinematics_hold(plan.trajectory, robot)
+    gap = np.min(np.hypot(s["x"][:, None] - poles_xy[:, 0], s["y"][:, None] - poles_xy[:, 1]))
+    assert gap >= solm.attrs["robot_radius"] + robot.r_safe

@@ -65,11 +65,14 @@ CASES = (
             bounds=(-15.0, -30.0, 55.0, 30.0), zones={"start": (-8.0, -8.0, 8.0, 8.0),
                                                       "goal": (30.0, -20.0, 45.0, 20.0)}, min_distance=25.0),
     MapCase("houses", "scene:houses", "vlp16", "r2", 0.5, 8, ray_stride=4, both_ways=True, min_distance=20.0),
-    MapCase("boxes", "scene:boxes", "vlp16", "r2", 0.25, 6, ray_stride=4, both_ways=True, min_distance=8.0),
+    # The room's halves join through gaps that leave the body 0.28 m on each side.
+    MapCase("boxes", "scene:boxes", "vlp16", "r2", 0.25, 6, ray_stride=4, both_ways=True, min_distance=8.0,
+            r_safe=0.2),
     MapCase("street", "outdoor_urban64_2021-10-26-16-21-29-468.pcd", "vlp16", "r2", 1.5, 6, ray_stride=4,
             bounds=(-30.0, -30.0, 30.0, 30.0), zones=_STREET_ZONES, both_ways=True, min_distance=15.0),
+    # Its start and goal zones join only with 0.1-0.15 m to spare beyond the body.
     MapCase("room", "indoor_pcl_room_scan1.pcd", "vlp16", "r2", 0.25, 4, ray_stride=4,
-            bounds=(-3.0, -2.5, 8.5, 3.5), zones=_ROOM_ZONES, both_ways=True, min_distance=2.5),
+            bounds=(-3.0, -2.5, 8.5, 3.5), zones=_ROOM_ZONES, both_ways=True, min_distance=2.5, r_safe=0.1),
     # Appended, not inserted: a case's pairs are drawn from its index (pair seed, index).
     MapCase("corridor", "scene:corridor", "mid70", "se2", 0.5, 8, yaw_reuse=True, ray_stride=4, both_ways=True,
             min_distance=30.0),
@@ -162,7 +165,7 @@ def _plan_pairs(case: MapCase, solm_path: Path, out: Path, seed: np.random.SeedS
             raise Lf3pmError(f"map case {case.name}: found only {len(pairs)} of {case.pairs} plannable pairs "
                              f"in {attempts - 1} draws")
         number = len(pairs)
-        robot = Robot(case.robots[number % len(case.robots)])
+        robot = Robot(case.robots[number % len(case.robots)], r_safe=case.r_safe)
         ends = ("goal", "start") if case.both_ways and number % 2 else ("start", "goal")
         a, b = (_draw(planner, zones[end], robot, rng) for end in ends)
         if a is None or b is None or math.hypot(b[0] - a[0], b[1] - a[1]) < case.min_distance:

@@ -17,6 +17,7 @@ class MapCase:
     file in the shared data folder. ``zones``: {"start": (xmin, ymin, xmax, ymax),
     "goal": ...} for files (scenes bring their own). Pairs are at least
     ``min_distance`` m apart; with ``both_ways`` every other pair runs goal to start.
+    ``r_safe``: the robots' clearance beyond the SOLM's robot radius.
     """
 
     name: str
@@ -35,6 +36,7 @@ class MapCase:
     zones: dict | None = None
     min_distance: float = 10.0
     both_ways: bool = False
+    r_safe: float = DEFAULTS.robot.r_safe
 
 
 def case_source(case: MapCase):
