@@ -135,3 +135,6 @@ def test_plans_keep_the_body_off_thin_poles_between_cell_centres(tmp_path, kind)
     s = assert_kinematics_hold(plan.trajectory, robot)
     gap = np.min(np.hypot(s["x"][:, None] - poles_xy[:, 0], s["y"][:, None] - poles_xy[:, 1]))
     assert gap >= solm.attrs["robot_radius"] + robot.r_safe
+    # A start 0.14 m from a pole, in a cell whose centre is clear: refused, not planned from.
+    with pytest.raises(Lf3pmError, match=r"start .* closer than the robot radius 0.3 m"):
+        Planner(solm).plan((3.9, 0.5, 0.0), (15.5, 0.5, 0.0), robot=robot, metric="none")

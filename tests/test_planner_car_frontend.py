@@ -284,7 +284,7 @@ def walled():
     (dict(radius=-1.0), "turning radius must be a positive number"),
     (dict(radius=R, start=(2.0, 2.0, 0.0)), "start (2.00, 2.00, 0.00) is inside an obstacle"),
     (dict(radius=R, goal=(9.0, 1.0, 0.0)), "goal (9.00, 1.00, 0.00) lies outside the grid"),
-    (dict(radius=R, start=(0.3, 1.0, 0.0)), "closer than the 0.1 m clearance"),
+    (dict(radius=R, start=(0.3, 1.0, 0.0)), "closer than r_safe 0.1 m"),
     (dict(radius=R, yaw_bins=2), "yaw_bins must be an integer >= 4"),
     (dict(radius=R, start=(1.0, 1.0, float("inf"))), "start must be three finite numbers"),
     # Heading straight into the wall 0.4 m ahead, with nowhere to turn: no forward path.

@@ -303,7 +303,7 @@ def blocked_map():
     ((3.5, 3.5, 0.0), (3.5, 10.5, 0.0), "goal .* lies outside the grid"),
     ((2.5, 2.5, 0.0), (3.5, 4.5, 0.0), "start .* is inside an obstacle"),
     ((3.5, 4.5, 0.0), (2.5, 7.5, 0.0), "goal .* is on unknown ground"),
-    ((3.5, 2.5, 0.0), (3.5, 5.5, 0.0), "start .* closer than r_safe = 1.2 m"),
+    ((3.5, 2.5, 0.0), (3.5, 5.5, 0.0), "start .* closer than r_safe 1.2 m"),
     ((1.5, 4.5, 0.0), (9.5, 4.5, 0.0), "goal .* is unreachable from start"),
     ((float("nan"), 4.5, 0.0), (9.5, 4.5, 0.0), "start must be three finite numbers"),
 ])

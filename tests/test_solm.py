@@ -16,7 +16,8 @@ from lf3pm.io import write_points
 from lf3pm.pose import pose_matrix
 from lf3pm.solm import Solm, build_solm, make_grid
 from lf3pm.solm.ray_thinning import thin_rays
-from lf3pm.terrain import occupied_cells
+from lf3pm.terrain import column_minimum, occupied_cells
+from lf3pm.solm.occupancy import grid_occupancy, occupancy_factor
 from lf3pm.planner.esdf import Esdf
 from lf3pm.scenes import build_scene
 
@@ -142,6 +143,20 @@ def test_occupied_cells_equal_a_cell_by_cell_reference(res):
         reference[j, i] = np.any(inside & (points[:, 2] >= bottom[j, i]) & (points[:, 2] <= top[j, i]))
     np.testing.assert_array_equal(occupied, reference)
     assert occupied.any() and not occupied[0, 0]
+
+
+def test_a_slope_is_ground_and_a_pole_on_it_is_not():
+    # A 25 % grade on 1 m cells: each SOLM cell's ground rises 0.25 m across it, more than
+    # the floor clearance (0.2 m) above its lowest point, yet none of it is an obstacle.
+    xs = np.arange(0.0, 8.001, 0.05)
+    slope = np.array([(x, y, 0.25 * x) for x in xs for y in np.arange(-2.0, 2.001, 0.05)])
+    pole = np.array([(4.55, 0.35, 0.25 * 4.55 + z) for z in np.arange(0.3, 1.2, 0.05)])
+    world = lf3pm.load_map(np.vstack([slope, pole]))
+    grid = make_grid(world, "r2", 1.0, bounds=(0, -2, 8, 2), height=1.0)
+    ground = column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny)
+    occupied = grid_occupancy(world.points, grid, ground, 0.3, 0.2)
+    k = occupancy_factor(grid)
+    assert {tuple(c) for c in np.argwhere(occupied)} == {(int((0.35 + 2) * k), int(4.55 * k))}
 
 
 def test_the_planner_keeps_the_body_off_thin_poles_between_cell_centres(tmp_path):

@@ -217,11 +217,15 @@ class Esdf:
         if self.unknown[iy, ix] and self.unknown_policy == "obstacle":
             return "on unknown ground (no map under the cell)"
         if self.values[iy, ix] < r_safe:
-            within = (f"the robot radius {self.body_radius:g} m + r_safe {r_safe:g} m" if self.body_radius > 0
-                      else f"r_safe = {r_safe:g} m")
-            return (f"{self.values[iy, ix] + self.body_radius:.2f} m from an obstacle or unknown ground, "
-                    f"closer than {within}")
+            return self.clearance_reason(self.values[iy, ix], r_safe)
         return None
+
+    def clearance_reason(self, clearance: float, r_safe: float) -> str:
+        """Why a point whose field reads ``clearance`` is closer than ``r_safe``."""
+        within = (f"the robot radius {self.body_radius:g} m + {r_safe:g} m" if self.body_radius > 0
+                  else f"r_safe {r_safe:g} m")
+        return (f"{max(clearance + self.body_radius, 0.0):.2f} m from an obstacle or unknown ground, "
+                f"closer than {within}")
 
 
 def _conservative_values(blocked: np.ndarray) -> np.ndarray:

@@ -98,6 +98,9 @@ def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float 
             raise Lf3pmError(f"{name} {format_pose(pose)} is "
                              + (reason or "not traversable (an obstacle, unknown ground, or closer "
                                           "than r_safe to one)"))
+        # The plan ends on the exact pose, not on its cell's centre: it must be clear too.
+        if esdf is not None and (clear := float(esdf.distance(pose[0], pose[1])[0])) < r_safe:
+            raise Lf3pmError(f"{name} {format_pose(pose)} is {esdf.clearance_reason(clear, r_safe)}")
     # The core indexes states (y * nx + x) * layers + k (yaw innermost, for locality).
     flat_cost = np.ascontiguousarray(np.moveaxis(values, 0, -1)).ravel()
     flat_mask = np.ascontiguousarray(np.moveaxis(mask, 0, -1), dtype=np.uint8).ravel()

@@ -127,7 +127,9 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
     elapsed = time.perf_counter() - t0
     if not out["found"]:
         raise Lf3pmError(f"no forward path of turning radius {radius:g} m from start {format_pose(start)} to goal "
-                         f"{format_pose(goal)} keeps {clearance:g} m from obstacles: {out['reason']}")
+                         f"{format_pose(goal)} keeps {clearance:g} m"
+                         + (f" beyond the robot radius {esdf.body_radius:g} m" if esdf.body_radius else "")
+                         + f" from obstacles: {out['reason']}")
     segments = np.asarray(out["segments"], dtype=np.float64).reshape(-1, 2)
     poses = sample_segments(start, segments, spacing)
     # Exact ends: the integration lands on the goal up to round-off.
@@ -172,8 +174,7 @@ def _check_end(name: str, pose, esdf: Esdf, field: GridField, clearance: float) 
     ix, iy = cell_on_grid(esdf, name, pose)
     d = float(field.sample(x, y)[0])
     if d < clearance:
-        reason = esdf.blocked_reason(ix, iy) or (f"{d:.2f} m from an obstacle or unknown ground, closer than "
-                                                 f"the {clearance:g} m clearance")
+        reason = esdf.blocked_reason(ix, iy) or esdf.clearance_reason(d, clearance)
         raise Lf3pmError(f"{name} {format_pose(pose)} is {reason}")
 
 

@@ -58,6 +58,11 @@ class Plan:
                 "violations": {k: float(v) for k, v in self.optimization.violations.items()}}
 
 
+#: Most spacing (m) of the front end's clearance samples: beside a pole 0.3 m + r_safe
+#: away the field between two samples dips below them by under 1 cm, which the
+#: optimiser's margin covers (0.25 m samples on 1 m cells: up to 3-5 cm).
+CLEARANCE_STEP = 0.1
+
 class Planner:
     """Plans on one SOLM: the ESDF and cost layers are computed once and reused
     for every (start, goal, metric) query."""
@@ -68,6 +73,9 @@ class Planner:
         self.solm = solm
         self.esdf = Esdf.from_solm(solm, unknown_policy=unknown_policy)
         self._esdf_field = self.esdf.grid_field()
+        # Clearance samples along front-end paths, at most CLEARANCE_STEP apart (quarter SOLM
+        # cells where finer), not every quarter of the ESDF's finer cells (slow).
+        self._sample_step = min(self.esdf.res / 4, CLEARANCE_STEP)
         self._layers: dict[tuple, CostLayer] = {}
 
     def cost_layer(self, metric: str, power: float = DEFAULTS.guidance.power) -> CostLayer:
@@ -95,7 +103,7 @@ class Planner:
         if robot.kind == "car" and robot.min_turn_radius > 0:
             path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
                                    clearance=robot.r_safe + ESDF_MARGIN, heuristic=heuristic,
-                                   esdf_field=self._esdf_field)
+                                   sample_step=self._sample_step, esdf_field=self._esdf_field)
             waypoints = path.poses
             # Pieces of a quarter turn at most, so the spline can follow the path's loops.
             piece_length = min(piece_length, 0.5 * math.pi * robot.min_turn_radius)
@@ -112,11 +120,8 @@ class Planner:
             # an SE(2) SOLM keeps the front end's yaws (the sensor's heading is the plan there);
             # otherwise the yaw is the direction of travel.
             oriented = robot.kind == "omni" and cost is not None and cost.yaw_bins > 1
-            # Samples every quarter SOLM cell, not every quarter of the finer ESDF cell: near a
-            # pole the field dips between samples 0.25-0.375 m apart by 1-3 cm at most, which the
-            # optimiser's margin covers, and the optimiser keeps the clearance itself.
             keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + ESDF_MARGIN, cost, weight,
-                                 step=self.esdf.res / 4, yaw="interpolate" if oriented else "travel",
+                                 step=self._sample_step, yaw="interpolate" if oriented else "travel",
                                  turn_radius=turn_radius)
             waypoints, corners = waypoints[keep], True
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
