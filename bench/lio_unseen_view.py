@@ -15,7 +15,6 @@ study's trajectories (``lf3pm experiment benefit -o DIR``)::
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +24,7 @@ from lf3pm.config import DEFAULT_HEIGHT
 from lf3pm.experiments.map_cases import load_case_map
 from lf3pm.replays.motion import Motion
 from lf3pm.scan.scans import ScanStream
-from study_inputs import study_case, study_plan
+from study_inputs import study_arguments, study_case, study_plan
 
 VOXEL = 0.5            # m, an odometry map's cell
 ABOVE_GROUND = 0.3     # m, a return counted as structure
@@ -49,12 +48,7 @@ def seen_shares(world, csv: Path, sensor) -> list[tuple]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--study", type=Path, default=Path("out/benefit3"))
-    parser.add_argument("--map", default="gobi")
-    parser.add_argument("--pair", default="00_omni", help="the pair's prefix, e.g. 00_omni or 03_diff")
-    parser.add_argument("--guidance", default="default")
-    args = parser.parse_args()
+    args = study_arguments(__doc__.split("\n\n")[0]).parse_args()
     case = study_case(args.map)
     world, _ = load_case_map(case)
     sensor = lf3pm.get_sensor(case.sensor)

@@ -15,24 +15,18 @@ horizontal direction of its eigenvector. It needs the study's trajectories
 
 from __future__ import annotations
 
-import argparse
 import math
-from pathlib import Path
 
 import numpy as np
 
 import lf3pm
 from lf3pm.errors import PoseError
 from lf3pm.experiments.map_cases import load_case_map
-from study_inputs import study_case, study_plan
+from study_inputs import study_arguments, study_case, study_plan
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--study", type=Path, default=Path("out/benefit3"))
-    parser.add_argument("--map", default="gobi")
-    parser.add_argument("--pair", default="00_omni", help="the pair's prefix, e.g. 00_omni or 05_diff")
-    parser.add_argument("--guidance", default="default")
+    parser = study_arguments(__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=2)
     parser.add_argument("--odometry", default="auto", help="genz, dlio or auto (lf3pm replay's --odometry)")
     args = parser.parse_args()

@@ -14,10 +14,8 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
-
 from lf3pm.config import DEFAULTS
-from lf3pm.planner.esdf import Esdf
+from lf3pm.planner.esdf import Esdf, solm_masks
 from lf3pm.solm import Solm
 
 
@@ -34,9 +32,7 @@ def best_time(build) -> tuple[float, object]:
 def coarse_esdf(solm: Solm) -> Esdf:
     """The field on the SOLM's own masks (a cell blocked when any yaw bin is)."""
     g = solm.grid_spec
-    obstacle, unknown = (np.asarray(solm.channel(name)).astype(bool) for name in ("obstacle", "unknown"))
-    if obstacle.ndim == 3:
-        obstacle, unknown = obstacle.any(axis=0), unknown.any(axis=0)
+    obstacle, unknown = solm_masks(solm)
     return Esdf.from_mask(obstacle, g.x0, g.y0, g.res, unknown=unknown)
 
 

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from lf3pm.experiments.benefit import CASES
@@ -22,3 +23,14 @@ def study_plan(study: Path, map_name: str, plan: str) -> Path:
     if not csv.is_file():
         raise SystemExit(f"no plan {csv}: run lf3pm experiment benefit -o {study} first")
     return csv
+
+
+def study_arguments(description: str) -> argparse.ArgumentParser:
+    """A parser with the arguments that name one pair of a study's plans: --study,
+    --map, --pair (its prefix, e.g. 00_omni) and --guidance (the guided plan's name)."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--study", type=Path, default=Path("out/benefit3"))
+    parser.add_argument("--map", default="gobi")
+    parser.add_argument("--pair", default="00_omni", help="the pair's prefix, e.g. 00_omni or 03_diff")
+    parser.add_argument("--guidance", default="default")
+    return parser

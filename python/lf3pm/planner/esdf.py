@@ -76,6 +76,7 @@ true one, and ``r_safe`` in :meth:`Esdf.traversable` is a margin beyond the body
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter
@@ -153,10 +154,7 @@ class Esdf:
         g = solm.grid_spec
         if g.space not in ("r2", "se2"):
             raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {g.space}")
-        obstacle = np.asarray(solm.channel("obstacle")).astype(bool)
-        unknown = np.asarray(solm.channel("unknown")).astype(bool)
-        if obstacle.ndim == 3:
-            obstacle, unknown = obstacle.any(axis=0), unknown.any(axis=0)
+        obstacle, unknown = solm_masks(solm)
         if unknown_policy not in UNKNOWN_POLICIES:
             raise Lf3pmError(f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, "
                              f"got {unknown_policy!r}")
@@ -191,11 +189,12 @@ class Esdf:
         values, and beyond that distance clearance never matters."""
         return GridField(np.clip(self._field, -_FAR, _FAR), self.x0, self.y0, self.field_res)
 
+    @cached_property
     def cell_bounds(self) -> GridField | None:
         """A GridField on the cells whose value in each is at least the field anywhere
         in it (the hybrid search's open cells), or None when the field lives on the
         cells themselves. Within a cell the field interpolates the field centres in
-        it and those one beyond: the bound is their largest."""
+        it and those one beyond: the bound is their largest. Built once per field."""
         if self.field_res == self.res:
             return None
         k = round(self.res / self.field_res)
@@ -226,6 +225,15 @@ class Esdf:
                   else f"r_safe {r_safe:g} m")
         return (f"{max(clearance + self.body_radius, 0.0):.2f} m from an obstacle or unknown ground, "
                 f"closer than {within}")
+
+
+def solm_masks(solm) -> tuple[np.ndarray, np.ndarray]:
+    """A SOLM's (ny, nx) obstacle and unknown masks (se2: set when any yaw bin is)."""
+    obstacle = np.asarray(solm.channel("obstacle")).astype(bool)
+    unknown = np.asarray(solm.channel("unknown")).astype(bool)
+    if obstacle.ndim == 3:
+        obstacle, unknown = obstacle.any(axis=0), unknown.any(axis=0)
+    return obstacle, unknown
 
 
 def _conservative_values(blocked: np.ndarray) -> np.ndarray:

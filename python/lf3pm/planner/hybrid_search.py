@@ -121,7 +121,7 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
                          sample_step=float(sample_step), analytic_every=int(analytic_every),
                          max_expansions=int(max_expansions), heuristic=bool(heuristic),
                          heuristic_weight=float(heuristic_weight))
-    cells = esdf.cell_bounds()
+    cells = esdf.cell_bounds
     out = _core.hybrid_search(esdf_field._core, None if cells is None else cells._core,
                               None if cost_field is None else cost_field._core, start, goal, params)
     elapsed = time.perf_counter() - t0
@@ -148,7 +148,7 @@ def search_heuristic(cost, esdf: Esdf, poses, goal, *, radius: float, weight: fl
     q = np.ascontiguousarray(np.asarray(poses, dtype=np.float64).reshape(-1, 3))
     params = core_struct(_core.HybridParams(), radius=float(radius), weight=float(weight),
                          clearance=float(clearance), yaw_bins=int(yaw_bins))
-    cells = esdf.cell_bounds()
+    cells = esdf.cell_bounds
     return _core.hybrid_heuristic(field._core, None if cells is None else cells._core,
                                   None if cost_field is None else cost_field._core, q, as_pose(goal, "goal"), params)
 
