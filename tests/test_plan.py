@@ -63,6 +63,25 @@ def test_a_car_turns_round_at_both_ends(planner):
     length = np.hypot(np.diff(fine["x"]), np.diff(fine["y"])).sum()
     assert summary["trajectory_length_m"] == pytest.approx(length, rel=1e-3)
     assert summary["trajectory_length_m"] >= np.hypot(goal[0] - start[0], goal[1] - start[1])
+    assert summary["warnings"] == []
+
+
+def test_a_plan_inside_r_safe_says_so(planner):
+    """The optimiser keeps clearance by a penalty: a plan that ends up inside r_safe is
+    reported with how far, and one whose body reaches the map says it touches."""
+    from dataclasses import replace
+
+    plan = planner.plan(START, GOAL, robot=Robot("omni", r_safe=0.05), metric="none")
+    assert plan.warnings() == [] and plan.optimization.violations["min_clearance"] >= 0
+
+    def with_clearance(c):
+        violations = {**plan.optimization.violations, "min_clearance": c}
+        return replace(plan, optimization=replace(plan.optimization, violations=violations))
+
+    assert with_clearance(-0.03).warnings() == [
+        "the trajectory comes 0.03 m inside r_safe (0.05 m): the body passes 0.02 m from the map"]
+    assert with_clearance(-0.08).summary()["warnings"] == [
+        "the trajectory comes 0.08 m inside r_safe (0.05 m): it touches the map"]
 
 
 def random_queries(planner, seed: int, count: int):

@@ -9,7 +9,7 @@ from typing import Optional, Tuple
 import typer
 
 from lf3pm.atomic import check_replaceable
-from lf3pm.cli._common import CONFIG_OPTION, app, configure, console, option, user_errors
+from lf3pm.cli._common import CONFIG_OPTION, app, configure, console, err_console, option, user_errors
 from lf3pm.errors import Lf3pmError
 
 
@@ -84,6 +84,8 @@ def plan(
                 png.unlink(missing_ok=True)
             raise
         summary = result.summary()
+        for line in summary["warnings"]:
+            err_console.print(f"[bold yellow]lf3pm: warning:[/] {out}: {line}", highlight=False, soft_wrap=True)
         if as_json:
             print(json.dumps(summary, indent=1))
         else:

@@ -55,7 +55,19 @@ class Plan:
                 "trajectory_length_m": length, "duration_s": float(self.trajectory.duration),
                 "search_s": self.path.time, "optimize_s": self.optimization.wall_time,
                 "iterations": int(self.optimization.iterations),
-                "violations": {k: float(v) for k, v in self.optimization.violations.items()}}
+                "violations": {k: float(v) for k, v in self.optimization.violations.items()},
+                "warnings": self.warnings()}
+
+    def warnings(self) -> list[str]:
+        """One line per way the optimised trajectory falls short of what the user asked
+        for. The optimiser keeps the clearance by a penalty (docs/planner_backend.md), so a
+        tight passage can leave a plan inside ``r_safe``; it is returned, not hidden."""
+        clearance = self.optimization.violations.get("min_clearance")
+        if clearance is None or clearance >= 0.0:
+            return []
+        body = self.robot.r_safe + clearance  # the ESDF is the body's distance to the map
+        contact = "it touches the map" if body <= 0.0 else f"the body passes {body:.2f} m from the map"
+        return [f"the trajectory comes {-clearance:.2f} m inside r_safe ({self.robot.r_safe:.2f} m): {contact}"]
 
 
 #: Most spacing (m) of the front end's clearance samples: beside a pole 0.3 m + r_safe
