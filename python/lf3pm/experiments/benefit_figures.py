@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -70,8 +71,10 @@ def scatter_figure(summary: dict, path: Path) -> None:
         ratio = f"median ratio {c['median_ratio']:.2f}" if c.get("pairs") else "no pairs"
         ax.set_title(f"{method}: {guidance}\n{ratio}", fontsize=9)
     axes[0][0].legend(fontsize=7, loc="upper left")
-    fig.suptitle("Each point a start/goal pair; below the solid line guidance localizes better, "
-                 "below the dotted line by half", fontsize=9)
+    # Wrapped to the figure's width: one column of panels (a single guidance) is narrow.
+    title = ("Each point a start/goal pair; below the solid line guidance localizes better, "
+             "below the dotted line by half")
+    fig.suptitle(textwrap.fill(title, width=int(14 * 3.6 * columns)), fontsize=9)
     fig.tight_layout()
     save_figure(fig, Path(path))
 
