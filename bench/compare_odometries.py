@@ -52,9 +52,8 @@ def drive(world, start, turn_rate: float, seconds: float) -> Motion:
     the yaw turns at up to ``turn_rate`` rad/s with the same ramp (the yaw is the
     heading); sensor 1 m above the ground."""
     t = np.arange(0.0, seconds + 1e-9, 1.0 / RATE)
-    s = np.clip(t / 2.0, 0.0, 1.0)
-    ramp = s**3 * (10 - 15 * s + 6 * s**2)
-    v, w = ramp, turn_rate * ramp
+    v = Warp(0.0, 2.0, seconds, 1.0)(t)[1]  # never reaches its ramp down
+    w = turn_rate * v
 
     def integral(f):
         return np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))])

@@ -19,12 +19,18 @@ exact IMU) and with default noise on seeds 0-2: APE rmse, and the error at the e
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 
-import lf3pm
-from lf3pm.experiments.benefit import CASES as STUDY_MAPS
-from lf3pm.experiments.map_cases import load_case_map
-from lf3pm.replays.motion import Motion
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from analytic_motion import Warp  # noqa: E402
+
+import lf3pm  # noqa: E402
+from lf3pm.experiments.benefit import CASES as STUDY_MAPS  # noqa: E402
+from lf3pm.experiments.map_cases import load_case_map  # noqa: E402
+from lf3pm.replays.motion import Motion  # noqa: E402
 
 Y, X0, X1, SPEED, RAMP_S = 4.0, -30.0, 40.0, 1.0, 2.0
 TURN_DEG, TURN_LENGTH = 25.0, 10.0
@@ -35,13 +41,9 @@ SEEDS = (0, 1, 2)
 def distance_profile(dt: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
     """(t, s): distance along the drive from rest to rest, the speed ramped by a quintic
     smoothstep over RAMP_S at both ends (continuous acceleration)."""
-    length = X1 - X0
-    cruise = (length - SPEED * RAMP_S) / SPEED  # each ramp covers SPEED * RAMP_S / 2
-    t = np.arange(0.0, 2 * RAMP_S + cruise + dt / 2, dt)
-    u = np.clip(np.minimum(t, t[-1] - t) / RAMP_S, 0.0, 1.0)
-    v = SPEED * u ** 3 * (10 - 15 * u + 6 * u ** 2)
-    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
-    return t, s * length / s[-1]
+    warp = Warp(0.0, RAMP_S, (X1 - X0) / SPEED - RAMP_S, SPEED)
+    t = np.arange(0.0, warp.t1 + dt / 2, dt)
+    return t, warp(t)[0]
 
 
 def motion(world, centre: float | None) -> Motion:
