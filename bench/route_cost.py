@@ -37,13 +37,18 @@ from lf3pm.trajectory.robots import Robot
 from study_inputs import study_arguments, study_case
 
 
+def along(values: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """``values`` ((yaw_bins, ny, nx), or (ny, nx) for r2) at each cell (ix, iy, yaw bin)."""
+    layered = values if values.ndim == 3 else values[None]
+    return layered[cells[:, 2], cells[:, 1], cells[:, 0]]
+
+
 def path_cost(values: np.ndarray, cells: np.ndarray, res: float, weight: float, rho: float) -> float:
     """The front end's cost of the grid path ``cells`` (ix, iy, yaw bin) on the
-    cost array ``values`` ((yaw_bins, ny, nx), or (ny, nx) for r2)."""
-    layered = values if values.ndim == 3 else values[None]
-    bins = layered.shape[0]
+    cost array ``values``."""
+    bins = values.shape[0] if values.ndim == 3 else 1
+    c = along(values, cells)
     ix, iy, k = cells[:, 0], cells[:, 1], cells[:, 2]
-    c = layered[k, iy, ix]
     length = res * np.hypot(np.diff(ix), np.diff(iy))
     dk = np.abs(np.diff(k)) % bins
     turns = np.minimum(dk, bins - dk)
@@ -100,10 +105,8 @@ def main() -> None:
     print("| channel \\ path of | " + " | ".join(names) + " |")
     print("|---" * (len(names) + 1) + "|")
     for channel in channels:
-        layer = planner.cost_layer(channel, 1.0)
-        values = layer.filled if layer.filled.ndim == 3 else layer.filled[None]
-        cells = {n: paths[n].cells for n in names}
-        row = [np.percentile(values[c[:, 2], c[:, 1], c[:, 0]], [10, 50, 90]) for c in cells.values()]
+        values = planner.cost_layer(channel, 1.0).filled
+        row = [np.percentile(along(values, paths[n].cells), [10, 50, 90]) for n in names]
         print(f"| {channel} | " + " | ".join(" / ".join(f"{v:.2f}" for v in r) for r in row) + " |")
 
 
