@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import lf3pm
-from lf3pm.calibration import fit_calibration, packaged_calibration, predict_mde
+from lf3pm.calibration import fit_calibration, packaged_calibration, predict_mde, support
 from lf3pm.scenes import build_scene
 
 
@@ -13,7 +13,7 @@ def test_fit_is_monotone_and_intervals_bracket_it():
     x = np.exp(rng.uniform(-8, -1, 400))
     y = x**2 * np.exp(rng.normal(scale=0.5, size=400))
     cal = fit_calibration(x, y, name="step_norm", provenance={})
-    values = [predict_mde(cal, v) for v in np.exp(np.linspace(-9, 0, 50))]
+    values = [predict_mde(cal, v) for v in np.geomspace(*support(cal), 50)]
     centres = [v[0] for v in values]
     assert all(b >= a for a, b in zip(centres, centres[1:]))
     assert all(lo <= c <= hi for c, lo, hi in values)

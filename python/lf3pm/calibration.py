@@ -12,6 +12,11 @@ the residuals in bins of the predictor. It is stored as JSON in the package
 (``lf3pm/calibration_data/``) with its provenance, and applied by
 :func:`predict_mde`. It holds for the conditions it was fitted under (sensor,
 range noise, disturbance size, map density): see docs/validation.md.
+
+Both predict only inside their :func:`support`, the range of the predictor the
+fit saw: beyond it the MDE fit would repeat its end value and the localization
+fit extrapolate its line, neither measured. :func:`withheld_reason` says why a
+query gets no prediction.
 """
 
 from __future__ import annotations
@@ -52,11 +57,25 @@ def fit_calibration(predictor: np.ndarray, mde: np.ndarray, *, name: str, proven
             "provenance": provenance}
 
 
+def support(calibration: dict) -> tuple[float, float]:
+    """The lowest and highest predictor value among the samples ``calibration`` was
+    fitted on (an MDE calibration or a localization-error fit)."""
+    if "q_n_range" in calibration:
+        lo, hi = calibration["q_n_range"]
+        return float(lo), float(hi)
+    return math.exp(calibration["log_x"][0]), math.exp(calibration["log_x"][-1])
+
+
+def _supported(calibration: dict, value: float) -> bool:
+    lo, hi = support(calibration)
+    return math.isfinite(value) and lo <= value <= hi
+
+
 def predict_mde(calibration: dict, value: float) -> tuple[float, float, float] | None:
-    """(expected MDE, low, high) at predictor ``value``; None when not positive and
-    finite. Beyond the fitted range the end values hold (a monotone fit cannot
-    extrapolate honestly)."""
-    if not (math.isfinite(value) and value > 0):
+    """(expected MDE, low, high) at predictor ``value``; None outside the fit's
+    :func:`support` (a monotone fit cannot extrapolate honestly) or where ``value``
+    is not finite."""
+    if not _supported(calibration, value):
         return None
     lx = math.log(value)
     centre = float(np.interp(lx, calibration["log_x"], calibration["log_mde"]))
@@ -80,10 +99,46 @@ def calibration_applies(calibration: dict, *, sensor: str, dof: int, association
     """Whether a query was evaluated under the conditions the calibration was fitted
     in (its sensor or sensors, default noise, dof 6, k-NN association, no scan
     downsampling, its w1)."""
+    return _mismatch(calibration, sensor=sensor, dof=dof, association=association, scan_voxel=scan_voxel,
+                     noise_is_default=noise_is_default, w1=w1) is None
+
+
+def _mismatch(calibration: dict, *, sensor, dof, association, scan_voxel, noise_is_default, w1) -> str | None:
+    """The first condition of a query that differs from the fit's, in words; None if none."""
     p = calibration["provenance"]
     sensors = p["sensors"] if "sensors" in p else [p["sensor"]]
-    return (sensor in sensors and dof == 6 and association == "knn" and scan_voxel == 0
-            and noise_is_default and abs(w1 - p["w1"]) < 1e-12)
+    if sensor not in sensors:
+        return f"sensor {sensor}, fitted for {', '.join(sensors)} only"
+    if dof != 6:
+        return f"dof {dof}, fitted at dof 6"
+    if association != "knn":
+        return f"association {association}, fitted with knn"
+    if scan_voxel != 0:
+        return f"scan_voxel {scan_voxel:g}, fitted without scan downsampling"
+    if not noise_is_default:
+        return "range noise set, fitted at the sensor's default"
+    if abs(w1 - p["w1"]) >= 1e-12:
+        return f"w1 {w1:g}, fitted at w1 {p['w1']:g}"
+    return None
+
+
+def withheld_reason(calibration: dict | None, value: float, **conditions) -> str | None:
+    """Why ``calibration`` (a packaged one: None when not shipped) gives no prediction
+    at predictor ``value`` for a query evaluated under ``conditions``
+    (:func:`calibration_applies`' keywords), in one line; None when it gives one."""
+    if calibration is None:
+        return "no fit is shipped with this lf3pm"
+    name = calibration["predictor"]
+    mismatch = _mismatch(calibration, **conditions)
+    if mismatch is not None:
+        return f"not fitted for this query: {mismatch}"
+    if not math.isfinite(value):
+        return f"{name} is infinite: the pose is degenerate"
+    if not _supported(calibration, value):
+        lo, hi = support(calibration)
+        return (f"{name} {value:.3g} is outside the range the fit was made on ({lo:.3g} to {hi:.3g}, "
+                f"{calibration['samples']} samples): not extrapolated")
+    return None
 
 
 def fit_localization_error(maps, q_n, ape, *, provenance: dict) -> dict:
@@ -119,14 +174,15 @@ def fit_localization_error(maps, q_n, ape, *, provenance: dict) -> dict:
                             "spearman_within_map": None if not math.isfinite(rho) else float(rho),
                             "median_factor": float(math.exp(np.median(np.abs(y[held] - centre))))}
     return {"predictor": "q_n", **fit(np.ones(len(x), bool)), "interval_quantiles": list(INTERVAL_QUANTILES),
-            "samples": int(len(x)), "q_n_range": [float(math.exp(x.min())), float(math.exp(x.max()))],
+            "samples": int(len(x)), "q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
             "validation": validation, "provenance": provenance}
 
 
 def predict_localization_error(calibration: dict, q_n: float) -> tuple[float, float, float] | None:
     """(expected localization error, low, high) in m at ``q_n``; None when q_n is not
-    positive and finite (a degenerate pose: localization there follows odometry)."""
-    if not (math.isfinite(q_n) and q_n > 0):
+    finite (a degenerate pose: localization there follows odometry) or lies outside
+    the fit's :func:`support` (``q_n_range``)."""
+    if not _supported(calibration, q_n):
         return None
     centre = calibration["a"] + calibration["b"] * math.log(q_n)
     return (math.exp(centre), math.exp(centre + calibration["log_lo"]),

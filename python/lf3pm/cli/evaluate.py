@@ -55,11 +55,26 @@ def evaluate(
                          sensor_points=obs["sensor_points"], row_hit=obs["row_hit"],
                          pose=np.asarray(result.pose))
         out = result.to_dict()
+        out.update(withheld_predictions(result, noise_is_default=cfg.scan.noise is None))
         out["map"] = world.describe()
         if as_json:
             print(json.dumps(out))
             return
         print_evaluation(out)
+
+
+def withheld_predictions(result, *, noise_is_default: bool) -> dict:
+    """``predicted_mde_withheld`` and ``predicted_localization_error_withheld``: why each
+    prediction is null (docs/validation.md), or None where it is given."""
+    from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, withheld_reason
+
+    p = result.params
+    conditions = {"sensor": result.sensor, "dof": p["dof"], "association": p["association"],
+                  "scan_voxel": p["scan_voxel"], "noise_is_default": noise_is_default, "w1": p["w1"]}
+    mde_fit, error_fit = packaged_calibration(), packaged_calibration(LOCALIZATION_PACKAGED)
+    mde_value = getattr(result, mde_fit["predictor"]) if mde_fit else float("nan")
+    return {"predicted_mde_withheld": withheld_reason(mde_fit, mde_value, **conditions),
+            "predicted_localization_error_withheld": withheld_reason(error_fit, result.q_n, **conditions)}
 
 
 def print_evaluation(out: dict) -> None:
@@ -70,17 +85,23 @@ def print_evaluation(out: dict) -> None:
                 "step_norm", "residual_norm", "scaled_cov_trace"):
         value = out[key]
         table.add_row(key, "inf" if value is None else f"{value:.6g}")
-    if out["predicted_mde"] is not None:
-        lo, hi = out["predicted_mde_interval"]
-        table.add_row("predicted MDE", f"{out['predicted_mde']:.3g} [{lo:.2g}, {hi:.2g}]")
-    if out["predicted_localization_error_m"] is not None:
-        lo, hi = out["predicted_localization_error_interval_m"]
-        table.add_row("predicted localization error (m)",
-                      f"{out['predicted_localization_error_m']:.3g} [{lo:.2g}, {hi:.2g}]")
+    reasons = []
+    for label, key, interval, withheld in (
+            ("predicted MDE", "predicted_mde", "predicted_mde_interval", "predicted_mde_withheld"),
+            ("predicted localization error (m)", "predicted_localization_error_m",
+             "predicted_localization_error_interval_m", "predicted_localization_error_withheld")):
+        if out[key] is not None:
+            lo, hi = out[interval]
+            table.add_row(label, f"{out[key]:.3g} [{lo:.2g}, {hi:.2g}]")
+        else:
+            table.add_row(label, "withheld")
+            reasons.append(f"{label.removesuffix(' (m)')} withheld: {out[withheld]}")
     table.add_row("rows m", str(out["m"]))
     table.add_row("hits / rays", f"{out['hits']} / {out['rays']}")
     table.add_row("degenerate", str(out["degenerate"]))
     console.print(table)
+    for line in reasons:
+        console.print(line, markup=False, highlight=False, soft_wrap=True)
 
 
 @app.command()
