@@ -28,6 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
+from lf3pm.limits import clip, excerpt, load_yaml, read_text_file
 
 _MAP = _core.MapParams()
 _SCAN = _core.ScanParams()
@@ -56,6 +57,14 @@ COMPOSITE_CHANNELS = {"q_n_q_min": ("q_n", "q_min")}
 #: The smallest speed, yaw rate or acceleration limit a robot takes (m/s, rad/s, m/s^2,
 #: rad/s^2): slower is no robot, and a 10 m plan at 1e-9 m/s would be 300 years of 100 Hz samples.
 MIN_LIMIT = 1e-3
+
+#: The coarsest SOLM cell (m): wider than any LiDAR's range (the presets reach 260 m), so
+#: a larger --res is a typo; make_grid also refuses a cell wider than the grid's extent.
+MAX_RES = 1000.0
+#: The most poses a SOLM may hold even with a raised --max-cells: its six float32
+#: channels then take 24 GB, what a large workstation can still hold for the planner,
+#: and a build of that many poses takes days on a cluster (docs/scale.md).
+MAX_CELLS_CEILING = 1_000_000_000
 
 #: Sensor height above the local ground (m) of a ground robot: a LiDAR on a small
 #: wheeled base. SOLM grids and the replay's motion take it by default.
@@ -150,7 +159,7 @@ class SolmConfig(Section):
     """The SOLM grid and build."""
 
     space: Literal[SPACES] = Field("r2", description="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z).")
-    res: float = Field(0.5, gt=0, description="Cell size (m).")
+    res: float = Field(0.5, gt=0, le=MAX_RES, description="Cell size (m).")
     yaw_bins: int = Field(36, ge=1, le=3600, description="Yaw bins (se2).")
     yaw_reuse: bool = Field(False, description="se2: one scan per yaw sector, summed per bin (faster, "
                                                "approximate; docs/solm.md).")
@@ -162,7 +171,8 @@ class SolmConfig(Section):
     robot_radius: float = Field(0.3, ge=0, le=100, description="Robot radius for the obstacle mask (m).")
     floor_clearance: float = Field(0.2, ge=0, le=100, description="Height above the ground from which a point "
                                                                   "blocks a ground robot's cell (m).")
-    max_cells: int = Field(10_000_000, ge=1, description="Refuse a grid of more poses than this.")
+    max_cells: int = Field(10_000_000, ge=1, le=MAX_CELLS_CEILING,
+                           description="Refuse a grid of more poses than this.")
     crop_above: int = Field(20_000_000, ge=1, description="Build maps of more points than this tile by tile, "
                                                           "each tile on its crop (docs/scale.md).")
 
@@ -365,9 +375,11 @@ def check_threads(threads) -> int:
 def describe(err: ValidationError, where: str = "", flags: dict | None = None) -> str:
     """One line for a pydantic error: the parameter (its CLI flag when given), what is wrong, the value."""
     first = err.errors(include_url=False)[0]
-    path = _parameter(first["loc"])
+    path = clip(_parameter(first["loc"]))
     name = (flags or {}).get(path) or (f"{where}.{path}" if where else path)
     message = first["msg"]
+    if first["type"] == "invalid_key":  # a YAML key such as 1 or 2.5
+        return f"{name + ': ' if name else ''}key {excerpt(first['input'])} is not a parameter name"
     if first["type"] == "value_error":   # a check across fields (a model validator's)
         text = message.removeprefix("Value error, ")
         return f"{name}: {text}" if name else text
@@ -378,7 +390,8 @@ def describe(err: ValidationError, where: str = "", flags: dict | None = None) -
     elif first["type"] == "extra_forbidden":
         message = "is not a parameter lf3pm knows"
     value = first.get("input")
-    shown = "" if first["type"] in ("extra_forbidden", "missing") or isinstance(value, dict) else f", got {value!r}"
+    quoted = first["type"] not in ("extra_forbidden", "missing") and not isinstance(value, dict)
+    shown = f", got {excerpt(value)}" if quoted else ""
     return f"{name} {message}{shown}"
 
 
@@ -396,16 +409,11 @@ def load_config(path: str | Path | None = None, overrides: dict | None = None,
     """
     data: dict = {}
     if path is not None:
+        text = read_text_file(path, "config", ConfigError)
         try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as err:
-            raise ConfigError(f"{path}: cannot read the config ({err.strerror or err})") from None
-        except UnicodeDecodeError:
-            raise ConfigError(f"{path}: not a YAML config (not UTF-8 text)") from None
-        try:
-            loaded = yaml.safe_load(text)
+            loaded = load_yaml(text, path, ConfigError)
         except yaml.YAMLError as err:
-            raise ConfigError(f"{path}: not YAML ({str(err).splitlines()[0]})") from None
+            raise ConfigError(f"{path}: not YAML ({clip(str(err).splitlines()[0])})") from None
         if loaded is not None and not isinstance(loaded, dict):
             raise ConfigError(f"{path}: a config is a mapping of sections, got {type(loaded).__name__}")
         data = loaded or {}
@@ -419,7 +427,7 @@ def load_config(path: str | Path | None = None, overrides: dict | None = None,
         else:
             data[name] = value
     try:
-        return Config(**data)
+        return Config.model_validate(data)
     except ValidationError as err:
         loc = _parameter(err.errors(include_url=False)[0]["loc"])
         if flags and loc in flags and (overrides or {}).get(loc) is not None:

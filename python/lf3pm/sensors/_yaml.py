@@ -10,6 +10,7 @@ import numpy as np
 import yaml
 
 from lf3pm.errors import SensorError
+from lf3pm.limits import clip, excerpt, load_yaml, read_text_file
 
 from ._model import MAX_RAYS, Sensor, _is_number, pattern_directions, ray_count, spinning_directions
 
@@ -17,6 +18,8 @@ _COMMON_KEYS = ("name", "description", "min_range", "max_range", "range_noise_si
 _SPINNING_KEYS = ("elevations_deg", "azimuth_count", "horizontal_fov_deg")
 _PATTERN_KEYS = ("pattern_file", "point_rate", "integration_time")
 ALLOWED_KEYS = _COMMON_KEYS + _SPINNING_KEYS + _PATTERN_KEYS
+#: The longest sensor name: a label for tables and messages, not a description.
+MAX_NAME = 64
 
 
 class _Reader:
@@ -83,7 +86,7 @@ class _Reader:
         out = []
         for i, item in enumerate(value):
             if not _is_number(item) or not math.isfinite(float(item)):
-                self.fail(key, f"item {i} must be a finite number, got {item!r}")
+                self.fail(key, f"item {i} must be a finite number, got {excerpt(item)}")
             out.append(float(item))
         return out
 
@@ -93,19 +96,13 @@ def _type(value) -> str:
 
 
 def _read_mapping(path: Path) -> dict:
+    text = read_text_file(path, "sensor file", SensorError)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SensorError(f"sensor file {path} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else type(exc).__name__
-        raise SensorError(f"sensor file {path} cannot be read ({reason})") from None
-    try:
-        data = yaml.safe_load(text)
+        data = load_yaml(text, f"sensor file {path}", SensorError)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or "syntax error"
+        problem = clip(getattr(exc, "problem", None) or "syntax error")
         raise SensorError(f"sensor file {path}: invalid YAML{where} ({problem})") from None
     if not isinstance(data, dict):
         raise SensorError(f"sensor file {path}: expected a mapping of keys (name, min_range, ...), "
@@ -128,7 +125,7 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
 
     for key in data:
         if not isinstance(key, str) or key not in ALLOWED_KEYS:
-            raise SensorError(f"sensor file {path}: unknown key '{key}' (allowed: {', '.join(ALLOWED_KEYS)})")
+            raise SensorError(f"sensor file {path}: unknown key {excerpt(key)} (allowed: {', '.join(ALLOWED_KEYS)})")
 
     spinning = [k for k in _SPINNING_KEYS if k in data]
     pattern = [k for k in _PATTERN_KEYS if k in data]
@@ -141,6 +138,8 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
                           "'pattern_file' (with 'point_rate' and 'integration_time') is missing")
 
     name = r.string("name")
+    if len(name) > MAX_NAME:
+        r.fail("name", f"must be at most {MAX_NAME} characters, got {len(name):,}: put the rest in 'description'")
     min_range = r.number("min_range", positive=True)
     max_range = r.number("max_range", positive=True)
     if max_range <= min_range:
@@ -171,10 +170,13 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
         pattern_path = Path(pattern_name).expanduser()
         if not pattern_path.is_absolute():
             pattern_path = path.parent / pattern_path
-        if not pattern_path.is_file():
+        if not pattern_path.exists():
             r.fail("pattern_file", f"names {pattern_path}, which does not exist")
+        if not pattern_path.is_file():
+            r.fail("pattern_file", f"names {pattern_path}, which is not a regular file")
         try:
-            pattern = np.load(pattern_path, allow_pickle=False)
+            # Memory-mapped: its shape is checked before a row is read.
+            pattern = np.load(pattern_path, mmap_mode="r", allow_pickle=False)
         except (OSError, ValueError, EOFError) as exc:
             reason = f" ({exc.strerror})" if isinstance(exc, OSError) and exc.strerror else ""
             r.fail("pattern_file", f"names {pattern_path}, which is not a readable numeric .npy array{reason}")
@@ -182,6 +184,9 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
                 or pattern.shape[0] < 1 or not np.issubdtype(pattern.dtype, np.number)):
             r.fail("pattern_file", f"names {pattern_path}, which must hold an (N, 2) numeric array of "
                                    f"azimuth/elevation in radians, got shape {getattr(pattern, 'shape', None)}")
+        if pattern.shape[0] > MAX_RAYS:
+            r.fail("pattern_file", f"names {pattern_path}, which holds {pattern.shape[0]:,} rays, more than the "
+                                   f"limit of {MAX_RAYS:,}")
         pattern = np.asarray(pattern, dtype=np.float64)
         if not np.isfinite(pattern).all():
             r.fail("pattern_file", f"names {pattern_path}, which holds NaN or infinite angles")
