@@ -32,11 +32,11 @@ MAX_OCCUPANCY_CELLS = 1 << 20
 
 def occupancy_factor(grid: SolmGrid) -> int:
     """k: occupancy cells per SOLM cell and axis, the most up to res / OCCUPANCY_RES
-    that keeps the grid within MAX_OCCUPANCY_CELLS (at least 1)."""
-    k = max(1, math.ceil(grid.res / OCCUPANCY_RES - 1e-9))
-    while k > 1 and grid.nx * grid.ny * k * k > MAX_OCCUPANCY_CELLS:
-        k -= 1
-    return k
+    that keeps the grid within MAX_OCCUPANCY_CELLS (at least 1). Closed form: the
+    largest k with nx ny k^2 <= MAX_OCCUPANCY_CELLS is isqrt(MAX // (nx ny))."""
+    wanted = math.ceil(grid.res / OCCUPANCY_RES - 1e-9)
+    fitting = math.isqrt(MAX_OCCUPANCY_CELLS // (grid.nx * grid.ny))
+    return max(1, min(wanted, fitting))
 
 
 def grid_occupancy(points: np.ndarray, grid: SolmGrid, ground: np.ndarray, robot_radius: float,
