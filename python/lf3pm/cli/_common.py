@@ -3,29 +3,111 @@ their defaults from lf3pm.config, and the progress bar."""
 
 from __future__ import annotations
 
+import os
+import secrets
+import stat
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
 import typer
 from rich.console import Console
+from rich.text import Text
 
+from lf3pm.atomic import check_replaceable
 from lf3pm.config import Config, help_with_default, load_config
 from lf3pm.errors import Lf3pmError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
-console = Console()
-err_console = Console(stderr=True)
+# No markup: what the consoles print holds paths, names and values as the user gave them,
+# and Rich would take "[red]" in a path or "[nan, 0.0]" in a message for a tag and drop it.
+console = Console(markup=False)
+err_console = Console(stderr=True, markup=False)
+
+
+def one_line(text) -> str:
+    """``text`` on one line: a newline in a path or a message shown as \\n."""
+    return str(text).replace("\r", "\\r").replace("\n", "\\n")
+
+
+def print_warning(text) -> None:
+    """``lf3pm: warning: TEXT`` on stderr, one line, TEXT verbatim."""
+    err_console.print(Text.assemble(("lf3pm: warning:", "bold yellow"), " ", one_line(text)), highlight=False,
+                      soft_wrap=True)
+
+
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """warnings.formatwarning for the CLI: one line, no file:line and source line."""
+    return f"lf3pm: warning: {one_line(message)}\n"
+
+
+@contextmanager
+def one_line_warnings():
+    """Python warnings (a map's dropped points, an odometry's caveat) printed as one line
+    each while the block runs."""
+    previous = warnings.formatwarning
+    warnings.formatwarning = _format_warning
+    try:
+        yield
+    finally:
+        warnings.formatwarning = previous
 
 
 @contextmanager
 def user_errors():
-    """Turns user-input errors into one line on stderr and exit status 2."""
+    """Turns user-input errors into one line on stderr and exit status 2; warnings are
+    one line each (:func:`one_line_warnings`)."""
     try:
-        yield
+        with one_line_warnings():
+            yield
     except Lf3pmError as err:
-        err_console.print(f"[bold red]lf3pm: error:[/] {err}", highlight=False, soft_wrap=True)
+        err_console.print(Text.assemble(("lf3pm: error:", "bold red"), " ", one_line(err)), highlight=False,
+                          soft_wrap=True)
         raise typer.Exit(2) from None
+
+
+def check_output(path: Path | None, *, folder: bool = False, parents: bool = False, new: bool = False) -> None:
+    """Raises Lf3pmError when ``path`` could not be written, so that a command fails in a
+    second, not after its work. A file (the default) is replaced whole: nothing or a
+    regular file there, in an existing folder. A ``folder`` is written into: an existing
+    folder, or one created in an existing folder (with ``parents``: under the nearest
+    existing one). ``new``: nothing may be there yet. A file is created and removed where
+    the output would go, so that permissions, a read-only mount and a missing folder are
+    all found as they are now. None: no output asked for."""
+    if path is None:
+        return
+    path = Path(path)
+    if os.path.lexists(path):
+        if new:
+            raise Lf3pmError(f"{path} exists: lf3pm writes it as a new folder and replaces nothing; remove it "
+                             "or choose another name")
+        if folder and not path.is_dir():
+            raise Lf3pmError(f"{path}: cannot write into the folder: it is not a folder; choose another name")
+        if not folder:
+            check_replaceable(path)
+        where, failure = (path, "cannot write into the folder") if folder else (path.parent, "cannot write the file")
+    else:
+        where = path.parent
+        while parents and not os.path.lexists(where) and where != where.parent:
+            where = where.parent
+        failure = f"cannot create the folder (cannot write in {where})" if folder else "cannot write the file"
+        if not os.path.lexists(where):
+            raise Lf3pmError(f"{path}: {failure}: {where} does not exist; create it first")
+        if not where.is_dir():
+            raise Lf3pmError(f"{path}: {failure}: {where} is not a folder; choose another place")
+    _probe(path, where, failure)
+
+
+def _probe(path: Path, where: Path, failure: str) -> None:
+    """Creates and removes a file in the folder ``where``; Lf3pmError ``path: failure
+    (why)`` if it cannot."""
+    probe = where / f".lf3pm-probe-{secrets.token_hex(4)}"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, stat.S_IRUSR | stat.S_IWUSR))
+    except OSError as err:
+        raise Lf3pmError(f"{path}: {failure} ({err.strerror or err}): choose a writable place") from None
+    os.remove(probe)
 
 
 def option(path: str, *names: str, help: str | None = None, **kwargs):
@@ -76,10 +158,12 @@ def progress_bar():
     """A rich progress bar on stderr; yields step(label, total, advance=1, restart=False)
     (restart: a new phase, counted from zero). The bar appears at the first step, so that
     an error before any work is its one line alone."""
-    from rich.progress import BarColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    bar = Progress("[progress.description]{task.description}", BarColumn(), "{task.completed}/{task.total}",
-                   TimeElapsedColumn(), TimeRemainingColumn(), console=err_console)
+    # The label holds paths (`writing OUT.bag`): shown as text, not markup.
+    bar = Progress(TextColumn("{task.description}", style="progress.description", markup=False), BarColumn(),
+                   "{task.completed}/{task.total}", TimeElapsedColumn(), TimeRemainingColumn(),
+                   console=err_console)
     task = None
 
     def step(label, total, advance=1, restart=False):
@@ -96,3 +180,4 @@ def progress_bar():
     finally:
         if task is not None:
             bar.stop()
+

@@ -10,9 +10,9 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from lf3pm.atomic import atomic_write, check_replaceable
-from lf3pm.cli._common import (CONFIG_OPTION, MAP_PATHS, SCAN_PATHS, app, configure, console, map_options, option,
-                               scan_options, user_errors)
+from lf3pm.atomic import atomic_write
+from lf3pm.cli._common import (CONFIG_OPTION, MAP_PATHS, SCAN_PATHS, app, check_output, configure, console, map_options,
+                               option, scan_options, user_errors)
 
 
 @app.command()
@@ -43,8 +43,7 @@ def evaluate(
         from lf3pm.metric import evaluate as run_evaluate
         from lf3pm.map import load_map
 
-        if save_observations is not None:
-            check_replaceable(save_observations)
+        check_output(save_observations)
         world = load_map(map_path, **map_options(cfg))
         result = run_evaluate(world, pose, cfg.sensor, **scan_options(cfg), dof=cfg.metric.dof, w1=cfg.metric.w1,
                               association=cfg.metric.association, observations=save_observations is not None)

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from lf3pm.cli._common import app, configure, console, option, progress_bar, section_paths, user_errors
+from lf3pm.cli._common import app, check_output, configure, console, option, progress_bar, section_paths, user_errors
 
 experiment_app = typer.Typer(help="Reproducible experiments (tables, figures, summary.json).",
                               no_args_is_help=True)
@@ -24,6 +24,7 @@ def experiment_table1(
 ):
     """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
     with user_errors():
+        check_output(out, folder=True, parents=True)
         from lf3pm.experiments import table1
 
         study = configure(None, locals(), section_paths("table1", "poses", "trials", "seed")).table1
@@ -44,6 +45,7 @@ def experiment_correlation(
 ):
     """Spearman correlation of each predictor with MDE, pooled and within maps."""
     with user_errors():
+        check_output(out, folder=True, parents=True)
         from lf3pm.experiments import correlation
 
         cfg = configure(None, locals(), {"sensor": "sensor", **section_paths(
@@ -73,6 +75,7 @@ def experiment_gobi(
 ):
     """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
     with user_errors():
+        check_output(out, folder=True, parents=True)
         from dataclasses import replace
 
         study = configure(None, locals(), section_paths("gobi", "seeds", "seed")).gobi
@@ -102,6 +105,7 @@ def experiment_benefit(
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
+        check_output(out, folder=True, parents=True)
         from lf3pm.experiments import benefit
 
         study = configure(None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry")).benefit

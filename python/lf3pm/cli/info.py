@@ -10,7 +10,7 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from lf3pm.cli._common import app, configure, console, option, user_errors
+from lf3pm.cli._common import app, check_output, configure, console, option, user_errors
 from lf3pm.config import load_config
 from lf3pm.errors import Lf3pmError
 
@@ -81,6 +81,7 @@ def scene(
         if output.suffix.lower() not in SUPPORTED_SUFFIXES:
             raise Lf3pmError(f"{output}: unknown suffix {output.suffix or '(none)'}; "
                              f"supported: {' '.join(SUPPORTED_SUFFIXES)}")
+        check_output(output)
         built = build_scene(name, seed=seed)
         write_points(output, built.points)
         x, y, z, yaw = built.reference_pose

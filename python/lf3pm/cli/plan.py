@@ -8,8 +8,8 @@ from typing import Optional, Tuple
 
 import typer
 
-from lf3pm.atomic import check_replaceable
-from lf3pm.cli._common import CONFIG_OPTION, app, configure, console, err_console, option, user_errors
+from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, option, print_warning,
+                               user_errors)
 from lf3pm.errors import Lf3pmError
 
 
@@ -57,6 +57,8 @@ def plan(
     """Plan a perception-aware trajectory on a SOLM (graph search, then MINCO + L-BFGS)."""
     with user_errors():
         cfg = configure(config, locals(), PLAN_PATHS)
+        check_output(out)
+        check_output(png)
         from lf3pm.planner.plan import Planner
         from lf3pm.solm import Solm
 
@@ -73,7 +75,6 @@ def plan(
             from lf3pm.map import load_map
             from lf3pm.planner.figures import plans_figure
 
-            check_replaceable(out)
             points = load_map(map_path).points if map_path is not None else None
             plans_figure(solm, {metric: result}, png, map_points=points,
                          title=f"{vehicle.kind} plan guided by {metric} over the SOLM (dotted: front-end path)")
@@ -85,7 +86,7 @@ def plan(
             raise
         summary = result.summary()
         for line in summary["warnings"]:
-            err_console.print(f"[bold yellow]lf3pm: warning:[/] {out}: {line}", highlight=False, soft_wrap=True)
+            print_warning(f"{out}: {line}")
         if as_json:
             print(json.dumps(summary, indent=1))
         else:

@@ -7,8 +7,8 @@ from typing import Optional, Tuple
 
 import typer
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, configure, console, err_console, map_options, option,
-                               progress_bar, user_errors)
+from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, err_console, map_options,
+                               option, progress_bar, user_errors)
 
 solm_app = typer.Typer(help="Static Observation Loss Maps: build, view, export.", no_args_is_help=True)
 app.add_typer(solm_app, name="solm")
@@ -48,6 +48,7 @@ def solm_build(
                                                       "height", "bounds", "robot_radius", "max_cells",
                                                       "crop_above")}}
         cfg = configure(config, locals(), paths)
+        check_output(out, folder=True)
         from lf3pm.map import load_map_points
         from lf3pm.sensors import get_sensor
         from lf3pm.solm import build_solm, make_grid
@@ -88,6 +89,7 @@ def solm_view(
         from lf3pm.solm import Solm
         from lf3pm.solm.figures import heat_map
 
+        check_output(png)
         solm = Solm.open(store)
         points = load_points(map_path) if map_path else None
         heat_map(solm, png, channel=channel, reduce=reduce, map_points=points)
@@ -105,5 +107,6 @@ def solm_export(
         from lf3pm.solm import Solm
         from lf3pm.solm.figures import export_ros
 
+        check_output(folder, folder=True, parents=True)
         written = export_ros(Solm.open(store), folder, reduce=reduce)
         console.print(f"wrote {len(written)} files to {folder}")
