@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 from typing import Optional
 
@@ -13,8 +12,8 @@ import typer
 from rich import box
 from rich.table import Table
 
-from lf3pm.atomic import check_replaceable
-from lf3pm.cli._common import CONFIG_OPTION, app, configure, console, option, progress_bar, user_errors
+from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, option, print_warning,
+                               progress_bar, user_errors)
 from lf3pm.errors import Lf3pmError
 
 #: Where each option of replay lives in the config.
@@ -50,16 +49,17 @@ def replay_command(
         from lf3pm.replays.motion import Motion
         from lf3pm.replays.replay import lio_modules, replay_bag, replay_seeds, resolve_sensor
 
+        check_output(png)
+        check_output(bag, folder=True, new=True)
         run, scan = cfg.replay, cfg.scan
         lidar = resolve_sensor(cfg.sensor, run.rate)
-        if png is not None:
-            check_replaceable(png)
-        if bag is not None and os.path.lexists(bag):
-            raise Lf3pmError(f"{bag} exists: a bag is a new directory and lf3pm replaces nothing there")
         if bag is not None:
             lio_modules("--bag (it carries the simulated IMU)")
         if run.method == "lio":
             lio_modules()
+            from lf3pm.replays.lio import choose_odometry
+
+            choose_odometry(run.odometry, lidar)  # a pair it refuses or warns about, before the map loads
         elif odometry is not None:
             raise Lf3pmError(f"--odometry applies to --method lio, not {run.method}")
         options = {"odometry": run.odometry} if run.method == "lio" else {}
@@ -144,7 +144,7 @@ def print_rest(results) -> None:
                   f"the estimate moved at most {moves}", highlight=False)
     for r in rested:
         if not r.rest["steady"]:
-            console.print(f"warning: seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at "
-                          f"the end of the rest (> {REST_SPEED_LIMIT:g} m/s): it entered the trajectory with a "
-                          "velocity error, so this APE measures its start, not the trajectory (docs/lio.md, "
-                          "\"A still sensor\")", style="yellow", highlight=False)
+            print_warning(f"seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at the end of "
+                          f"the rest (> {REST_SPEED_LIMIT:g} m/s): it entered the trajectory with a velocity "
+                          "error, so this APE measures its start, not the trajectory (docs/lio.md, \"A still "
+                          "sensor\")")

@@ -122,15 +122,25 @@ ODOMETRIES = {"genz": Odometry("GenZ-LIO", "genz-lio", "0.1.1", "GPL-2.0-only"),
               "dlio": Odometry("DLIO", "evalio", "0.6.1", "MIT (evalio and DLIO)"),
               "liosam": Odometry("LIO-SAM", "evalio", "0.6.1", "BSD-3-Clause (LIO-SAM), MIT (evalio)")}
 DEFAULT_ODOMETRY = ReplayConfig.model_fields["odometry"].default
+#: The sensors docs/lio.md measured an odometry to lose, by odometry and by whether the
+#: sensor spins (rings of beams; False: a non-repetitive Livox pattern): what was measured
+#: and what to run instead. choose_odometry warns when asked for such a pair.
+LOSES = {("dlio", False): "DLIO loses track of a non-repetitive (Livox) sensor, whose 0.1 s scans cover a "
+                          "part of its pattern (Mid-70: 0.1-3 m APE where GenZ-LIO holds 0.4-4 cm; docs/lio.md, "
+                          "\"Two odometries\"): use odometry genz or auto"}
 
 
 def choose_odometry(odometry: str, sensor: Sensor) -> str:
     """The odometry run for ``odometry`` (a key of ODOMETRIES or "auto") and
     ``sensor``: "auto" is DLIO for a spinning sensor, GenZ-LIO for a
     non-repetitive (Livox) one (module docstring). Raises Lf3pmError for an
-    unknown name."""
+    unknown name; warns (once) for a pair of LOSES."""
+    spinning = spinning_rings(sensor) is not None
     if odometry == "auto":
-        return "dlio" if spinning_rings(sensor) is not None else "genz"
+        return "dlio" if spinning else "genz"
+    if (odometry, spinning) in LOSES:
+        # Attributed here, not to the caller: the CLI's early check and run_lio then warn once.
+        warnings.warn(f"{sensor.name} with {odometry}: {LOSES[odometry, spinning]}", stacklevel=1)
     if odometry not in ODOMETRIES:
         raise Lf3pmError(f"unknown odometry {odometry!r}; use one of auto, {', '.join(ODOMETRIES)}")
     if not runs_on(odometry, sensor):
