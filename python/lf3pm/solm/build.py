@@ -4,6 +4,7 @@ resumable (see store.py)."""
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,41 @@ from lf3pm.terrain import column_minimum
 
 #: Engines that compute the tiles: here (local) or as Ray tasks (cluster.py).
 ENGINES = ("local", "ray")
+#: Percentiles of x and of y whose box :func:`stray_points_warning` suggests as bounds.
+STRAY_PERCENTILES = (0.5, 99.5)
+#: Points per pass of that check (and the most it takes its percentiles from), so
+#: that it holds a few MB beside a map of any size.
+STRAY_CHUNK = 1_000_000
+
+
+def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
+    """One line when a few stray points make most of ``grid`` empty: most of its x-y
+    cells hold no map point, and the box of STRAY_PERCENTILES of the points' x and y
+    (on an even sample of at most STRAY_CHUNK) covers less than half of it. The line
+    names the grid cells that hold that box as the ``--bounds`` to build with
+    instead; None otherwise."""
+    origin, res = np.array([grid.x0, grid.y0]), grid.res
+    end = origin + res * np.array([grid.nx, grid.ny])
+    lo, hi = np.percentile(points[::max(1, len(points) // STRAY_CHUNK), :2], STRAY_PERCENTILES, axis=0)
+    if np.prod(np.clip(np.minimum(hi, end) - np.maximum(lo, origin), 0, None)) >= 0.5 * np.prod(end - origin):
+        return None
+    box_lo = origin + np.floor((lo - origin) / res) * res
+    box_hi = origin + (np.floor((hi - origin) / res) + 1) * res   # the cells holding the box, a point on its edge too
+    filled, outside = np.zeros(grid.ny * grid.nx, bool), 0
+    for first in range(0, len(points), STRAY_CHUNK):
+        xy = points[first:first + STRAY_CHUNK, :2]
+        outside += int(np.count_nonzero(np.any((xy < box_lo) | (xy > box_hi), axis=1)))
+        ij = np.floor((xy - origin) / res)
+        ij = ij[np.all((ij >= 0) & (ij < [grid.nx, grid.ny]), axis=1)].astype(np.int64)
+        filled[ij[:, 1] * grid.nx + ij[:, 0]] = True
+    if filled.sum() >= filled.size / 2:
+        return None
+    bounds = " ".join(f"{round(v, 6):g}" for v in (*box_lo, *box_hi))
+    x0, y0, x1, y1 = (round(float(v), 6) for v in (*origin, *end))
+    return (f"{filled.sum():,} of the SOLM grid's {filled.size:,} x-y cells hold a map point: stray points stretch "
+            f"it over x [{x0:g}, {x1:g}], y [{y0:g}, {y1:g}]; --bounds {bounds} (the {STRAY_PERCENTILES[0]:g} "
+            f"and {STRAY_PERCENTILES[1]:g} percentiles of x and y, in whole cells) holds all but "
+            f"{outside:,} of the {len(points):,} points and skips the empty cells")
 
 
 def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = DEFAULTS.scan.seed,
@@ -63,6 +99,9 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         raise Lf3pmError(f"tile must be >= 1, got {tile}")
     if layout.yaw_reuse and grid.space != "se2":
         raise Lf3pmError("yaw reuse applies to se2 grids only")
+    hint = stray_points_warning(world.points, grid)
+    if hint is not None:
+        warnings.warn(hint, UserWarning, stacklevel=2)
     job = make_job(sensor, grid, tile=tile, noise=scan.noise_for(sensor), seed=scan.seed, metric=metric,
                    robot_radius=layout.robot_radius, floor_clearance=floor_clearance, yaw_reuse=layout.yaw_reuse,
                    ray_stride=layout.ray_stride)
