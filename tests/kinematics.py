@@ -4,21 +4,21 @@ back-end and end-to-end planning tests and bench/bench_random_queries.py."""
 import numpy as np
 
 
-def body_speeds(trajectory):
-    """(samples, v_lon, v_lat) at 100 Hz; v in the body frame."""
-    s = trajectory.sample(100.0)
+def body_speeds(trajectory, rate: float = 100.0):
+    """(samples, v_lon, v_lat) at ``rate`` Hz; v in the body frame."""
+    s = trajectory.sample(rate)
     c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
     return s, s["vx"] * c + s["vy"] * si, -s["vx"] * si + s["vy"] * c
 
 
-def kinematic_checks(trajectory, robot, slack: float = 0.02):
-    """(samples, {check: passed}) for every limit of ``robot`` on 100 Hz samples: speeds
+def kinematic_checks(trajectory, robot, slack: float = 0.02, rate: float = 100.0):
+    """(samples, {check: passed}) for every limit of ``robot`` on ``rate`` Hz samples: speeds
     (body frame and, if set, |v|), yaw rate, body-frame accelerations and yaw acceleration
     within ``slack``; no sideways motion (|h| < 1e-3 m/s) for diff and car; the car's
     turning radius within ``slack`` of its top speed. The yaw acceleration is taken by
     central differences of the sampled yaw rate, as a tracking controller would see it
     (a jump in the yaw rate fails it)."""
-    s, v_lon, v_lat = body_speeds(trajectory)
+    s, v_lon, v_lat = body_speeds(trajectory, rate)
     c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
     lim = 1 + slack
     out = {"v_lon": np.max(np.abs(v_lon)) <= lim * robot.vmax_lon,

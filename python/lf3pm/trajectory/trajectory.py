@@ -77,6 +77,15 @@ class Trajectory:
         return {"t": t, "x": p[:, 0], "y": p[:, 1], "yaw": p[:, 2], "vx": v[:, 0], "vy": v[:, 1],
                 "omega": v[:, 2], "ax": a[:, 0], "ay": a[:, 1]}
 
+    def time_scaled(self, factor: float) -> "Trajectory":
+        """The same path traversed ``factor`` times slower (factor > 0): position at t is
+        this trajectory's at t / factor, so speeds and rates scale by 1 / factor and
+        accelerations by 1 / factor^2; a flat piece's heading is unchanged."""
+        if not (np.isfinite(factor) and factor > 0):
+            raise Lf3pmError(f"time scale factor must be a positive number, got {factor}")
+        scale = factor ** -np.arange(4.0)  # coefficient k of a cubic in t / factor
+        return Trajectory(self.coefficients * scale[None, :, None], self.durations * factor, self.flat)
+
     def _locate(self, t: np.ndarray):
         """Piece index and local time of each (clamped) time."""
         starts = np.concatenate([[0.0], np.cumsum(self.durations)[:-1]])

@@ -29,12 +29,15 @@ from lf3pm import _core, libm
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid_field import GridField
 from lf3pm.trajectory.robots import Robot
-from lf3pm.trajectory.trajectory import CSV_RATE, Trajectory
+from lf3pm.trajectory.trajectory import Trajectory
 
 #: The objective's weights as the C++ core defines them (trajectory_cost.hpp CostWeights):
 #: the penalty weight W, K samples per piece and the clearance margin, read once from there.
 DEFAULT_WEIGHTS = _core.CostWeights()
 ESDF_MARGIN = DEFAULT_WEIGHTS.esdf_margin
+#: Samples per second on which every limit is checked and enforced (:func:`within_limits`):
+#: a tracking controller's rate; CSV_RATE's samples (100 Hz) are a subset of them.
+LIMIT_CHECK_RATE = 1000.0
 
 
 @dataclass(frozen=True)
@@ -43,14 +46,17 @@ class OptimizeResult:
 
     ``status``: L-BFGS's (converged, stalled, max_iterations, line_search_failed) and
     ``reason``, why it stopped, with the numbers that decided it (lbfgs.hpp).
-    ``terms``: the objective's terms at the solution (q, velocity, omega, acceleration,
-    turn, esdf, time, energy, total). ``violations`` on samples at ``check_rate`` Hz:
+    ``terms``: the objective's terms at the optimiser's solution (q, velocity, omega,
+    acceleration, turn, esdf, time, energy, total), before ``time_scale``: the uniform
+    stretch of time (>= 1) that brought every limit inside (:func:`within_limits`).
+    ``violations`` of the returned trajectory on samples at ``check_rate`` Hz:
     max_v_lon_ratio, max_v_lat_ratio (omni), max_speed_ratio (omni with vmax_norm),
     max_omega_ratio, max_a_lon_ratio, max_a_lat_ratio (body-frame acceleration), max_alpha_ratio
     (yaw acceleration, from central differences of the sampled yaw rate) (<= 1 is within
     the limit), max_turn_excess (car: max(R |omega|
     - |v_lon|) in m/s), max_h (|xdot sin yaw - ydot cos yaw|, m/s; diff and car)
-    and min_clearance (ESDF - r_safe, m).
+    and min_clearance (ESDF - r_safe, m). Time scaling changes neither of the last two
+    nor the car's turn excess in sign: those are the path's geometry.
     """
 
     trajectory: Trajectory
@@ -61,6 +67,14 @@ class OptimizeResult:
     terms: dict
     violations: dict
     wall_time: float
+    time_scale: float = 1.0
+
+    @property
+    def limited_by(self) -> str | None:
+        """The limit the trajectory presses hardest against, as its ratio's name in
+        ``violations`` (e.g. ``max_omega_ratio``); None when it has none (no ratio)."""
+        ratios = {k: v for k, v in self.violations.items() if k in _SPEED_RATIOS + _ACCELERATION_RATIOS}
+        return max(ratios, key=ratios.get) if ratios else None
 
 
 def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
@@ -193,7 +207,8 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
                         esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
                         corners: bool = False,
                         g_epsilon: float = _LBFGS.g_epsilon, rel_cost_tol: float = _LBFGS.delta,
-                        max_iterations: int = _LBFGS.max_iterations, check_rate: float = CSV_RATE) -> OptimizeResult:
+                        max_iterations: int = _LBFGS.max_iterations,
+                        check_rate: float = LIMIT_CHECK_RATE) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
     ``cost``: the localisability cost (a SOLM channel; None to leave it out), weighted
@@ -206,7 +221,10 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     path is resampled evenly); ``piece_length``:
     metres per piece in the initial guess. L-BFGS stops at ||g|| <= g_epsilon
     max(1, ||x||), when the objective fell by less than ``rel_cost_tol`` (relative)
-    over 3 iterations, or after ``max_iterations`` (0: none). Single-threaded.
+    over 3 iterations, or after ``max_iterations`` (0: none). The limits are penalties
+    in the objective, so the solution may pass them slightly: time is then stretched
+    uniformly until every limit holds on samples at ``check_rate`` Hz
+    (:func:`within_limits`). Single-threaded.
     """
     start = time.perf_counter()
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
@@ -216,16 +234,50 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     lbfgs.g_epsilon, lbfgs.delta, lbfgs.max_iterations = g_epsilon, rel_cost_tol, max_iterations
     out = problem.optimize(lbfgs)
     coefficients, durations = problem.trajectory(out["x"])
-    wall = time.perf_counter() - start
     trajectory = Trajectory(coefficients, durations, np.ones(len(durations), bool) if robot.nonholonomic else None)
     if robot.kind == "diff":
         wp = np.asarray(waypoints, dtype=np.float64)
         trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax, robot.alpha_max)
+    trajectory, scale, violations = within_limits(trajectory, robot, esdf, check_rate)
     return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], out["reason"],
-                          dict(out["terms"]), check_limits(trajectory, robot, esdf, check_rate), wall)
+                          dict(out["terms"]), violations, time.perf_counter() - start, scale)
 
 
-def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = CSV_RATE) -> dict:
+#: Violation ratios that time scaling by k divides by k (speeds and rates) and by k^2
+#: (accelerations); the other entries are geometry, which it leaves alone.
+_SPEED_RATIOS = ("max_v_lon_ratio", "max_v_lat_ratio", "max_speed_ratio", "max_omega_ratio")
+_ACCELERATION_RATIOS = ("max_a_lon_ratio", "max_a_lat_ratio", "max_alpha_ratio")
+#: Rounds of :func:`within_limits`: the first stretch brings the sampled maxima to 1 but
+#: for where the samples fall on the stretched trajectory, a second mends that residue.
+_STRETCH_ROUNDS = 4
+#: Relative margin of each stretch over the ratios it answers: their float rounding.
+_STRETCH_MARGIN = 1e-12
+
+
+def stretch_factor(violations: dict) -> float:
+    """The uniform time stretch (>= 1) that brings every speed, rate and acceleration
+    ratio of ``violations`` to at most 1: max(1, r_v, r_omega, sqrt(r_a), sqrt(r_alpha))."""
+    return max([1.0] + [violations[k] for k in _SPEED_RATIOS if k in violations]
+               + [math.sqrt(violations[k]) for k in _ACCELERATION_RATIOS if k in violations])
+
+
+def within_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = LIMIT_CHECK_RATE):
+    """(trajectory, factor, violations): ``trajectory`` stretched uniformly in time by the
+    least factor (>= 1) that brings every speed, rate and acceleration limit inside on
+    samples at ``rate`` Hz, and its :func:`check_limits` there. The path is unchanged, so
+    are clearance and a car's turning radius (geometric: a stretch cannot mend them)."""
+    total = 1.0
+    for _ in range(_STRETCH_ROUNDS):
+        violations = check_limits(trajectory, robot, esdf, rate)
+        factor = stretch_factor(violations)
+        if factor <= 1.0:
+            return trajectory, total, violations
+        factor *= 1.0 + _STRETCH_MARGIN
+        trajectory, total = trajectory.time_scaled(factor), total * factor
+    return trajectory, total, check_limits(trajectory, robot, esdf, rate)
+
+
+def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = LIMIT_CHECK_RATE) -> dict:
     """Worst constraint values on samples at ``rate`` Hz (see :class:`OptimizeResult`)."""
     s = trajectory.sample(rate)
     c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
