@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import os
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -124,15 +125,21 @@ def as_map(map, threads: int = DEFAULTS.scan.threads) -> "Map":
 
 def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
              knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
-             max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads) -> Map:
+             max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads,
+             progress: Callable[[str], None] | None = None) -> Map:
     """Reads a map file (or takes an N x 3 array) and indexes it.
 
     ``voxel`` downsamples the map first (one centroid per voxel); ``cell_size``
     0 lets the index choose its voxel edge from the point spacing; the association
     parameters are FAST-LIO's (:class:`lf3pm.config.MapConfig`, which validates them).
+    ``progress``, if given, is called with what is being done as each phase starts
+    (reading the file, indexing its points): a large map takes tens of seconds.
     """
-    return load_map_points(source, voxel=voxel, cell_size=cell_size, knn=knn, plane_threshold=plane_threshold,
-                           max_neighbor_distance=max_neighbor_distance, threads=threads).indexed(threads)
+    points = load_map_points(source, voxel=voxel, cell_size=cell_size, knn=knn, plane_threshold=plane_threshold,
+                             max_neighbor_distance=max_neighbor_distance, threads=threads, progress=progress)
+    if progress is not None:
+        progress(f"indexing {points.size:,} points of {points.source}")
+    return points.indexed(threads)
 
 
 @dataclass(frozen=True)
@@ -178,12 +185,15 @@ def _sha256(points: np.ndarray) -> str:
 
 def load_map_points(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
                     knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
-                    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads) -> MapPoints:
+                    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads,
+                    progress: Callable[[str], None] | None = None) -> MapPoints:
     """Reads a map as :func:`load_map` does, without indexing it whole (:class:`MapPoints`);
     its hash is load_map's, so a SOLM store accepts either."""
     config = validated(MapConfig, "map", voxel=voxel, cell_size=cell_size, knn=knn,
                        plane_threshold=plane_threshold, max_neighbor_distance=max_neighbor_distance)
     threads = check_threads(threads)
+    if progress is not None:
+        progress(f"reading {os.fspath(source) if isinstance(source, (str, os.PathLike)) else 'the map array'}")
     if isinstance(source, (str, os.PathLike)):
         points = load_points(source, voxel=voxel)
         name = os.fspath(source)

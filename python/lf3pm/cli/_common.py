@@ -1,5 +1,5 @@
 """What every command shares: the app, the consoles, one-line errors, options that read
-their defaults from lf3pm.config, and the progress bar."""
+their defaults from lf3pm.config, the progress bar and the line shown while a map loads."""
 
 from __future__ import annotations
 
@@ -181,3 +181,29 @@ def progress_bar():
         if task is not None:
             bar.stop()
 
+
+@contextmanager
+def map_loading():
+    """Yields the ``progress`` callback of lf3pm.map.load_map (and load_map_points): on a
+    terminal, a line on stderr with a spinner, the phase (reading the file, indexing its
+    points) and the time elapsed, erased when the block ends so that an error after it is
+    its one line alone; nothing elsewhere."""
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    line = Progress(SpinnerColumn(), TextColumn("{task.description}", markup=False), TimeElapsedColumn(),
+                    console=err_console, transient=True)
+    task = None
+
+    def phase(text):
+        nonlocal task
+        if task is None:
+            line.start()
+            task = line.add_task(text, total=None)
+        else:
+            line.update(task, description=text, refresh=True)  # now: a phase may end before the next tick
+
+    try:
+        yield phase
+    finally:
+        if task is not None:
+            line.stop()

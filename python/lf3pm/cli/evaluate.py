@@ -11,8 +11,8 @@ import typer
 from rich.table import Table
 
 from lf3pm.atomic import atomic_write
-from lf3pm.cli._common import (CONFIG_OPTION, MAP_PATHS, SCAN_PATHS, app, check_output, configure, console, map_options,
-                               option, scan_options, user_errors)
+from lf3pm.cli._common import (CONFIG_OPTION, MAP_PATHS, SCAN_PATHS, app, check_output, configure, console, map_loading,
+                               map_options, option, scan_options, user_errors)
 
 
 @app.command()
@@ -44,7 +44,8 @@ def evaluate(
         from lf3pm.map import load_map
 
         check_output(save_observations)
-        world = load_map(map_path, **map_options(cfg))
+        with map_loading() as progress:
+            world = load_map(map_path, **map_options(cfg), progress=progress)
         result = run_evaluate(world, pose, cfg.sensor, **scan_options(cfg), dof=cfg.metric.dof, w1=cfg.metric.w1,
                               association=cfg.metric.association, observations=save_observations is not None)
         if save_observations is not None:
@@ -125,7 +126,8 @@ def mde(
         from lf3pm.validation import mde as run_mde
         from lf3pm.map import load_map
 
-        world = load_map(map_path, **map_options(cfg))
+        with map_loading() as progress:
+            world = load_map(map_path, **map_options(cfg), progress=progress)
         result = run_mde(world, pose, cfg.sensor, trials=cfg.mde.trials, sigma_t=cfg.mde.sigma_t,
                          sigma_r_deg=cfg.mde.sigma_r, **scan_options(cfg))
         out = result.to_dict()

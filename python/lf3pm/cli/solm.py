@@ -7,8 +7,8 @@ from typing import Optional, Tuple
 
 import typer
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, err_console, map_options,
-                               option, progress_bar, user_errors)
+from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, err_console, map_loading,
+                               map_options, option, progress_bar, user_errors)
 
 solm_app = typer.Typer(help="Static Observation Loss Maps: build, view, export.", no_args_is_help=True)
 app.add_typer(solm_app, name="solm")
@@ -55,9 +55,14 @@ def solm_build(
 
         grid_config = cfg.solm
         lidar = get_sensor(cfg.sensor)
-        world = load_map_points(map_path, **map_options(cfg))
-        grid = make_grid(world, grid_config.space, grid_config.res, bounds=grid_config.bounds,
-                         yaw_bins=grid_config.yaw_bins, height=grid_config.height, max_cells=grid_config.max_cells)
+        with map_loading() as progress:
+            world = load_map_points(map_path, **map_options(cfg), progress=progress)
+            grid = make_grid(world, grid_config.space, grid_config.res, bounds=grid_config.bounds,
+                             yaw_bins=grid_config.yaw_bins, height=grid_config.height,
+                             max_cells=grid_config.max_cells)
+            if engine == "local" and not crop and world.size <= grid_config.crop_above:
+                progress(f"indexing {world.size:,} points of {map_path}")
+                world = world.indexed(cfg.scan.threads)  # what build_solm would do, here with its line
         with progress_bar() as step:
             def advance(cells, total):
                 step(f"SOLM {grid.space} {grid.shape} cells", total, cells)
