@@ -14,6 +14,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import shlex
+import shutil
+import sys
 import time
 from pathlib import Path
 
@@ -111,10 +115,30 @@ def main() -> None:
         fp.write(json.dumps(records, indent=1).encode())
     print(f"wrote {report}, {args.out / 'report.json'}, figures in {args.out}/ and {args.out / 'gobi'}/ "
           f"in {time.perf_counter() - started:.0f} s")
-    gobi = args.out / "gobi"
-    print(f"look at them in 3D (docs/view.md): lf3pm view {gobi / 'map.npy'} --solm {gobi / 'solm.zarr'} "
-          f"--plan {gobi / 'trajectories/default.csv'} --plan {gobi / 'trajectories/none.csv'} "
-          f"--replay {gobi / 'replays/default_localization_0.json'}")
+    print(f"look at them in 3D (docs/view.md): {view_command(args.out / 'gobi')}")
+
+
+def view_command(gobi: Path) -> str:
+    """The `lf3pm view` command line of the demo's Gobi outputs in ``gobi``, runnable as
+    printed from the folder the demo ran in (:func:`cli_command`)."""
+    return cli_command() + " " + shlex.join(
+        ["view", str(gobi / "map.npy"), "--solm", str(gobi / "solm.zarr"),
+         "--plan", str(gobi / "trajectories/default.csv"), "--plan", str(gobi / "trajectories/none.csv"),
+         "--replay", str(gobi / "replays/default_localization_0.json")])
+
+
+def cli_command() -> str:
+    """How to run this Python's `lf3pm` from the current folder: ``lf3pm`` where that is
+    the one on PATH, else its path (``.venv/bin/lf3pm`` after `make`, which puts nothing
+    on PATH), else ``python -m lf3pm``."""
+    beside = Path(sys.executable).parent / "lf3pm"  # not resolved: a venv's python is a link out of it
+    found = shutil.which("lf3pm")
+    if found is not None and Path(found).resolve() == beside.resolve():
+        return "lf3pm"
+    if beside.is_file():
+        relative = os.path.relpath(beside)
+        return shlex.quote(relative if os.sep in relative else os.path.join(os.curdir, relative))
+    return f"{shlex.quote(sys.executable)} -m lf3pm"
 
 
 def demo_gobi(out: Path) -> str:
