@@ -31,3 +31,13 @@ class SensorError(Lf3pmError):
 
 class PoseError(Lf3pmError):
     """A pose is malformed or lies where it cannot be evaluated."""
+
+
+class StorageError(Lf3pmError):
+    """Storage failed under a read or write (a full disk, an I/O error, a folder that
+    vanished); the message names the file and says what was kept and how to go on."""
+
+
+class CorruptStoreError(Lf3pmError):
+    """A store's chunk or metadata cannot be decoded; the message names it and says how
+    to get a sound store back."""

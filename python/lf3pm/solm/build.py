@@ -4,23 +4,34 @@ resumable (see store.py)."""
 from __future__ import annotations
 
 import math
+import numbers
+import os
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from lf3pm import __version__
 from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, SolmConfig, validated
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, StorageError
 from lf3pm.map import Map, MapPoints
 from lf3pm.sensors import Sensor, as_sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.occupancy import grid_occupancy, occupancy_factor
-from lf3pm.solm.store import CHANNELS, TILE, check_new_store, open_or_create, tiles_shape
+from lf3pm.solm.store import (
+    CHANNELS,
+    MAX_TILE,
+    TILE,
+    check_new_store,
+    chunk_path,
+    open_or_create,
+    read_array,
+    tiles_shape,
+    writing,
+)
 from lf3pm.solm.tiles import compute_tile, crop_margin, make_job, write_tile
 from lf3pm.terrain import column_minimum
-
-
 
 #: Engines that compute the tiles: here (local) or as Ray tasks (cluster.py).
 ENGINES = ("local", "ray")
@@ -86,6 +97,16 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     cluster at ``address``, None: a local one; each task indexes only its tile's crop;
     cluster.py). The parameters are validated by lf3pm.config's ScanConfig,
     MetricConfig and SolmConfig."""
+    if not isinstance(world, (Map, MapPoints)):
+        raise Lf3pmError(f"build_solm needs a map (lf3pm.load_map), got {type(world).__name__}")
+    if not isinstance(grid, SolmGrid):
+        raise Lf3pmError(f"build_solm needs a grid (lf3pm.make_grid), got {type(grid).__name__}")
+    if not isinstance(out, (str, os.PathLike)):
+        raise Lf3pmError(f"the SOLM store to build is a path, got {type(out).__name__}")
+    if progress is not None and not callable(progress):
+        raise Lf3pmError(f"progress must be a function (cells, total), got {type(progress).__name__}")
+    if max_tiles is not None and not (_integer(max_tiles) and max_tiles >= 0):
+        raise Lf3pmError(f"max_tiles must be None or an integer >= 0, got {max_tiles!r}")
     scan = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
     metric = validated(MetricConfig, "metric", association=association, w1=w1)
     layout = validated(SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride,
@@ -93,10 +114,10 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     if engine not in ENGINES:
         raise Lf3pmError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     sensor = as_sensor(sensor)
-    if not (math.isfinite(floor_clearance) and floor_clearance >= 0):
-        raise Lf3pmError(f"floor clearance must be a number >= 0 m, got {floor_clearance}")
-    if tile < 1:
-        raise Lf3pmError(f"tile must be >= 1, got {tile}")
+    if not (isinstance(floor_clearance, numbers.Real) and math.isfinite(floor_clearance) and floor_clearance >= 0):
+        raise Lf3pmError(f"floor clearance must be a number >= 0 m, got {floor_clearance!r}")
+    if not (_integer(tile) and 1 <= tile <= MAX_TILE):
+        raise Lf3pmError(f"tile must be an integer from 1 to {MAX_TILE}, got {tile!r}")
     if layout.yaw_reuse and grid.space != "se2":
         raise Lf3pmError("yaw reuse applies to se2 grids only")
     hint = stray_points_warning(world.points, grid)
@@ -124,19 +145,44 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     ground = (column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny)
               if ground_robot else None)
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
-    if ground_robot:
-        group["ground_z"][...] = np.where(np.isfinite(ground), ground, np.nan).astype(np.float32)
-        group["occupied"][...] = grid_occupancy(world.points, grid, ground, job.robot_radius,
-                                                job.floor_clearance).astype(np.uint8)
-    done = group["done"][...]
+    done = read_array(group, "done")
     ty_n, tx_n = tiles_shape(grid.ny, grid.nx, tile)
+    kept = int(np.count_nonzero(done))
     todo = [(ty, tx) for ty in range(ty_n) for tx in range(tx_n) if not done[ty, tx]]
     if max_tiles is not None:
         todo = todo[:max_tiles]
     total = grid.layers * grid.ny * grid.nx
+    out = Path(out)
+
+    @contextmanager
+    def storing(where: Path):
+        """A write into the store (``where``: the chunk or array written). A storage fault
+        stops the build in one line: the file, the finished tiles kept, how to resume."""
+        if not (out / "zarr.json").is_file():  # zarr would recreate the folders of a chunk it writes
+            raise StorageError(f"{out}/zarr.json: the store vanished during the build (removed, or its disk "
+                               f"unmounted); nothing of it is kept: remove what is left at {out}, then run "
+                               f"`lf3pm solm build {world.source} -o {out}` with the same options again")
+        try:
+            with writing(where):
+                yield
+        except StorageError as err:
+            raise StorageError(f"{err}; the build stopped with {kept} of {ty_n * tx_n} tiles finished and kept "
+                               f"in {out}: free space or fix the storage, then run `lf3pm solm build "
+                               f"{world.source} -o {out}` with the same options (or the same build_solm call) "
+                               "again to resume it") from None
+
+    if ground_robot:
+        occupied = grid_occupancy(world.points, grid, ground, job.robot_radius, job.floor_clearance)
+        with storing(out / "ground_z"):
+            group["ground_z"][...] = np.where(np.isfinite(ground), ground, np.nan).astype(np.float32)
+        with storing(out / "occupied"):
+            group["occupied"][...] = occupied.astype(np.uint8)
 
     def finished(ty, tx, cells):
-        group["done"][ty, tx] = 1  # last: the tile counts only once all its data are on disk
+        nonlocal kept
+        with storing(chunk_path(group, "done", (0, 0))):
+            group["done"][ty, tx] = 1  # last: the tile counts only once all its data are on disk
+        kept += 1
         if progress:
             progress(cells, total)
 
@@ -152,6 +198,12 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         for ty, tx in todo:
             where = world.crop(job.bounds(ty, tx), margin, scan.threads) if crop else world
             arrays = compute_tile(where, job, ty, tx, job.ground(ground, ty, tx), scan.threads)
-            finished(ty, tx, write_tile(group, job, ty, tx, arrays))
-    return {"tiles": ty_n * tx_n, "built_now": len(todo), "complete": bool(group["done"][...].all()),
+            with storing(out):
+                cells = write_tile(group, job, ty, tx, arrays)
+            finished(ty, tx, cells)
+    return {"tiles": ty_n * tx_n, "built_now": len(todo), "complete": kept == ty_n * tx_n,
             "on_crops": engine == "ray" or bool(crop)}
+
+
+def _integer(value) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import CorruptStoreError, Lf3pmError
 from lf3pm.grid_field import axis_weights, bilinear
 from lf3pm.solm.grid import SolmGrid
-from lf3pm.solm.store import CHANNELS, MASKS
+from lf3pm.solm.store import CHANNELS, MASKS, QUOTED, read_array
 
 
 class Solm:
@@ -22,10 +23,14 @@ class Solm:
         self.attrs = dict(group.attrs)
 
     @classmethod
-    def open(cls, path) -> "Solm":
-        """Opens the store at ``path`` (read-only); an incomplete build is an error."""
+    def open(cls, path) -> Solm:
+        """Opens the store at ``path`` (read-only); an incomplete build is an error, and so
+        is a store whose metadata or chunks do not decode (CorruptStoreError, naming the
+        file; also when a channel is read later)."""
         import zarr
 
+        if not isinstance(path, (str, os.PathLike)):
+            raise Lf3pmError(f"a SOLM store is a path, got {type(path).__name__}")
         path = Path(path)
         if not path.exists():
             raise Lf3pmError(f"{path}: no such SOLM store")
@@ -34,11 +39,16 @@ class Solm:
             spec = dict(group.attrs["grid"])
         except Exception as err:  # noqa: BLE001 - any unreadable store is refused the same way
             raise Lf3pmError(f"{path} is not a SOLM store ({err.__class__.__name__})") from None
-        if not np.all(group["done"][...]):
+        if not np.all(read_array(group, "done")):
             raise Lf3pmError(f"{path} is an unfinished build: run the same `lf3pm solm build` again "
                              "to resume it")
-        spec["z_levels"] = tuple(spec["z_levels"])
-        return cls(group, SolmGrid(**spec))
+        try:
+            spec["z_levels"] = tuple(spec["z_levels"])
+            grid = SolmGrid(**spec)
+        except Exception as err:  # noqa: BLE001 - attributes edited into any shape
+            raise CorruptStoreError(f"{path / 'zarr.json'}: the SOLM's grid attribute is malformed "
+                                    f"({err.__class__.__name__}); build the store again") from None
+        return cls(group, grid)
 
     @property
     def channels(self) -> tuple:
@@ -46,9 +56,9 @@ class Solm:
 
     def channel(self, name: str) -> np.ndarray:
         """The stored array of channel ``name`` (NaN where not evaluated)."""
-        if name not in self.channels and name != "ground_z":
-            raise Lf3pmError(f"unknown channel {name!r}; channels: {', '.join(self.channels)}")
-        return self._group[name][...]
+        if not isinstance(name, str) or (name not in self.channels and name != "ground_z"):
+            raise Lf3pmError(f"unknown channel {repr(name)[:QUOTED]}; channels: {', '.join(self.channels)}")
+        return read_array(self._group, name)
 
     def occupancy(self) -> tuple[np.ndarray, int]:
         """The occupancy layer of a ground robot's SOLM (occupancy.py): a (ny k, nx k)
@@ -58,7 +68,7 @@ class Solm:
             raise Lf3pmError("this SOLM has no occupancy layer, which the planner needs to keep the robot off "
                              "thin obstacles (an older build, or an r3 grid): build it again "
                              "into a new store")
-        return self._group["occupied"][...].astype(bool), int(k)
+        return read_array(self._group, "occupied").astype(bool), int(k)
 
     def grid(self) -> tuple:
         """Cell-centre coordinates as arrays of the channels' shape: (x, y) for r2,
@@ -75,24 +85,25 @@ class Solm:
         """Trilinear interpolation of ``channel`` at (x, y, yaw) (se2: yaw periodic)
         or (x, y, z) (r3), vectorised; returns (value, gradient) with the gradient's
         last axis d/dx, d/dy, d/dyaw (or d/dz; r2: d/dx, d/dy). Positions are
-        clamped to the grid's cell centres."""
+        clamped to the grid's cell centres. The coordinates must be finite numbers of
+        shapes that broadcast together (else Lf3pmError)."""
         g = self.grid_spec
+        x, y, yaw, *z = _coordinates(x=x, y=y, yaw=yaw, **({} if z is None else {"z": z}))
         data = self.channel(channel).astype(np.float64)
-        x, y = np.asarray(x, float), np.asarray(y, float)
         if g.space == "r2":
             data = data[None]  # one layer: the same code, no third axis
             k0 = k1 = np.zeros(np.broadcast(x, y).shape, dtype=np.int64)
             tk, step, fk = 0.0, 1.0, 0.0
         elif g.space == "se2":
             step = 2 * math.pi / g.yaw_bins
-            f = np.mod(np.asarray(yaw, float), 2 * math.pi) / step
+            f = np.mod(yaw, 2 * math.pi) / step
             ik = np.floor(f).astype(int)
             tk = f - ik
             k0, k1 = ik % g.yaw_bins, (ik + 1) % g.yaw_bins
             fk = 1.0 if g.yaw_bins > 1 else 0.0
         else:
             levels = np.asarray(g.z_levels)
-            zz = np.asarray(z if z is not None else levels[0], float)
+            zz = z[0] if z else np.float64(levels[0])
             dz = levels[1] - levels[0] if len(levels) > 1 else 1.0
             fk, k0, k1, tk = axis_weights(zz, levels[0] - 0.5 * dz, dz, len(levels))
             step = dz
@@ -105,3 +116,27 @@ class Solm:
         value = (1 - tk) * a + tk * b
         grad = np.stack([(1 - tk) * ax + tk * bx, (1 - tk) * ay + tk * by, (b - a) / step * fk], axis=-1)
         return value, (grad[..., :2] if g.space == "r2" else grad)
+
+
+def _coordinates(**named) -> list[np.ndarray]:
+    """The query's coordinates as float arrays, in the order given: Lf3pmError naming the
+    first that is not numbers or not finite, or when their shapes do not broadcast."""
+    arrays = []
+    for name, value in named.items():
+        try:
+            a = np.asarray(value)
+        except ValueError:  # ragged nesting
+            a = np.asarray(None)
+        if a.dtype.kind not in "biuf":  # None, strings, objects and complex numbers are no coordinates
+            raise Lf3pmError(f"Solm.query: {name} must be a number or an array of numbers, got "
+                             f"{repr(value)[:QUOTED]}")
+        a = a.astype(np.float64)
+        if not np.isfinite(a).all():
+            raise Lf3pmError(f"Solm.query: {name} must be finite, got {a[~np.isfinite(a)].flat[0]}")
+        arrays.append(a)
+    try:
+        np.broadcast(*arrays)
+    except ValueError:
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(named, arrays))
+        raise Lf3pmError(f"Solm.query: the coordinates' shapes do not broadcast together ({shapes})") from None
+    return arrays

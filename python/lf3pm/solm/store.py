@@ -15,16 +15,21 @@ from __future__ import annotations
 import math
 import os
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
 
 CHANNELS = ("q_min", "q_n", "q_max", "sigma1", "step_norm", "m")
 MASKS = ("obstacle", "unknown", "degenerate")
 #: Default cells per tile edge (x and y); a tile holds every yaw bin or z level.
 TILE = 32
+#: The largest tile edge: a tile is a chunk, held whole in memory by every read and write.
+MAX_TILE = 1024
+#: Characters of an underlying error quoted in a one-line message.
+QUOTED = 80
 
 
 def tiles_shape(ny: int, nx: int, tile: int) -> tuple[int, int]:
@@ -88,5 +93,73 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
         group["done"][...] = np.zeros(tiles, np.uint8)
     except OSError as err:
         shutil.rmtree(path, ignore_errors=True)  # never leave a half-created store
-        raise Lf3pmError(f"{path}: cannot write the store ({err.strerror or err})") from None
+        raise StorageError(f"{path}: cannot create the store ({_quote(err)}); nothing was kept: free space or "
+                           "fix the storage, then run the build again") from None
     return group
+
+
+def store_root(group) -> Path:
+    """The folder of the store that ``group`` was opened from."""
+    return Path(getattr(group.store, "root", str(group.store)))
+
+
+def chunk_path(group, name: str, coords: tuple) -> Path:
+    """The file of chunk ``coords`` (chunk indices) of array ``name``: zarr's default chunk
+    key encoding (c/i/j/...), which every lf3pm store is created with."""
+    return store_root(group) / name / "c" / Path(*(str(int(c)) for c in coords))
+
+
+def _quote(err: BaseException) -> str:
+    """The first line of ``err``, at most QUOTED characters: the cause a one-line error adds."""
+    text = (getattr(err, "strerror", None) or str(err) or err.__class__.__name__).splitlines()[0]
+    return text if len(text) <= QUOTED else text[:QUOTED - 1] + "…"
+
+
+@contextmanager
+def writing(path: Path):
+    """Turns an OSError under the block (a write to ``path``: a chunk or a folder of a
+    store) into a one-line StorageError that names it."""
+    try:
+        yield
+    except OSError as err:
+        raise StorageError(f"{path}: cannot write ({_quote(err)})") from None
+
+
+def read_array(group, name: str) -> np.ndarray:
+    """Array ``name`` of the store ``group`` whole. Unreadable metadata or a chunk that
+    does not decode is a CorruptStoreError, an OSError a StorageError, each naming the
+    file (the failing chunk found by reading chunk by chunk) and saying what to do."""
+    root = store_root(group)
+    rebuild = (f"the store was not changed; build it again (remove {root}, then run `lf3pm solm build "
+               f"{group.attrs.get('map_source', 'MAP')} -o {root}` with its options)")
+    try:
+        array = group[name]
+    except OSError as err:
+        raise StorageError(f"{root / name}: cannot read the SOLM's {name} ({_quote(err)}); {rebuild} "
+                           "once the storage is sound") from None
+    except KeyError:
+        raise CorruptStoreError(f"{root / name / 'zarr.json'}: the SOLM's {name} is missing (no metadata); "
+                                f"{rebuild}") from None
+    except Exception as err:  # noqa: BLE001 - zarr reports unreadable metadata by JSON or value errors
+        raise CorruptStoreError(f"{root / name / 'zarr.json'}: the SOLM's {name} has unreadable metadata "
+                                f"({err.__class__.__name__}: {_quote(err)}); {rebuild}") from None
+    try:
+        return array[...]
+    except Exception as err:  # noqa: BLE001 - codecs report a chunk that does not decode by any error class
+        where = _failing_chunk(group, array, name) or root / name
+        if isinstance(err, OSError):
+            raise StorageError(f"{where}: cannot read the SOLM's {name} ({_quote(err)}); {rebuild} once the "
+                               "storage is sound") from None
+        raise CorruptStoreError(f"{where}: a corrupt chunk of the SOLM's {name} ({err.__class__.__name__}: "
+                                f"{_quote(err)}); {rebuild}") from None
+
+
+def _failing_chunk(group, array, name: str) -> Path | None:
+    """The file of the first chunk of ``array`` that cannot be read, or None."""
+    for coords in np.ndindex(*array.cdata_shape):
+        region = tuple(slice(c * n, (c + 1) * n) for c, n in zip(coords, array.chunks))
+        try:
+            array[region]
+        except Exception:  # noqa: BLE001 - any failure marks the chunk
+            return chunk_path(group, name, coords)
+    return None

@@ -26,7 +26,7 @@ from lf3pm.config import DEFAULTS, MetricConfig, core_struct, scan_params
 from lf3pm.map import Map, MapPoints
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.ray_thinning import thin_rays
-from lf3pm.solm.store import CHANNELS
+from lf3pm.solm.store import CHANNELS, chunk_path, writing
 from lf3pm.solm.yaw_reuse import sector_layout
 from lf3pm.terrain import body_blocked
 
@@ -143,12 +143,15 @@ def compute_tile(world: Map, job: TileJob, ty: int, tx: int, ground: np.ndarray 
 
 
 def write_tile(group, job: TileJob, ty: int, tx: int, arrays: dict[str, np.ndarray]) -> int:
-    """Writes a tile's arrays into the store's chunks (not its done flag); returns its cell count."""
+    """Writes a tile's arrays into the store's chunks (not its done flag); returns its cell
+    count. A failed write (a full disk, an I/O error) is a StorageError naming the chunk."""
     ys_, xs_ = job.slices(ty, tx)
     r2 = job.grid.space == "r2"
     region = (slice(None),) * (0 if r2 else 1) + (ys_, xs_)
+    chunk = (0,) * (0 if r2 else 1) + (ty, tx)  # a tile is one chunk of every array
     for name, values in arrays.items():
-        group[name][region] = values[0] if r2 else values
+        with writing(chunk_path(group, name, chunk)):
+            group[name][region] = values[0] if r2 else values
     return int(np.prod(next(iter(arrays.values())).shape))
 
 
