@@ -7,22 +7,24 @@ import secrets
 import stat
 from contextlib import contextmanager, suppress
 
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, StorageError
 
 
 @contextmanager
-def atomic_write(path, error: type[Lf3pmError] = Lf3pmError):
+def atomic_write(path, error: type[Lf3pmError] = StorageError):
     """Yields a binary file whose content replaces ``path`` when the block ends without error.
 
     The data go to a temporary file in the same directory (so that ``os.replace``
     is a rename within one file system), flushed to disk before the rename. On
     any error the temporary file is removed and ``path`` is left untouched;
-    OSErrors become a one-line ``error`` (an Lf3pmError subclass). Only a
+    OSErrors (a full disk, an I/O error, a vanished folder) become a one-line ``error``
+    (an Lf3pmError subclass) that says so. Only a
     regular file is ever replaced: a rename would put a file in place of a
     symlink, a device or a FIFO (and fails on a directory), so an existing
     ``path`` of any other kind is refused before anything is written.
     """
     check_replaceable(path, error)
+    kept = "the existing file is left as it was" if os.path.lexists(path) else "nothing was written"
     directory, base = os.path.split(os.path.abspath(path))
     temporary = os.path.join(directory, f".{base}.{secrets.token_hex(4)}.tmp")
     try:
@@ -34,7 +36,7 @@ def atomic_write(path, error: type[Lf3pmError] = Lf3pmError):
         os.replace(temporary, path)
     except OSError as err:
         _remove(temporary)
-        raise error(f"{path}: cannot write the file ({err.strerror or err})") from err
+        raise error(f"{path}: cannot write the file ({err.strerror or err}); {kept}") from err
     except BaseException:
         _remove(temporary)
         raise

@@ -39,13 +39,15 @@ stamp as "no time"). The offset is stored in the bag's custom data
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import secrets
 import shutil
+import sqlite3
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, StorageError
 from lf3pm.sensors import Sensor, spinning_rings
 
 #: Ground truth rate (Hz): the planner's CSV rate.
@@ -79,21 +81,33 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
     ``imu`` (ImuSamples: t, accel, gyro) as a ROS 2 bag directory at ``path``
     (module docstring). The bag is written next to ``path`` and renamed into
     place when complete; an existing ``path`` is never replaced. Returns the
-    message count per topic and the clock offset."""
-    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+    message count per topic and the clock offset. A storage fault while writing (a full
+    disk, an I/O error, the folder gone) is a one-line StorageError; nothing of the bag
+    is left behind."""
+    from rosbags.interfaces import (
+        Qos,
+        QosDurability,
+        QosHistory,
+        QosLiveliness,
+        QosReliability,
+        QosTime,
+    )
     from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.rosbag2.errors import WriterError
     from rosbags.typesys import Stores, get_typestore
 
+    if not isinstance(path, (str, os.PathLike)):
+        raise Lf3pmError(f"a bag is written to a path, got {type(path).__name__}")
     path = os.path.abspath(os.fspath(path))
     if os.path.lexists(path):
         raise Lf3pmError(f"{path} exists: a bag is a new directory and lf3pm replaces nothing there")
-    if not (math.isfinite(truth_rate) and truth_rate > 0):
-        raise Lf3pmError(f"the ground truth rate must be > 0 Hz, got {truth_rate}")
+    if not (isinstance(truth_rate, numbers.Real) and math.isfinite(truth_rate) and truth_rate > 0):
+        raise Lf3pmError(f"the ground truth rate must be > 0 Hz, got {truth_rate!r}")
     parent = os.path.dirname(path)
     if not os.path.isdir(parent):
         raise Lf3pmError(f"{path}: the folder {parent} does not exist")
     motion, sensor = scans.motion, scans.sensor
-    truth_times = motion.t0 + np.arange(int(math.floor((motion.t1 - motion.t0) * truth_rate + 1e-9)) + 1) / truth_rate
+    truth_times = motion.t0 + np.arange(math.floor((motion.t1 - motion.t0) * truth_rate + 1e-9) + 1) / truth_rate
     imu_t = np.asarray(imu.t, dtype=np.float64)
     earliest = min(scans.times[0] - scans.period, truth_times[0], imu_t[0] if len(imu_t) else math.inf)
     offset = 1.0 - earliest
@@ -108,7 +122,7 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
     counts = {"/points": 0, "/imu": 0, "/ground_truth": 0, "/tf": 0, "/tf_static": 0}
 
     def stamp(t: float):
-        ns = int(round((t + offset) * 1e9))
+        ns = round((t + offset) * 1e9)
         return ns, T["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
 
     def header(t: float, frame: str):
@@ -200,8 +214,11 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
         finally:
             writer.close()
         os.rename(temporary, path)
-    except OSError as err:
-        raise Lf3pmError(f"{path}: cannot write the bag ({err.strerror or err})") from err
+    except (OSError, sqlite3.Error, WriterError) as err:
+        # sqlite reports a full disk as its own error ("database or disk is full").
+        cause = (getattr(err, "strerror", None) or str(err) or err.__class__.__name__).splitlines()[0]
+        raise StorageError(f"{path}: cannot write the bag ({cause}); no bag is kept (its partial folder is "
+                           "removed): free space or fix the storage, then run the replay with --bag again") from None
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     return {"topics": counts, "clock_offset_s": float(offset), "point_layout": layout, "storage": "sqlite3",
