@@ -5,6 +5,7 @@ never raised into viser's threads."""
 
 from __future__ import annotations
 
+import html
 import math
 import sys
 import threading
@@ -13,10 +14,10 @@ from contextlib import contextmanager
 import numpy as np
 
 from lf3pm.config import DEFAULTS, GuidanceConfig
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
 from lf3pm.pose import pose_matrix
 from lf3pm.view import layers
-from lf3pm.view.inputs import ViewInputs
+from lf3pm.view.inputs import ViewInputs, check_host, check_port
 
 #: Colours (RGB) of what the page draws besides colour-mapped layers.
 PLAN_COLORS = [(230, 60, 60), (40, 120, 255), (250, 160, 20), (150, 60, 200), (20, 170, 120)]
@@ -31,8 +32,10 @@ DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8080
 
 
 class ViewApp:
-    """A running viewer (:func:`serve` starts it): ``server`` is its viser server,
-    ``stop()`` ends it. ``status`` holds the last message shown (for tests)."""
+    """A running viewer (:func:`serve` starts it): ``server`` is its viser server, ``port``
+    the port it serves on, ``stop()`` ends it. ``status`` holds the last message shown
+    (for tests); an error met while serving stays in the panel until the action that met
+    it succeeds."""
 
     def __init__(self, inputs: ViewInputs, *, host: str, port: int, robot=None,
                  guidance: GuidanceConfig | None = None, sensor: str | None = None):
@@ -49,6 +52,7 @@ class ViewApp:
         self.footprint_radius = float(solm.attrs.get("robot_radius", DEFAULTS.solm.robot_radius)
                                       if solm is not None else DEFAULTS.solm.robot_radius)
         self.status = ""
+        self._errors = {}  # the page action that failed: its message, shown in the panel
         self._lock = threading.RLock()  # an action may set a control whose callback runs inside it
         self._rings = {}
         self._planner = None
@@ -58,14 +62,27 @@ class ViewApp:
         # this far above the ground stay in front of them.
         self._above_layer = 0.5 * (solm.grid_spec.res if solm is not None else 0.0) + 0.15
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
-        self.server.scene.set_up_direction("+z")
-        self._add_map()
-        if solm is not None:
-            self._add_solm_controls()
-        self._add_given_plans()
-        self._add_replays()
-        self._add_click_controls()
-        self._set_camera()
+        try:
+            # viser moves to the next port when the one asked for was taken since it was checked.
+            if port != 0 and self.server.get_port() != port:
+                raise Lf3pmError(f"port {port} on {host} is in use: choose another port")
+            self.server.scene.set_up_direction("+z")
+            self.error_text = self.server.gui.add_html("", visible=False)
+            self._add_map()
+            if solm is not None:
+                self._add_solm_controls()
+            self._add_given_plans()
+            self._add_replays()
+            self._add_click_controls()
+            self._set_camera()
+        except BaseException:
+            self.server.stop()  # nothing half-built keeps serving
+            raise
+
+    @property
+    def port(self) -> int:
+        """The port the page is served on (the one taken when :func:`serve` was given 0)."""
+        return self.server.get_port()
 
     # -- what is given -------------------------------------------------------------------
 
@@ -112,14 +129,14 @@ class ViewApp:
         self.channel.on_update(lambda event: self._guarded(self._solm_changed, event.client))
         if self.layer is not None:
             self.layer.on_update(lambda event: self._guarded(self._solm_changed, event.client))
-        self._solm_changed()
+        self._guarded(self._solm_changed)
 
     def _solm_index(self) -> int | None:
         """The layer the controls select: None for the minimum over yaw."""
         g = self.inputs.solm.grid_spec
         if g.space == "se2":
             self.layer.disabled = bool(self.min_yaw.value)
-            return None if self.min_yaw.value else int(round(self.layer.value / (360 / g.yaw_bins))) % g.yaw_bins
+            return None if self.min_yaw.value else round(self.layer.value / (360 / g.yaw_bins)) % g.yaw_bins
         return int(self.layer.value) if self.layer is not None else None
 
     def _solm_changed(self, client=None) -> None:
@@ -273,8 +290,8 @@ class ViewApp:
         hits = result.observations["points"].astype(np.float32)
         self.server.scene.add_point_cloud("/cell/scan", hits, SCAN, point_size=0.08, point_shape="circle")
         position = np.asarray(pose_matrix(pose))[:3, 3]
-        text = [f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
-                f"at z = {z:.2f} m", f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
+        text = [(f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
+                 f"at z = {z:.2f} m"), f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
                 f"- {result.hits:,} hits of {result.rays:,} rays (red points)"]
         if result.predicted_localization_error_m is not None:
             lo, hi = result.predicted_localization_error_interval_m
@@ -308,9 +325,10 @@ class ViewApp:
             self.server.scene.add_arrows(f"/ends/{name}", np.array([[[xy[0], xy[1], z], tip]]), color,
                                          shaft_radius=0.08, head_radius=0.25, head_length=0.5)
             ring = self._rings.get(name)
-            if ring is not None:  # the slider moved: turn the ring with it (a drag keeps within a step)
-                if abs(math.remainder(_quaternion_yaw(ring.wxyz) - yaw, 2 * math.pi)) > math.radians(yaw_slider.step):
-                    ring.wxyz = _yaw_quaternion(yaw)
+            # The slider moved: turn the ring with it (a drag keeps within a step).
+            if ring is not None and (abs(math.remainder(_quaternion_yaw(ring.wxyz) - yaw, 2 * math.pi))
+                                     > math.radians(yaw_slider.step)):
+                ring.wxyz = _yaw_quaternion(yaw)
 
     def plan_between(self, client=None) -> dict:
         """Plans from the clicked start to the clicked goal with the default guidance and
@@ -385,24 +403,43 @@ class ViewApp:
                 note.remove()
 
     def _guarded(self, action, *args):
-        """Runs a page action; an error becomes a message in the page (and in ``status``)."""
+        """Runs a page action; an error becomes a message in the page (and in ``status``).
+        A fault of the storage or the SOLM, or an unexpected error, is also one line on
+        stderr: the page keeps serving what it can."""
+        name = getattr(action, "__name__", repr(action))
         with self._lock:
             try:
-                return action(*args)
+                result = action(*args)
+            except (StorageError, CorruptStoreError) as err:
+                self._show_error(name, str(err), args)
+                print(f"lf3pm view: error: {err}", file=sys.stderr)
             except Lf3pmError as err:
-                self._show_error(str(err), args)
+                self._show_error(name, str(err), args)
             except Exception as err:  # noqa: BLE001 - a page action must never kill the page
                 message = f"{err.__class__.__name__}: {err}"
-                self._show_error(message, args)
+                self._show_error(name, message, args)
                 print(f"lf3pm view: {message}", file=sys.stderr)
+            else:
+                if self._errors.pop(name, None) is not None:
+                    self._show_errors()
+                return result
 
-    def _show_error(self, message: str, args) -> None:
+    def _show_error(self, action: str, message: str, args) -> None:
         self.status = f"error: {message}"
+        self._errors[action] = message
+        self._show_errors()
         client = next((a for a in args if hasattr(a, "add_notification")), None)
         client = client or next((getattr(a, "client", None) for a in args if hasattr(a, "client")), None)
         targets = [client] if client is not None else list(self.server.get_clients().values())
         for c in targets:
             c.add_notification("lf3pm", message, color="red", auto_close_seconds=10.0)
+
+    def _show_errors(self) -> None:
+        """The errors of the actions that failed last, in the panel for every page open now
+        or later, verbatim (a path may hold markup)."""
+        self.error_text.content = "".join(f"<div style='color:#c62828;font-size:0.85em;overflow-wrap:anywhere'>"
+                                          f"<b>error:</b> {html.escape(m)}</div>" for m in self._errors.values())
+        self.error_text.visible = bool(self._errors)
 
     def stop(self) -> None:
         self.server.stop()
@@ -421,7 +458,26 @@ def _quaternion_yaw(wxyz) -> float:
 def serve(inputs: ViewInputs, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, robot=None,
           guidance: GuidanceConfig | None = None, sensor: str | None = None) -> ViewApp:
     """Starts the viewer of ``inputs`` (lf3pm.view.load_view_inputs) on ``host``:``port``
-    and returns it (its server runs in a thread; ``stop()`` ends it). ``robot`` and
-    ``guidance`` plan the clicked start and goal (default: the configuration's); ``sensor``
-    evaluates clicked cells (default: the SOLM's)."""
-    return ViewApp(inputs, host=host, port=port, robot=robot, guidance=guidance, sensor=sensor)
+    and returns it (its server runs in a thread; ``stop()`` ends it). ``port`` 0 serves on
+    any free port (``ViewApp.port`` says which); any other port must be free: one in use
+    is an Lf3pmError, never another port silently. ``host`` and ``port`` are checked as
+    ``lf3pm view`` checks them (check_host, check_port). ``robot`` and ``guidance`` plan
+    the clicked start and goal (default: the configuration's); ``sensor`` evaluates
+    clicked cells (default: the SOLM's)."""
+    from lf3pm.sensors import as_sensor
+    from lf3pm.trajectory.robots import Robot
+
+    if not isinstance(inputs, ViewInputs):
+        raise Lf3pmError(f"serve needs the viewer's inputs (lf3pm.view.load_view_inputs), got "
+                         f"{type(inputs).__name__}")
+    if isinstance(port, int) and not isinstance(port, bool) and port == 0:
+        check_host(host)
+    else:
+        check_port(host, port)
+    if robot is not None and not isinstance(robot, Robot):
+        raise Lf3pmError(f"robot must be an lf3pm.Robot, got {type(robot).__name__}")
+    if guidance is not None and not isinstance(guidance, GuidanceConfig):
+        raise Lf3pmError(f"guidance must be an lf3pm.config.GuidanceConfig, got {type(guidance).__name__}")
+    if sensor is not None:
+        as_sensor(sensor)  # an unknown sensor fails here, not at the first click
+    return ViewApp(inputs, host=host, port=int(port), robot=robot, guidance=guidance, sensor=sensor)

@@ -8,7 +8,11 @@ import math
 
 import numpy as np
 
-from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error
+from lf3pm.calibration import (
+    LOCALIZATION_PACKAGED,
+    packaged_calibration,
+    predict_localization_error,
+)
 from lf3pm.errors import Lf3pmError
 from lf3pm.solm import Solm
 
@@ -156,24 +160,63 @@ def replay_tracks(replay: dict) -> dict:
     ``errors`` (N,) m, ``lo``/``hi`` (m), ``rest``: what a LIO did while the sensor stood
     still before the trajectory (replay_result.rest_motion; empty for other methods).
     ``replay``: what ``lf3pm replay --json`` writes (its first run is shown), or a study's
-    replay record (its positions once a second)."""
-    run = replay["runs"][0] if isinstance(replay.get("runs"), list) and replay["runs"] else replay
+    replay record (its positions once a second). Lf3pmError, naming the field, when a
+    field is missing or not what those write: the truth finite numbers, the estimate and
+    errors numbers or null (a lost estimate), errors >= 0, ``rest`` an object."""
+    if not isinstance(replay, dict):
+        raise Lf3pmError("the replay JSON is not an object")
+    runs = replay.get("runs")
+    run = runs[0] if isinstance(runs, list) and runs else replay
+    if not isinstance(run, dict):
+        raise Lf3pmError(f"the replay JSON's runs[0] must be an object, got {type(run).__name__}")
     keys = [("truth_xyz", "estimate_xyz", "errors"),
             ("truth_xyz_every_second", "estimate_xyz_every_second", "errors_every_second")]
     names = next((k for k in keys if all(name in run for name in k)), None)
     if names is None:
         raise Lf3pmError("the replay JSON holds no true and estimated positions (write it with "
                          "`lf3pm replay --json`)")
-    truth, estimate, errors = (np.asarray(run[name], dtype=np.float64) for name in names)
-    if truth.ndim != 2 or truth.shape[1] != 3 or estimate.shape != truth.shape or errors.shape != truth[:, 0].shape:
-        raise Lf3pmError("the replay JSON's true positions, estimated positions and errors differ in length")
+    truth, estimate, errors = (_numbers(run[name], name, width, nulls=name != names[0])
+                               for name, width in zip(names, (3, 3, None)))
+    if not (len(truth) == len(estimate) == len(errors)):
+        raise Lf3pmError(f"the replay JSON's {', '.join(names)} differ in length "
+                         f"({len(truth)}, {len(estimate)}, {len(errors)})")
     if len(truth) < 2:
         raise Lf3pmError("the replay JSON holds fewer than 2 scans")
-    lo, hi = max(float(np.nanmin(errors)), 1e-3), max(float(np.nanmax(errors)), 2e-3)
+    known = errors[np.isfinite(errors)]
+    if np.any(known < 0):
+        raise Lf3pmError(f"the replay JSON's {names[2]} must be >= 0 (distances), got {known.min():g}")
+    rest = run.get("rest") or {}
+    if not (isinstance(rest, dict) and (not rest or (isinstance(rest.get("steady"), bool)
+                                                     and _is_number(rest.get("speed_mps"))))):
+        raise Lf3pmError("the replay JSON's rest must be an object with steady (true or false) and speed_mps "
+                         f"(a number), got {repr(rest)[:60]}")
+    lo = max(float(known.min()), 1e-3) if known.size else 1e-3
+    hi = max(float(known.max()), 2e-3) if known.size else 2e-3
     colors = colormap(errors, lo, hi, name="plasma")
     return {"truth": polyline(*truth.T), "estimate": polyline(*estimate.T),
             "colors": np.stack([colors[:-1], colors[1:]], axis=1), "errors": errors, "lo": lo, "hi": hi,
-            "rest": dict(run.get("rest") or {})}
+            "rest": dict(rest)}
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _numbers(value, name: str, width: int | None, *, nulls: bool) -> np.ndarray:
+    """A replay JSON's field ``name`` as floats: a list of numbers (``width`` None) or of
+    [x, y, z] (``width`` 3); null is NaN where ``nulls``, else every value must be finite.
+    Lf3pmError naming the field and the first bad entry otherwise."""
+    if not isinstance(value, list):
+        raise Lf3pmError(f"the replay JSON's {name} must be a list, got {type(value).__name__}")
+    what = ("a number" if width is None else "[x, y, z] of numbers") + (" or null" if nulls else "")
+    for i, row in enumerate(value):
+        items = [row] if width is None else row if isinstance(row, list) and len(row) == width else None
+        if items is None or not all(_is_number(v) or (nulls and v is None) for v in items):
+            raise Lf3pmError(f"the replay JSON's {name}[{i}] must be {what}, got {repr(row)[:40]}")
+    a = np.array(value, dtype=np.float64).reshape(len(value), *(() if width is None else (width,)))
+    if not nulls and not np.isfinite(a).all():
+        raise Lf3pmError(f"the replay JSON's {name} must be finite, got {a[~np.isfinite(a)][0]}")
+    return a
 
 
 def replay_caption(name: str, tracks: dict) -> str:
