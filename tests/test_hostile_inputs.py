@@ -17,7 +17,8 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.config import MAX_CELLS_CEILING, MAX_RES, ConfigError, load_config
+from lf3pm.config import (MAX_CELL_SIZE, MAX_CELLS_CEILING, MAX_RES, MAX_TRAJECTORY_SECONDS, ConfigError,
+                          load_config)
 from lf3pm.errors import Lf3pmError, SensorError
 from lf3pm.limits import EXCERPT, MAX_TEXT_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES
 from lf3pm.scenes import build_scene
@@ -98,6 +99,25 @@ def test_solm_sizes_are_bounded_in_the_api(boxes):
         make_grid(world, "r2", 0.5, max_cells=10**12)
     span = float(max(world.bounds[1][:2] - world.bounds[0][:2]))
     assert make_grid(world, "r2", span).shape == (1, 1)  # one cell over the whole map is still a grid
+
+
+def test_the_knn_voxel_is_bounded(boxes, tmp_path):
+    # 20 m: 49 s for one evaluate on the boxes room (2 s at its own 0.16 m); 1e12 m: no planes.
+    config = tmp_path / "c.yaml"
+    config.write_text("map: {cell_size: 20.0}\n")
+    done, started = invoke("evaluate", boxes, "--pose", "0", "0", "1", "0", "--config", config)
+    one_line_error(done, f"map.cell_size must be less than or equal to {MAX_CELL_SIZE:g}", within=20, started=started)
+    with pytest.raises(ConfigError, match="map.cell_size must be less than or equal to"):
+        lf3pm.load_map(boxes, cell_size=1e12)
+
+
+def test_a_replay_is_bounded_in_time(boxes, tmp_path):
+    # A CSV whose last stamp is 1e7 s filled 12 GB with the motion's ground knots, without end.
+    csv = tmp_path / "long.csv"
+    csv.write_text(f"t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n{MAX_TRAJECTORY_SECONDS + 1:g},0.1,0,0,0,0,0\n")
+    done, started = invoke("replay", csv, "--map", tmp_path / "missing.npy")  # refused before the map is read
+    one_line_error(done, f"more than {MAX_TRAJECTORY_SECONDS:g} s, the longest lf3pm replays", within=20,
+                   started=started)
 
 
 def test_the_occupancy_factor_is_closed_form():

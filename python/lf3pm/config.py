@@ -58,6 +58,14 @@ COMPOSITE_CHANNELS = {"q_n_q_min": ("q_n", "q_min")}
 #: rad/s^2): slower is no robot, and a 10 m plan at 1e-9 m/s would be 300 years of 100 Hz samples.
 MIN_LIMIT = 1e-3
 
+#: The largest k-NN grid voxel (m): FAST-LIO's farthest neighbour is sqrt(5) m, and a larger
+#: voxel only crowds each cell (one evaluate on the boxes room: 2 s at its own 0.16 m, 25 s
+#: at 10 m, 49 s at 20 m; at 1e6 m the search returned wrong planes, at 1e12 m none).
+MAX_CELL_SIZE = 10.0
+#: The longest trajectory a replay takes (s): an hour is 36,000 scans at 10 Hz (hours of
+#: LIO per seed) and its motion's ground profile 360,000 knots at 100 Hz (90 MB); a day of
+#: them (from a CSV's last time stamp: 1e7 s) filled 12 GB without end.
+MAX_TRAJECTORY_SECONDS = 3600.0
 #: The coarsest SOLM cell (m): wider than any LiDAR's range (the presets reach 260 m), so
 #: a larger --res is a typo; make_grid also refuses a cell wider than the grid's extent.
 MAX_RES = 1000.0
@@ -85,7 +93,8 @@ class MapConfig(Section):
     """Map indexing and FAST-LIO association (C++ MapParams)."""
 
     voxel: Optional[float] = Field(None, gt=0, description="Voxel-downsample the map first (m; none: off).")
-    cell_size: float = Field(_MAP.cell_size, ge=0, description="k-NN grid voxel (m; 0: from the point spacing).")
+    cell_size: float = Field(_MAP.cell_size, ge=0, le=MAX_CELL_SIZE,
+                             description="k-NN grid voxel (m; 0: from the point spacing).")
     knn: int = Field(_MAP.knn, ge=3, le=64, description="Neighbours per association plane (FAST-LIO NUM_MATCH_POINTS).")
     plane_threshold: float = Field(_MAP.plane_threshold, gt=0,
                                    description="Plane validity: every neighbour within this of the plane (m).")

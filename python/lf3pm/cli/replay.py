@@ -14,6 +14,7 @@ from rich.table import Table
 
 from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, option, print_warning,
                                progress_bar, user_errors)
+from lf3pm.config import MAX_TRAJECTORY_SECONDS
 from lf3pm.errors import Lf3pmError
 
 #: Where each option of replay lives in the config.
@@ -63,8 +64,10 @@ def replay_command(
         elif odometry is not None:
             raise Lf3pmError(f"--odometry applies to --method lio, not {run.method}")
         options = {"odometry": run.odometry} if run.method == "lio" else {}
+        samples = read_trajectory(trajectory)
         world = load_map(map_path, threads=scan.threads)
-        motion = Motion.from_csv(trajectory, world, height=run.height)
+        motion = Motion.from_arrays(*(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")), map=world,
+                                    height=run.height)
         common = {"rate": run.rate, "height": run.height, "noise": scan.noise, "threads": scan.threads}
         with progress_bar() as step:
             series = replay_seeds(world, motion, lidar, run.method, run.seeds, scan.seed, **common, **options,
@@ -93,6 +96,19 @@ def replay_command(
             counts = ", ".join(f"{topic} {n}" for topic, n in bag_info["topics"].items())
             console.print(f"wrote {bag} (ROS 2 bag, sqlite3, {bag_info['point_layout']} points): {counts}",
                           highlight=False)
+
+
+def read_trajectory(path: Path) -> dict:
+    """The columns of a trajectory CSV (Motion.from_csv's input), refused in one line when
+    it lasts longer than MAX_TRAJECTORY_SECONDS, before the map is read."""
+    from lf3pm.trajectory.trajectory import read_csv
+
+    samples = read_csv(path)
+    duration = float(samples["t"][-1] - samples["t"][0])
+    if duration > MAX_TRAJECTORY_SECONDS:
+        raise Lf3pmError(f"{path}: the trajectory lasts {duration:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, the "
+                         "longest lf3pm replays: replay a part of it (its rows within an hour)")
+    return samples
 
 
 def print_series(series) -> None:
