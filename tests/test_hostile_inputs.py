@@ -17,8 +17,8 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.config import (MAX_CELL_SIZE, MAX_CELLS_CEILING, MAX_RES, MAX_TRAJECTORY_SECONDS, ConfigError,
-                          load_config)
+from lf3pm.config import (MAX_CELL_SIZE, MAX_CELLS_CEILING, MAX_LIMIT, MAX_RES, MAX_TRAJECTORY_SECONDS,
+                          ConfigError, load_config)
 from lf3pm.errors import Lf3pmError, SensorError
 from lf3pm.limits import EXCERPT, MAX_TEXT_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES
 from lf3pm.scenes import build_scene
@@ -118,6 +118,18 @@ def test_a_replay_is_bounded_in_time(boxes, tmp_path):
     done, started = invoke("replay", csv, "--map", tmp_path / "missing.npy")  # refused before the map is read
     one_line_error(done, f"more than {MAX_TRAJECTORY_SECONDS:g} s, the longest lf3pm replays", within=20,
                    started=started)
+
+
+def test_robot_limits_are_bounded(tmp_path):
+    # 1e12 m/s and friends gave a 6e6 s trajectory; refused before the SOLM is opened.
+    for flag in ("--vmax-lon", "--vmax-lat", "--wmax", "--amax-lon", "--amax-lat", "--alpha-max"):
+        done, started = invoke("plan", "--solm", tmp_path / "missing.zarr", "--start", "0", "0", "0", "--goal", "1",
+                               "1", "0", "-o", tmp_path / "t.csv", flag, "1e12")
+        one_line_error(done, f"{flag} must be less than or equal to {MAX_LIMIT:g}", within=20, started=started)
+    from lf3pm.trajectory.robots import Robot
+
+    with pytest.raises(Lf3pmError, match="less than or equal to"):
+        Robot("omni", vmax_lon=1e12)
 
 
 def test_the_occupancy_factor_is_closed_form():

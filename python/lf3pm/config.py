@@ -57,6 +57,10 @@ COMPOSITE_CHANNELS = {"q_n_q_min": ("q_n", "q_min")}
 #: The smallest speed, yaw rate or acceleration limit a robot takes (m/s, rad/s, m/s^2,
 #: rad/s^2): slower is no robot, and a 10 m plan at 1e-9 m/s would be 300 years of 100 Hz samples.
 MIN_LIMIT = 1e-3
+#: The largest (same units): no ground robot drives 100 m/s (360 km/h), turns 100 rad/s
+#: (16 turns a second) or accelerates at 10 g; with 1e12 the optimiser's trajectory came
+#: out 6e6 s long.
+MAX_LIMIT = 100.0
 
 #: The largest k-NN grid voxel (m): FAST-LIO's farthest neighbour is sqrt(5) m, and a larger
 #: voxel only crowds each cell (one evaluate on the boxes room: 2 s at its own 0.16 m, 25 s
@@ -203,14 +207,16 @@ class RobotConfig(Section):
     """
 
     kind: Literal[ROBOT_KINDS] = Field("omni", description="omni, diff (differential drive) or car.")
-    vmax_lon: float = Field(_LIMITS.vmax_lon, ge=MIN_LIMIT, description="Longitudinal speed limit (m/s).")
-    vmax_lat: float = Field(_LIMITS.vmax_lat, ge=MIN_LIMIT, description="Lateral speed limit (m/s; omni).")
-    wmax: float = Field(_LIMITS.wmax, ge=MIN_LIMIT, description="Yaw rate limit (rad/s).")
-    amax_lon: float = Field(_LIMITS.amax_lon, ge=MIN_LIMIT,
+    vmax_lon: float = Field(_LIMITS.vmax_lon, ge=MIN_LIMIT, le=MAX_LIMIT, description="Longitudinal speed limit (m/s).")
+    vmax_lat: float = Field(_LIMITS.vmax_lat, ge=MIN_LIMIT, le=MAX_LIMIT,
+                            description="Lateral speed limit (m/s; omni).")
+    wmax: float = Field(_LIMITS.wmax, ge=MIN_LIMIT, le=MAX_LIMIT, description="Yaw rate limit (rad/s).")
+    amax_lon: float = Field(_LIMITS.amax_lon, ge=MIN_LIMIT, le=MAX_LIMIT,
                             description="Longitudinal (tangential) acceleration limit (m/s^2).")
-    amax_lat: float = Field(_LIMITS.amax_lat, ge=MIN_LIMIT,
+    amax_lat: float = Field(_LIMITS.amax_lat, ge=MIN_LIMIT, le=MAX_LIMIT,
                             description="Lateral (centripetal) acceleration limit (m/s^2).")
-    alpha_max: float = Field(_LIMITS.alpha_max, ge=MIN_LIMIT, description="Yaw acceleration limit (rad/s^2).")
+    alpha_max: float = Field(_LIMITS.alpha_max, ge=MIN_LIMIT, le=MAX_LIMIT,
+                             description="Yaw acceleration limit (rad/s^2).")
     min_turn_radius: float = Field(_LIMITS.min_turn_radius, ge=0, description="Minimum turning radius (m; car).")
     r_safe: float = Field(_LIMITS.r_safe, ge=0, description="Clearance beyond the SOLM's robot radius (m).")
     vmax_norm: Optional[float] = Field(None, gt=0, allow_inf_nan=True,
