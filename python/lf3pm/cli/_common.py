@@ -38,8 +38,9 @@ def print_warning(text) -> None:
 
 
 def _format_warning(message, category, filename, lineno, line=None) -> str:
-    """warnings.formatwarning for the CLI: one line, no file:line and source line."""
-    return f"lf3pm: warning: {one_line(message)}\n"
+    """warnings.formatwarning for the CLI: one line, no file:line and source line (and
+    no second "lf3pm: " where the message names its source already)."""
+    return f"lf3pm: warning: {one_line(message).removeprefix('lf3pm: ')}\n"
 
 
 @contextmanager
