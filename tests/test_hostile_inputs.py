@@ -20,7 +20,7 @@ from lf3pm.cli import app
 from lf3pm.config import (MAX_CELL_SIZE, MAX_CELLS_CEILING, MAX_LIMIT, MAX_RES, MAX_TRAJECTORY_SECONDS,
                           ConfigError, load_config)
 from lf3pm.errors import Lf3pmError, SensorError
-from lf3pm.limits import EXCERPT, MAX_TEXT_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES
+from lf3pm.limits import EXCERPT, MAX_TEXT_BYTES, MAX_TRAJECTORY_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import load_sensor_yaml
 from lf3pm.sensors._model import MAX_RAYS
@@ -118,6 +118,11 @@ def test_a_replay_is_bounded_in_time(boxes, tmp_path):
     done, started = invoke("replay", csv, "--map", tmp_path / "missing.npy")  # refused before the map is read
     one_line_error(done, f"more than {MAX_TRAJECTORY_SECONDS:g} s, the longest lf3pm replays", within=20,
                    started=started)
+    with open(csv, "ab") as fp:
+        fp.truncate(MAX_TRAJECTORY_BYTES + 1)  # sparse: no disk used
+    for path, text in (("/dev/zero", "not a regular file"), (csv, f"larger than {MAX_TRAJECTORY_BYTES:,} bytes")):
+        done, started = invoke("replay", path, "--map", tmp_path / "missing.npy")  # /dev/zero: read without end
+        one_line_error(done, text, within=20, started=started)
 
 
 def test_robot_limits_are_bounded(tmp_path):

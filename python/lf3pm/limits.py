@@ -22,6 +22,9 @@ from lf3pm.errors import Lf3pmError
 #: The largest config or sensor file read (bytes): the shipped configs are 0.5-1.4 kB and
 #: a sensor file of 128 beams about 3 kB; a megabyte is no file a person writes by hand.
 MAX_TEXT_BYTES = 1 << 20
+#: The largest trajectory CSV read (bytes): an hour (config.MAX_TRAJECTORY_SECONDS) at the
+#: 100 Hz `lf3pm plan` writes is 360,000 rows of about 100 characters, 36 MB.
+MAX_TRAJECTORY_BYTES = 64 << 20
 #: The deepest YAML nesting read: a config is two levels deep, a sensor file two; past a
 #: few hundred levels the YAML parser and the validation recurse out of Python's stack.
 MAX_YAML_DEPTH = 32
@@ -55,11 +58,11 @@ def read_text_file(path, what: str, error: type[Lf3pmError] = Lf3pmError, limit:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except OSError as err:
         raise error(f"{path}: cannot read the {what} ({err.strerror or err})") from None
-    mode = os.fstat(fd).st_mode
-    if not stat.S_ISREG(mode):
+    try:
+        _check_kind(path, os.fstat(fd).st_mode, what, error)
+    except Lf3pmError:
         os.close(fd)
-        kind = "a directory" if stat.S_ISDIR(mode) else "a device, FIFO or socket"
-        raise error(f"{path}: the {what} is {kind}, not a regular file: give a YAML file")
+        raise
     with os.fdopen(fd, "rb") as fp:
         try:
             data = fp.read(limit + 1)  # the file may grow after fstat
@@ -72,6 +75,24 @@ def read_text_file(path, what: str, error: type[Lf3pmError] = Lf3pmError, limit:
         return data.decode("utf-8")
     except UnicodeDecodeError:
         raise error(f"{path}: not a YAML {what} (not UTF-8 text)") from None
+
+
+def check_file(path, what: str, error: type[Lf3pmError] = Lf3pmError, limit: int = MAX_TEXT_BYTES) -> None:
+    """Raises ``error`` in one line unless ``path`` is a regular file of at most ``limit``
+    bytes: for a reader that opens the file itself (stat does not wait on a FIFO)."""
+    try:
+        status = os.stat(path)
+    except OSError as err:
+        raise error(f"{path}: cannot read the {what} ({err.strerror or err})") from None
+    _check_kind(path, status.st_mode, what, error)
+    if status.st_size > limit:
+        raise error(f"{path}: the {what} is larger than {limit:,} bytes, the most lf3pm reads")
+
+
+def _check_kind(path, mode: int, what: str, error: type[Lf3pmError]) -> None:
+    if not stat.S_ISREG(mode):
+        kind = "a directory" if stat.S_ISDIR(mode) else "a device, FIFO or socket"
+        raise error(f"{path}: the {what} is {kind}, not a regular file")
 
 
 class _Loader(yaml.SafeLoader):

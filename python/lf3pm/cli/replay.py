@@ -16,6 +16,7 @@ from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, cons
                                progress_bar, user_errors)
 from lf3pm.config import MAX_TRAJECTORY_SECONDS
 from lf3pm.errors import Lf3pmError
+from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
 
 #: Where each option of replay lives in the config.
 REPLAY_PATHS = {"sensor": "sensor", "method": "replay.method", "odometry": "replay.odometry", "seeds": "replay.seeds",
@@ -100,9 +101,11 @@ def replay_command(
 
 def read_trajectory(path: Path) -> dict:
     """The columns of a trajectory CSV (Motion.from_csv's input), refused in one line when
-    it lasts longer than MAX_TRAJECTORY_SECONDS, before the map is read."""
+    it is not a regular file of at most MAX_TRAJECTORY_BYTES or lasts longer than
+    MAX_TRAJECTORY_SECONDS, before the map is read."""
     from lf3pm.trajectory.trajectory import read_csv
 
+    check_file(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
     samples = read_csv(path)
     duration = float(samples["t"][-1] - samples["t"][0])
     if duration > MAX_TRAJECTORY_SECONDS:
