@@ -256,7 +256,7 @@ def test_paths_and_values_are_printed_verbatim(boxes, tmp_path):
 
 
 def test_a_bad_host_is_named_as_the_host(boxes):
-    line = one_line_error(invoke("view", boxes, "--host", "bad.invalid")[0], "--host bad.invalid is not an address")
+    line = one_line_error(invoke("view", boxes, "--host", "bad.invalid")[0], "host 'bad.invalid' is not an address")
     assert "--port" not in line and "0.0.0.0" in line
 
 

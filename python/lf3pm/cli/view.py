@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import socket
 import time
 from pathlib import Path
 from typing import List, Optional
@@ -10,7 +9,6 @@ from typing import List, Optional
 import typer
 
 from lf3pm.cli._common import CONFIG_OPTION, app, configure, console, one_line_warnings, option, user_errors
-from lf3pm.errors import Lf3pmError
 from lf3pm.view.app import DEFAULT_HOST, DEFAULT_PORT
 
 
@@ -30,7 +28,7 @@ def view(
     with user_errors():
         cfg = configure(config, locals(), {"robot": "robot.kind", "threads": "scan.threads"})
         from lf3pm.trajectory.robots import Robot
-        from lf3pm.view import check_port, load_view_inputs, serve
+        from lf3pm.view import check_host, check_port, load_view_inputs, serve
 
         check_host(host)
         check_port(host, port)
@@ -49,13 +47,3 @@ def view(
         viewer.stop()
         console.print("lf3pm view: stopped", highlight=False)
 
-
-def check_host(host: str) -> None:
-    """Raises Lf3pmError when this machine cannot listen on ``host`` (a name that does not
-    resolve, an address that is not one of its own), before the map is read."""
-    try:
-        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM) as s:
-            s.bind((host, 0))
-    except OSError as err:
-        raise Lf3pmError(f"--host {host} is not an address of this machine ({err.strerror or err}): use 127.0.0.1 "
-                         "(this machine only), 0.0.0.0 (every interface) or one of its addresses") from None
