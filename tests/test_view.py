@@ -243,3 +243,27 @@ def test_an_r3_solm_is_shown_and_inspected_level_by_level(site, tmp_path):
         assert viewer.inspect(np.array([0.0, 0.0]))["pose"][2] == 1.5
     finally:
         viewer.stop()
+
+
+@pytest.mark.parametrize("lo, hi", [(0.029, 0.12), (0.0021, 0.93), (12.5, 12345.6), (1.0, 1.0001)])
+def test_the_colour_bar_labels_fit_inside_it(lo, hi):
+    """Its end values are aligned inwards: no label is cut at the image's edges (LogNorm's
+    own minor labels were: "3x10^-2" at 0.029 lost its left half)."""
+    image = layers.colorbar_image(lo, hi, layers.CHANNELS["q_n"])
+    assert image.shape == (*layers.COLORBAR_PIXELS[::-1], 3)
+    for column in (image[:, 0], image[:, -1]):
+        assert column.min(axis=1).min() > 160, "a label is cut at the edge"
+
+
+def test_the_first_view_looks_at_the_plans_and_replays(app, site):
+    """Not at the middle of the map: at what was given to look at, from the south and above."""
+    samples = app.inputs.plans["plan plan"]
+    (x0, y0), (x1, y1) = app.focus_bounds()
+    assert (x0, y0, x1, y1) == (samples["x"].min(), samples["y"].min(), samples["x"].max(), samples["y"].max())
+    look = np.asarray(app.server.initial_camera.look_at)
+    eye = np.asarray(app.server.initial_camera.position)
+    span = max(x1 - x0, y1 - y0, 10.0)
+    # The plan's middle, a little right of it so that the panel does not cover it (the map's
+    # middle is 2 m west of it).
+    assert look[:2] == pytest.approx([0.5 * (x0 + x1) + 0.1 * span, 0.5 * (y0 + y1)])
+    assert eye[1] < look[1] and eye[2] > look[2] + 1.0

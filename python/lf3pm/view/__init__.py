@@ -12,6 +12,12 @@ clicked poses), which call lf3pm's public API. docs/view.md says what the page s
 """
 
 from lf3pm.view.app import ViewApp, serve
-from lf3pm.view.inputs import ViewInputs, check_host, check_port, free_port, load_view_inputs
+from lf3pm.view.inputs import (
+    ViewInputs,
+    check_host,
+    check_port,
+    free_port,
+    load_view_inputs,
+)
 
 __all__ = ["ViewApp", "ViewInputs", "check_host", "check_port", "free_port", "load_view_inputs", "serve"]

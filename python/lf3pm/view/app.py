@@ -27,6 +27,11 @@ SCAN = (255, 40, 40)
 ARROWS = [(255, 0, 0), (255, 150, 0), (255, 230, 0)]  # weakest first
 #: Seconds between two footprints drawn along a trajectory.
 FOOTPRINT_EVERY_S = 2.0
+#: Screen widths (pixels) of the lines drawn. A replay runs along its plan: the plan is a
+#: wide band, the replay's truth and estimate thin lines on it, so that neither hides the
+#: other; plans given together are nested, each PLAN_STEP narrower than the one before
+#: and a little above it, so that where they share a path each keeps a rim.
+PLAN_WIDTH, PLAN_STEP, TRUTH_WIDTH, ESTIMATE_WIDTH = 9.0, 3.0, 1.5, 3.0
 #: Where the page is served unless told otherwise (this machine only).
 DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8080
 
@@ -151,10 +156,10 @@ class ViewApp:
         gui = self.server.gui
         if not self.inputs.plans:
             return
-        lines = []
+        lines, n = [], len(self.inputs.plans)
         for k, (name, samples) in enumerate(self.inputs.plans.items()):
             color = PLAN_COLORS[k % len(PLAN_COLORS)]
-            self._draw_trajectory(f"/plans/{k}", samples, color)
+            self._draw_trajectory(f"/plans/{k}", samples, color, PLAN_WIDTH + PLAN_STEP * (n - 1 - k), lift=0.02 * k)
             lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
                          f"{layers.path_length(samples['x'], samples['y']):.1f} m, {samples['t'][-1]:.1f} s"
                          + self._mean_error_text(samples))
@@ -165,20 +170,41 @@ class ViewApp:
             return
         lines = []
         for k, (name, tracks) in enumerate(self.inputs.replays.items()):
-            self.server.scene.add_line_segments(f"/replays/{k}/truth", tracks["truth"], TRUTH, thickness=2.0,
-                                                thickness_units="screen")
+            self.server.scene.add_line_segments(f"/replays/{k}/truth", tracks["truth"], TRUTH,
+                                                thickness=TRUTH_WIDTH, thickness_units="screen")
             self.server.scene.add_line_segments(f"/replays/{k}/estimate", tracks["estimate"], tracks["colors"],
-                                                thickness=4.0, thickness_units="screen")
+                                                thickness=ESTIMATE_WIDTH, thickness_units="screen")
             lines.append(f"- {layers.replay_caption(name, tracks)}")
         self.server.gui.add_markdown("**Replays**\n\n" + "\n".join(lines))
 
     def _set_camera(self) -> None:
-        lo, hi = self.inputs.world.bounds
-        centre = 0.5 * (np.asarray(lo) + np.asarray(hi))
-        span = float(max(hi[0] - lo[0], hi[1] - lo[1]))
+        """The first view: from the south and above, on what was given to look at (the
+        plans and replays; else the SOLM's grid; else the whole map), a little left of the
+        centre, which the panel covers."""
+        (x0, y0), (x1, y1) = self.focus_bounds()
+        span = max(x1 - x0, y1 - y0, 10.0)
+        points = self.inputs.world.points
+        inside = (points[:, 0] >= x0) & (points[:, 0] <= x1) & (points[:, 1] >= y0) & (points[:, 1] <= y1)
+        ground = float(np.percentile(points[inside, 2], 5)) if inside.any() else float(points[:, 2].min())
+        centre = (0.5 * (x0 + x1) + 0.1 * span, 0.5 * (y0 + y1))
         camera = self.server.initial_camera
-        camera.look_at = (centre[0], centre[1], lo[2])
-        camera.position = (centre[0], centre[1] - 0.45 * span, lo[2] + 0.55 * span)
+        camera.look_at = (centre[0], centre[1], ground)
+        camera.position = (centre[0], centre[1] - 0.6 * span, ground + 0.6 * span)
+
+    def focus_bounds(self) -> tuple:
+        """((xmin, ymin), (xmax, ymax)) of what the first view shows: the given plans and
+        replays; without them the SOLM's grid, without it the map."""
+        xy = [np.c_[s["x"], s["y"]] for s in self.inputs.plans.values()]
+        xy += [t["truth"].reshape(-1, 3)[:, :2] for t in self.inputs.replays.values()]
+        solm = self.inputs.solm
+        if not xy and solm is not None:
+            g = solm.grid_spec
+            xy.append(np.array([[g.x0, g.y0], [g.x0 + g.nx * g.res, g.y0 + g.ny * g.res]]))
+        if not xy:
+            lo, hi = self.inputs.world.bounds
+            return (float(lo[0]), float(lo[1])), (float(hi[0]), float(hi[1]))
+        xy = np.concatenate(xy)
+        return tuple(map(float, xy.min(axis=0))), tuple(map(float, xy.max(axis=0)))
 
     # -- clicks: inspect a cell, set a start and a goal, plan ------------------------------
 
@@ -349,10 +375,11 @@ class ViewApp:
                                                             turn_radius=g.turn_radius),
                      "none (shortest)": self._planner.plan(start, goal, robot=self.robot, metric="none")}
         lines, out = [], {}
-        for name, plan in plans.items():
+        for k, (name, plan) in enumerate(plans.items()):
             samples = plan.trajectory.sample(20.0)
             color = GUIDED if name.startswith("default") else UNGUIDED
-            self._draw_trajectory(f"/planned/{name.split()[0]}", samples, color)
+            self._draw_trajectory(f"/planned/{name.split()[0]}", samples, color,
+                                  PLAN_WIDTH + PLAN_STEP * (len(plans) - 1 - k), lift=0.02 * k)
             summary = plan.summary()
             out[name] = {**summary, "mean_predicted_error_m": self.mean_predicted_error(samples)}
             lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
@@ -362,11 +389,12 @@ class ViewApp:
         self.status = self.plan_text.content
         return out
 
-    def _draw_trajectory(self, name: str, samples: dict, color) -> None:
+    def _draw_trajectory(self, name: str, samples: dict, color, width: float = PLAN_WIDTH,
+                         lift: float = 0.0) -> None:
         z = np.array([self.ground_height(x, y) for x, y in zip(samples["x"][::20], samples["y"][::20])])
-        z = np.interp(np.arange(len(samples["x"])), np.arange(0, len(samples["x"]), 20), z) + self._above_layer
+        z = np.interp(np.arange(len(samples["x"])), np.arange(0, len(samples["x"]), 20), z) + self._above_layer + lift
         path = layers.polyline(samples["x"], samples["y"], z)
-        self.server.scene.add_line_segments(f"{name}/path", path, color, thickness=4.0, thickness_units="screen")
+        self.server.scene.add_line_segments(f"{name}/path", path, color, thickness=width, thickness_units="screen")
         with_z = dict(samples, z=z)
         self.server.scene.add_line_segments(f"{name}/footprint",
                                             layers.footprints(with_z, self.footprint_radius, FOOTPRINT_EVERY_S),

@@ -27,8 +27,9 @@ CHANNELS = {
 MAX_MAP_POINTS = 1_000_000
 #: Seed of the map's subsample: the same points on every start.
 SUBSAMPLE_SEED = 0
-#: Pixels (width, height) of the colour bar.
+#: Pixels (width, height) of the colour bar, and the values it labels.
 COLORBAR_PIXELS = (360, 90)
+COLORBAR_TICKS = 4
 #: Length (m) of the arrow of the least observable direction at a clicked cell.
 ARROW_LENGTH = 2.0
 
@@ -110,18 +111,26 @@ def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
 
 def colorbar_image(lo: float, hi: float, label: str, pixels: tuple = COLORBAR_PIXELS) -> np.ndarray:
     """An RGB image (rows, columns, 3) of the log colour bar from ``lo`` to ``hi`` with its
-    label and end values, ``pixels`` (width, height) large."""
+    label and COLORBAR_TICKS values from end to end, ``pixels`` (width, height) large.
+    The end values are aligned inwards, so that every label lies inside the image."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
+    from matplotlib.ticker import NullLocator
 
     fig = plt.figure(figsize=(pixels[0] / 100, pixels[1] / 100), dpi=100)
-    ax = fig.add_axes((0.05, 0.4, 0.9, 0.25))
-    fig.colorbar(plt.cm.ScalarMappable(norm=LogNorm(lo, hi), cmap="viridis"), cax=ax, orientation="horizontal")
+    ax = fig.add_axes((0.04, 0.42, 0.92, 0.25))
+    bar = fig.colorbar(plt.cm.ScalarMappable(norm=LogNorm(lo, hi), cmap="viridis"), cax=ax, orientation="horizontal")
+    ticks = np.geomspace(lo, hi, COLORBAR_TICKS)
+    bar.set_ticks(ticks, labels=[f"{t:.3g}" for t in ticks])
+    ax.xaxis.set_minor_locator(NullLocator())  # LogNorm's minor labels crowd and overflow the ends
+    ax.tick_params(labelsize=7)
+    first, *_, last = ax.get_xticklabels()
+    first.set_horizontalalignment("left")
+    last.set_horizontalalignment("right")
     ax.set_title(label, fontsize=7)
-    ax.tick_params(labelsize=6)
     fig.canvas.draw()
     image = np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
     plt.close(fig)
