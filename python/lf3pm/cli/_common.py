@@ -189,6 +189,9 @@ def map_loading():
     terminal, a line on stderr with a spinner, the phase (reading the file, indexing its
     points) and the time elapsed, erased when the block ends so that an error after it is
     its one line alone; nothing elsewhere."""
+    if not err_console.is_terminal:  # a stopped Progress still ends its (empty) line there
+        yield lambda text: None
+        return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     line = Progress(SpinnerColumn(), TextColumn("{task.description}", markup=False), TimeElapsedColumn(),

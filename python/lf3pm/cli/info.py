@@ -10,7 +10,7 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from lf3pm.cli._common import app, check_output, configure, console, option, user_errors
+from lf3pm.cli._common import app, check_output, configure, console, map_loading, option, user_errors
 from lf3pm.config import load_config
 from lf3pm.errors import Lf3pmError
 
@@ -47,7 +47,9 @@ def info(map_path: Path = typer.Argument(..., metavar="MAP"),
     with user_errors():
         from lf3pm.map import load_map
 
-        console.print_json(json.dumps(load_map(map_path, voxel=map_voxel).describe()))
+        with map_loading() as progress:
+            world = load_map(map_path, voxel=map_voxel, progress=progress)
+        console.print_json(json.dumps(world.describe()))
 
 
 @app.command()

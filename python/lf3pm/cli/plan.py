@@ -8,7 +8,7 @@ from typing import Optional, Tuple
 
 import typer
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, option, print_warning,
+from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, map_loading, option, print_warning,
                                user_errors)
 from lf3pm.errors import Lf3pmError
 
@@ -75,7 +75,10 @@ def plan(
             from lf3pm.map import load_map
             from lf3pm.planner.figures import plans_figure
 
-            points = load_map(map_path).points if map_path is not None else None
+            points = None
+            if map_path is not None:
+                with map_loading() as progress:
+                    points = load_map(map_path, progress=progress).points
             plans_figure(solm, {metric: result}, png, map_points=points,
                          title=f"{vehicle.kind} plan guided by {metric} over the SOLM (dotted: front-end path)")
         try:

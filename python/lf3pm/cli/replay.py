@@ -12,11 +12,10 @@ import typer
 from rich import box
 from rich.table import Table
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, option, print_warning,
+from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, map_loading, option, print_warning,
                                progress_bar, user_errors)
 from lf3pm.config import MAX_TRAJECTORY_SECONDS
 from lf3pm.errors import Lf3pmError
-from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
 
 #: Where each option of replay lives in the config.
 REPLAY_PATHS = {"sensor": "sensor", "method": "replay.method", "odometry": "replay.odometry", "seeds": "replay.seeds",
@@ -66,7 +65,8 @@ def replay_command(
             raise Lf3pmError(f"--odometry applies to --method lio, not {run.method}")
         options = {"odometry": run.odometry} if run.method == "lio" else {}
         samples = read_trajectory(trajectory)
-        world = load_map(map_path, threads=scan.threads)
+        with map_loading() as progress:
+            world = load_map(map_path, threads=scan.threads, progress=progress)
         motion = Motion.from_arrays(*(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")), map=world,
                                     height=run.height)
         common = {"rate": run.rate, "height": run.height, "noise": scan.noise, "threads": scan.threads}
@@ -100,12 +100,11 @@ def replay_command(
 
 
 def read_trajectory(path: Path) -> dict:
-    """The columns of a trajectory CSV (Motion.from_csv's input), refused in one line when
-    it is not a regular file of at most MAX_TRAJECTORY_BYTES or lasts longer than
-    MAX_TRAJECTORY_SECONDS, before the map is read."""
+    """The columns of a trajectory CSV (Motion.from_csv's input; read_csv bounds the file),
+    refused in one line when it lasts longer than MAX_TRAJECTORY_SECONDS, before the map
+    is read (Motion refuses it too, after)."""
     from lf3pm.trajectory.trajectory import read_csv
 
-    check_file(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
     samples = read_csv(path)
     duration = float(samples["t"][-1] - samples["t"][0])
     if duration > MAX_TRAJECTORY_SECONDS:

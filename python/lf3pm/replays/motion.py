@@ -30,7 +30,7 @@ from lf3pm.replays.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING,
 from lf3pm.trajectory.sampling import check_trajectory
 from lf3pm.map import Map
 from lf3pm.pose import pose_matrices
-from lf3pm.config import DEFAULT_HEIGHT
+from lf3pm.config import DEFAULT_HEIGHT, MAX_TRAJECTORY_SECONDS
 
 #: Knots per second of the height polynomial (besides the samples): the CSV's rate.
 Z_KNOT_RATE = 100.0
@@ -71,6 +71,9 @@ class Motion:
 
     def __init__(self, t, x, y, yaw, vx, vy, omega, ground: SmoothGround, height: float):
         t, _ = check_trajectory(t, np.column_stack([x, y, np.zeros_like(np.asarray(x, float)), yaw]))
+        if t[-1] - t[0] > MAX_TRAJECTORY_SECONDS:  # the height's knots every 10 ms would fill memory
+            raise Lf3pmError(f"the trajectory lasts {t[-1] - t[0]:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, "
+                             "the longest lf3pm replays: replay a part of it")
         channels = [np.asarray(c, dtype=np.float64) for c in (x, y, np.unwrap(np.asarray(yaw, float)))]
         rates = [np.asarray(c, dtype=np.float64) for c in (vx, vy, omega)]
         if any(r.shape != t.shape or not np.all(np.isfinite(r)) for r in rates):

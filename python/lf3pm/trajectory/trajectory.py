@@ -10,6 +10,7 @@ import numpy as np
 from lf3pm import libm
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
+from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
 
 CSV_COLUMNS = ("t", "x", "y", "yaw", "vx", "vy", "omega")
 #: Samples per second of a trajectory CSV (and of a Trajectory replayed directly, so that
@@ -145,9 +146,11 @@ def read_csv(path) -> dict:
     at least the columns ``t,x,y,yaw,vx,vy,omega`` (any order, extra columns
     ignored), then one row of numbers per sample. Returns a dict of float64
     arrays by column name. Raises Lf3pmError, naming the line, for a missing
-    or unreadable file, a missing column, a row of the wrong length, a field
+    or unreadable file, one that is not a regular file of at most
+    limits.MAX_TRAJECTORY_BYTES, a missing column, a row of the wrong length, a field
     that is not a number, a non-finite value, fewer than 2 rows or times that
     do not increase strictly."""
+    check_file(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
     try:
         with open(path, encoding="utf-8") as fp:
             lines = fp.read().splitlines()
