@@ -83,3 +83,23 @@ def test_a_stretch_keeps_the_path_and_scales_speed_and_acceleration():
     np.testing.assert_allclose(p_k, p, atol=1e-12)
     np.testing.assert_allclose(v_k, v / k, atol=1e-12)
     np.testing.assert_allclose(slow.acceleration(k * t), trajectory.acceleration(t) / k**2, atol=1e-12)
+
+
+def test_a_fixed_end_inside_the_clearance_margin_adds_no_penalty():
+    """A start beside a wall, at r_safe (inside the margin the penalty starts from): the
+    penalty at a fixed end cannot be removed, and made |f| thousands of times the plan's
+    own cost, so that L-BFGS's relative stop came early (1,000-2,800 iterations, or plans
+    near their half-speed initial guess: issue 39). The fixed ends' pieces keep the
+    clearance the ends have, so the plan costs what it costs with the wall far away."""
+    from lf3pm.grid_field import GridField
+    from lf3pm.trajectory.trajectory_optimizer import optimize_trajectory
+
+    robot = Robot("omni")
+    ys = 0.05 + 0.1 * np.arange(120)
+    wall = GridField(np.repeat(ys[:, None], 400, axis=1), -5.0, 0.0, 0.1)  # distance to the wall y = 0
+    far = GridField(np.full((120, 400), 50.0), -5.0, 0.0, 0.1)
+    waypoints = np.array([[0.0, robot.r_safe, 0.0], [4.0, 3.0, 0.5], [30.0, 3.0, 0.0]])
+    beside, free = (optimize_trajectory(waypoints, None, field, robot, corners=True) for field in (wall, far))
+    assert beside.terms["esdf"] < 1e-6
+    assert beside.violations["min_clearance"] >= -1e-9
+    assert beside.terms["time"] == pytest.approx(free.terms["time"], rel=0.01)

@@ -26,8 +26,22 @@ inline double cubic_penalty(double z, double weight, double& sum) {
 }  // namespace
 
 TrajectoryCost::TrajectoryCost(GridField cost, GridField esdf, const RobotLimits& robot, const CostWeights& weights)
-    : cost_(std::move(cost)), esdf_(std::move(esdf)), robot_(robot), weights_(weights) {
+    : cost_(std::move(cost)),
+      esdf_(std::move(esdf)),
+      robot_(robot),
+      weights_(weights),
+      head_clearance_(robot.r_safe + weights.esdf_margin),
+      tail_clearance_(head_clearance_) {
   if (weights_.samples < 1) throw std::invalid_argument("samples per piece must be >= 1");
+}
+
+void TrajectoryCost::keep_ends(double head_x, double head_y, double tail_x, double tail_y) {
+  const double clearance = robot_.r_safe + weights_.esdf_margin;
+  head_clearance_ = tail_clearance_ = clearance;
+  if (esdf_.empty()) return;
+  Eigen::Vector3d unused;
+  head_clearance_ = std::min(clearance, esdf_.sample(head_x, head_y, 0.0, unused));
+  tail_clearance_ = std::min(clearance, esdf_.sample(tail_x, tail_y, 0.0, unused));
 }
 
 void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations, Eigen::MatrixX3d& grad_c,
@@ -57,6 +71,10 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 4, 3> c = coef.middleRows<4>(4 * i);
     const double dur = durations(i), dt = dur / k_max;
+    // The fixed ends' pieces keep at most the clearance the ends have (keep_ends).
+    double kept = clearance;
+    if (i == 0) kept = std::min(kept, head_clearance_);
+    if (i == n - 1) kept = std::min(kept, tail_clearance_);
     Eigen::Matrix<double, 4, 3> gc = Eigen::Matrix<double, 4, 3>::Zero();
     double gt = 0.0;
     const Eigen::Vector3d jerk = 6.0 * c.row(3).transpose();
@@ -161,7 +179,7 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
       if (!esdf_.empty()) {
         const double dist = esdf_.sample(p(0), p(1), 0.0, field_grad);
         // In units of kClearanceScale, so that an intrusion weighs like the relative excesses above.
-        const double dc = cubic_penalty((clearance - dist) / kClearanceScale, w, f.esdf) / kClearanceScale;
+        const double dc = cubic_penalty((kept - dist) / kClearanceScale, w, f.esdf) / kClearanceScale;
         gp(0) -= dc * field_grad(0), gp(1) -= dc * field_grad(1);
       }
 

@@ -65,6 +65,12 @@ class TrajectoryCost {
   const RobotLimits& robot() const { return robot_; }
   const CostWeights& weights() const { return weights_; }
 
+  /// The clearance kept on the first (last) piece: r_safe + margin, or the fixed start's
+  /// (goal's) own ESDF value where that is less. A penalty at a fixed end cannot be removed:
+  /// beside a wall it was thousands of times the plan's own cost, and the relative stop of
+  /// L-BFGS then left plans near their half-speed initial guess (docs/planner_backend.md).
+  void keep_ends(double head_x, double head_y, double tail_x, double tail_y);
+
   /// Add every sampled term of the piecewise cubic (4N x 3 coefficients, N durations)
   /// to `terms`, their partial gradients to grad_c (4N x 3) and grad_t (N).
   void add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations, Eigen::MatrixX3d& grad_c,
@@ -75,6 +81,7 @@ class TrajectoryCost {
   GridField cost_, esdf_;
   RobotLimits robot_;
   CostWeights weights_;
+  double head_clearance_, tail_clearance_;  // keep_ends
 };
 
 }  // namespace lf3pm

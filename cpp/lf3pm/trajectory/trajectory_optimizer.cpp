@@ -22,6 +22,7 @@ TrajectoryProblem::TrajectoryProblem(TrajectoryCost cost, double rho_t, double w
   if ((durations.array() <= 0.0).any()) throw std::invalid_argument("trajectory: durations must be positive");
   // With straight ends the spline's head and tail take the junctions' accelerations too,
   // and place its first and last waypoints itself (minco.hpp): those are not parameters.
+  cost_.keep_ends(head(0, 0), head(1, 0), tail(0, 0), tail(1, 0));
   const int skip = straight_ends_ ? 1 : 0, free = free_waypoints();
   if (straight_ends_) {
     minco_.set_conditions(MincoS2::State::Zero(), MincoS2::State::Zero(), pieces_, true, true);

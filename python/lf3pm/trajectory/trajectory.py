@@ -84,7 +84,9 @@ class Trajectory:
         accelerations by 1 / factor^2; a flat piece's heading is unchanged."""
         if not (np.isfinite(factor) and factor > 0):
             raise Lf3pmError(f"time scale factor must be a positive number, got {factor}")
-        scale = factor ** -np.arange(4.0)  # coefficient k of a cubic in t / factor
+        # Coefficient k of a cubic in t / factor: Python's powers (the C library's), as NumPy's
+        # vector power differs in the last bit between CPUs (lf3pm.libm).
+        scale = np.array([float(factor) ** -k for k in range(4)])
         return Trajectory(self.coefficients * scale[None, :, None], self.durations * factor, self.flat)
 
     def _locate(self, t: np.ndarray):
