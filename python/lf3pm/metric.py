@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 
 from lf3pm import _core
 from lf3pm.calibration import (LOCALIZATION_PACKAGED, calibration_applies, packaged_calibration, predict_mde,
-                               predict_localization_error)
+                               predict_localization_error, withheld_reason)
 from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, scan_params, validated
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
@@ -51,6 +51,8 @@ class Evaluation:
     predicted_mde_interval: list | None
     predicted_localization_error_m: float | None
     predicted_localization_error_interval_m: list | None
+    predicted_mde_withheld: str | None
+    predicted_localization_error_withheld: str | None
     pose: list
     sensor: str
     params: dict
@@ -99,7 +101,9 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, se
     downsampling), else None; likewise predicted_localization_error_m (with a
     10-90 % interval, m): the APE of map localization expected along a trajectory
     through poses like this one, fitted on the benefit study's plans (its
-    sensors; None at a degenerate pose).
+    sensors; None at a degenerate pose). Either is None too outside the range of
+    the predictor its fit saw; ``predicted_*_withheld`` says why a prediction is
+    None, in one line (docs/validation.md), and is None where it is given.
     A pose outside the map's x-y extent or within ``clearance`` m of a map point
     raises PoseError.
     """
@@ -118,9 +122,10 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, se
     conditions = {"sensor": sensor.name, "dof": metric.dof, "association": metric.association,
                   "scan_voxel": scan.scan_voxel, "noise_is_default": scan.noise is None, "w1": metric.w1}
     calibration = packaged_calibration()
+    mde_value = values[calibration["predictor"]] if calibration is not None else math.nan
     prediction = None
-    if calibration_applies(calibration, **conditions):
-        prediction = predict_mde(calibration, values[calibration["predictor"]])
+    if calibration is not None and calibration_applies(calibration, **conditions):
+        prediction = predict_mde(calibration, mde_value)
     fit = packaged_calibration(LOCALIZATION_PACKAGED)
     error = (predict_localization_error(fit, values["q_n"])
              if fit is not None and calibration_applies(fit, **conditions) else None)
@@ -133,4 +138,6 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, se
                       predicted_mde_interval=list(prediction[1:]) if prediction else None,
                       predicted_localization_error_m=error[0] if error else None,
                       predicted_localization_error_interval_m=list(error[1:]) if error else None,
+                      predicted_mde_withheld=withheld_reason(calibration, mde_value, **conditions),
+                      predicted_localization_error_withheld=withheld_reason(fit, values["q_n"], **conditions),
                       pose=matrix.tolist(), sensor=sensor.name, params=recorded, observations=obs)

@@ -55,26 +55,11 @@ def evaluate(
                          sensor_points=obs["sensor_points"], row_hit=obs["row_hit"],
                          pose=np.asarray(result.pose))
         out = result.to_dict()
-        out.update(withheld_predictions(result, noise_is_default=cfg.scan.noise is None))
         out["map"] = world.describe()
         if as_json:
             print(json.dumps(out))
             return
         print_evaluation(out)
-
-
-def withheld_predictions(result, *, noise_is_default: bool) -> dict:
-    """``predicted_mde_withheld`` and ``predicted_localization_error_withheld``: why each
-    prediction is null (docs/validation.md), or None where it is given."""
-    from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, withheld_reason
-
-    p = result.params
-    conditions = {"sensor": result.sensor, "dof": p["dof"], "association": p["association"],
-                  "scan_voxel": p["scan_voxel"], "noise_is_default": noise_is_default, "w1": p["w1"]}
-    mde_fit, error_fit = packaged_calibration(), packaged_calibration(LOCALIZATION_PACKAGED)
-    mde_value = getattr(result, mde_fit["predictor"]) if mde_fit else float("nan")
-    return {"predicted_mde_withheld": withheld_reason(mde_fit, mde_value, **conditions),
-            "predicted_localization_error_withheld": withheld_reason(error_fit, result.q_n, **conditions)}
 
 
 def print_evaluation(out: dict) -> None:

@@ -162,7 +162,7 @@ class ViewApp:
             self._draw_trajectory(f"/plans/{k}", samples, color, PLAN_WIDTH + PLAN_STEP * (n - 1 - k), lift=0.02 * k)
             lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
                          f"{layers.path_length(samples['x'], samples['y']):.1f} m, {samples['t'][-1]:.1f} s"
-                         + self._mean_error_text(samples))
+                         + self._error_text(*self.predicted_error(samples)))
         gui.add_markdown("**Plans**\n\n" + "\n".join(lines))
 
     def _add_replays(self) -> None:
@@ -323,6 +323,8 @@ class ViewApp:
             lo, hi = result.predicted_localization_error_interval_m
             text.append(f"- predicted localization error {result.predicted_localization_error_m * 100:.1f} cm "
                         f"({lo * 100:.1f}-{hi * 100:.1f} cm)")
+        elif result.predicted_localization_error_withheld is not None:
+            text.append(f"- predicted localization error withheld: {result.predicted_localization_error_withheld}")
         if solm is not None:
             stored = float(solm.query(xy[0], xy[1], yaw=yaw, z=z if solm.grid_spec.space == "r3" else None)[0])
             text.append(f"- SOLM q_n here {stored:.4g} (interpolated)" if math.isfinite(stored) else
@@ -359,7 +361,7 @@ class ViewApp:
     def plan_between(self, client=None) -> dict:
         """Plans from the clicked start to the clicked goal with the default guidance and
         with none (lf3pm.Planner on the SOLM), draws both with the robot's footprint and
-        returns {name: summary with the mean predicted error}."""
+        returns {name: summary with the predicted error (:meth:`predicted_error`)}."""
         from lf3pm.planner.plan import Planner
 
         if self._start is None or self._goal is None:
@@ -381,10 +383,11 @@ class ViewApp:
             self._draw_trajectory(f"/planned/{name.split()[0]}", samples, color,
                                   PLAN_WIDTH + PLAN_STEP * (len(plans) - 1 - k), lift=0.02 * k)
             summary = plan.summary()
-            out[name] = {**summary, "mean_predicted_error_m": self.mean_predicted_error(samples)}
+            error, withheld = self.predicted_error(samples)
+            out[name] = {**summary, "predicted_error_m": error, "predicted_error_withheld": withheld}
             lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
                          f"{summary['trajectory_length_m']:.1f} m, {summary['duration_s']:.1f} s"
-                         + self._mean_error_text(samples))
+                         + self._error_text(error, withheld))
         self.plan_text.content = f"Robot {self.robot.kind}:\n\n" + "\n".join(lines)
         self.status = self.plan_text.content
         return out
@@ -400,23 +403,36 @@ class ViewApp:
                                             layers.footprints(with_z, self.footprint_radius, FOOTPRINT_EVERY_S),
                                             color, thickness=0.05)
 
-    def mean_predicted_error(self, samples: dict) -> float | None:
-        """The mean predicted localization error (m) along a trajectory's samples, from the
-        SOLM's q_n and the packaged fit, over the samples where q_n is known and not
-        degenerate; None without a SOLM or such samples."""
-        solm = self.inputs.solm
-        if solm is None:
-            return None
-        try:
-            errors = layers.predicted_error(solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0])
-        except Lf3pmError:  # no packaged fit
-            return None
-        errors = errors[np.isfinite(errors)]
-        return float(np.mean(errors)) if errors.size else None
+    @staticmethod
+    def _error_text(error: float | None, withheld: str | None) -> str:
+        if error is not None:
+            return f", predicted error {error * 100:.1f} cm"
+        return "" if withheld is None else f", predicted error withheld: {html.escape(withheld)}"
 
-    def _mean_error_text(self, samples: dict) -> str:
-        error = self.mean_predicted_error(samples)
-        return "" if error is None else f", mean predicted error {error * 100:.1f} cm"
+    def predicted_error(self, samples: dict) -> tuple[float | None, str | None]:
+        """(error, withheld): the localization error (m) the packaged fit predicts along a
+        trajectory's samples (evenly spaced in time) from its predictor, the time mean of
+        q_n (experiments/localization_error.py), here the SOLM's q_n over the samples where
+        it is known; or None and why, in one line. (None, None) without a SOLM or a fit."""
+        from lf3pm.calibration import (LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error,
+                                       withheld_reason)
+
+        solm, fit = self.inputs.solm, packaged_calibration(LOCALIZATION_PACKAGED)
+        if solm is None or fit is None:
+            return None, None
+        q_n = solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0]
+        if np.isinf(q_n).any():
+            return None, "the plan passes a degenerate pose (q_n infinite): localization follows the odometry there"
+        known = q_n[np.isfinite(q_n)]
+        if not known.size:
+            return None, "the SOLM has no q_n along the plan"
+        mean = float(np.mean(known))
+        predicted = predict_localization_error(fit, mean)
+        if predicted is None:
+            return None, withheld_reason(fit, mean, sensor=fit["provenance"].get("sensors", ["?"])[0], dof=6,
+                                         association="knn", scan_voxel=0, noise_is_default=True,
+                                         w1=fit["provenance"]["w1"])
+        return predicted[0], None
 
     # -- progress, errors and shutdown ---------------------------------------------------
 
