@@ -38,3 +38,16 @@ def orientation_planner(tmp_path_factory):
     path = tmp_path_factory.mktemp("orientation") / "s.zarr"
     build_solm(world, get_sensor("mid70"), grid, path, yaw_reuse=True, ray_stride=8)
     return Planner(Solm.open(path))
+
+
+@pytest.fixture(scope="session")
+def study_boxes_planner(tmp_path_factory):
+    """A Planner on the benefit study's ``boxes`` case (0.25 m cells: the room's halves join
+    through gaps that leave the body 0.28 m on each side), built as the study builds it."""
+    from lf3pm.experiments.benefit import CASES
+    from lf3pm.experiments.map_cases import build_case_solm
+    from lf3pm.planner import Planner
+    from lf3pm.solm.reader import Solm
+
+    case = next(c for c in CASES if c.name == "boxes")
+    return Planner(Solm.open(build_case_solm(case, tmp_path_factory.mktemp("study") / "boxes.zarr")))

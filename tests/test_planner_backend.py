@@ -191,13 +191,19 @@ def test_lbfgs_line_search_that_sees_f_change_is_still_a_failure():
 
 # --- The objective's gradient ----------------------------------------------------------
 
-@pytest.mark.parametrize("kind, vmax_norm", [("omni", None), ("omni", 0.4), ("diff", None), ("car", None)])
-def test_objective_gradient_matches_finite_differences(kind, vmax_norm):
+@pytest.mark.parametrize("kind, vmax_norm, turn_price", [("omni", None, 0.0), ("omni", 0.4, 0.0), ("omni", None, 2.5),
+                                                        ("diff", None, 0.0), ("car", None, 0.0)])
+def test_objective_gradient_matches_finite_differences(kind, vmax_norm, turn_price):
     rng = np.random.default_rng(3)
     robot = Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, min_turn_radius=30.0 if kind == "car" else 0.0,
                   r_safe=1.0, vmax_norm=vmax_norm, amax_lon=0.05, amax_lat=0.02, alpha_max=0.002)
     problem = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
-                           rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
+                           rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0,
+                           turn_price=turn_price)
+    if turn_price:  # the turns' price is in the q term
+        free = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
+                            rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
+        assert problem.details(problem.initial)["q"] > 1.01 * free.details(problem.initial)["q"]
     x = problem.initial + rng.normal(size=problem.dimension) * 0.1
     taus = slice(3 * (problem.pieces - 1), 4 * problem.pieces - 1)
     x[taus] -= 1.0  # shorter durations than the initial guess: limits violated

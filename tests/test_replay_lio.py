@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 import lf3pm
 from lf3pm.cli import app
 from lf3pm.replays.motion import Motion
+from lf3pm.replays.lio import choose_odometry
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.replay import LIO_REST, replay, replay_rest
 from lf3pm.scenes import build_scene
@@ -85,6 +86,7 @@ def fake_lio(monkeypatch):
     imu.simulate_imu = simulate_imu
     lio = types.ModuleType("lf3pm.replays.lio")
     lio.run_lio = run_lio
+    lio.choose_odometry = choose_odometry  # the CLI checks the odometry and sensor before the map loads
     monkeypatch.setitem(sys.modules, "lf3pm.replays.imu", imu)
     monkeypatch.setitem(sys.modules, "lf3pm.replays.lio", lio)
     calls.clear()

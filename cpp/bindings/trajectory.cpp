@@ -174,7 +174,9 @@ void bind_trajectory(nb::module_& m) {
       .def_rw("w_q", &CostWeights::w_q)
       .def_rw("penalty", &CostWeights::penalty)
       .def_rw("esdf_margin", &CostWeights::esdf_margin)
-      .def_rw("samples", &CostWeights::samples);
+      .def_rw("samples", &CostWeights::samples)
+      .def_rw("turn", &CostWeights::turn)
+      .def_rw("w_time", &CostWeights::w_time);
 
   nb::class_<TrajectoryProblem>(m, "TrajectoryProblem",
                                 "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece), car: 2 x 3 straight-end parameters].")

@@ -12,6 +12,9 @@ namespace {
 // (as a speed at twice its limit's square): the clearance penalty's scale.
 constexpr double kClearanceScale = 0.1;
 
+// |omega| smoothed as sqrt(omega^2 + eps^2) - eps (rad/s): differentiable through zero.
+constexpr double kTurnEps = 1e-2;
+
 // Each sample's penalties weigh its share of the time plus this (s): at least one
 // 100 Hz control period, however short its piece.
 constexpr double kSampleFloor = 0.01;
@@ -157,6 +160,14 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
         if (!cost_.empty() && weights_.w_q != 0.0) {
           f.q = weights_.w_q * cost_.sample(p(0), p(1), p(2), field_grad);
           qp += weights_.w_q * field_grad;
+        }
+        if (weights_.turn > 0.0) {
+          // The turn's price: turn (w_time + w_q c) |omega|, with qp so far w_q grad c.
+          const double root = std::sqrt(v(2) * v(2) + kTurnEps * kTurnEps), rate = root - kTurnEps;
+          const double price = weights_.turn * (weights_.w_time + f.q);
+          qv(2) += price * v(2) / root;
+          qp *= 1.0 + weights_.turn * rate;
+          f.q += price * rate;
         }
         // d v_lon / d(xdot, ydot, yaw) = (cos, sin | v_lat); d v_lat = (-sin, cos | -v_lon).
         double d = 2.0 * v_lon * ilon2 * cubic_penalty(v_lon * v_lon * ilon2 - 1.0, w, f.velocity);

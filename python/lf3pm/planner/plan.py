@@ -119,7 +119,7 @@ class Planner:
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
         layer = self.cost_layer(metric, power)
         cost = None if metric == "none" else GridField(layer.filled, self.esdf.x0, self.esdf.y0, self.esdf.res)
-        piece_length, corners = 2.0, False
+        piece_length, corners, turn_price = 2.0, False, 0.0
         if robot.kind == "car" and robot.min_turn_radius > 0:
             path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
                                    clearance=robot.r_safe + ESDF_MARGIN, heuristic=heuristic,
@@ -144,7 +144,10 @@ class Planner:
                                  step=self._sample_step, yaw="interpolate" if oriented else "travel",
                                  turn_radius=turn_radius)
             waypoints, corners = waypoints[keep], True
+            # The back end prices the sensor's turns as the front end does (a turn_radius of
+            # travel per rad), or it turns where the front end judged turning not to pay.
+            turn_price = turn_radius / robot.vmax_lon if oriented else 0.0
         result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
                                      rho_T=rho_T, esdf_margin=ESDF_MARGIN, piece_length=piece_length,
-                                     corners=corners)
+                                     corners=corners, turn_price=turn_price)
         return Plan(metric, robot, path, result)

@@ -80,7 +80,7 @@ class OptimizeResult:
 def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                  w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
                  esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
-                 corners: bool = False):
+                 corners: bool = False, turn_price: float = 0.0):
     """The C++ objective (``lf3pm._core.TrajectoryProblem``) and its initial guess from
     front-end waypoints (K, 3: x, y, yaw), K >= 2. Arguments as in :func:`optimize_trajectory`."""
     wp = np.asarray(waypoints, dtype=np.float64)
@@ -96,7 +96,7 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
     if esdf is not None and esdf.yaw_bins != 1:
         raise Lf3pmError("the ESDF must be an (ny, nx) field")
     for name, value in (("w_q", w_q), ("rho_T", rho_T), ("w_energy", w_energy), ("penalty", penalty),
-                        ("esdf_margin", esdf_margin)):
+                        ("esdf_margin", esdf_margin), ("turn_price", turn_price)):
         if not (math.isfinite(value) and value >= 0):
             raise Lf3pmError(f"{name} must be a non-negative number, got {value!r}")
     if not (isinstance(samples, int) and samples >= 1):
@@ -114,6 +114,7 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
         head[2, 0], tail[2, 0] = points[1, 2], points[-2, 2]
     weights = _core.CostWeights()
     weights.w_q, weights.penalty, weights.esdf_margin, weights.samples = w_q, penalty, esdf_margin, samples
+    weights.turn, weights.w_time = (turn_price, rho_T) if robot.kind == "omni" else (0.0, rho_T)
     return _core.TrajectoryProblem(cost._core if cost is not None else None, esdf._core if esdf is not None else None,
                                    robot.limits(), weights, rho_T, w_energy, head, tail,
                                    np.ascontiguousarray(points[1:-1]), durations)
@@ -205,7 +206,7 @@ _LBFGS = _core.trajectory_lbfgs()
 def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
                         w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
                         esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
-                        corners: bool = False,
+                        corners: bool = False, turn_price: float = 0.0,
                         g_epsilon: float = _LBFGS.g_epsilon, rel_cost_tol: float = _LBFGS.delta,
                         max_iterations: int = _LBFGS.max_iterations,
                         check_rate: float = LIMIT_CHECK_RATE) -> OptimizeResult:
@@ -218,10 +219,12 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     yaw rate, speed norm, turning radius and clearance limits (clearance penalised
     from r_safe + esdf_margin); ``samples``: K samples per piece; ``corners``: every
     waypoint is a knot of the initial guess (a shortcut path's corners; otherwise the
-    path is resampled evenly); ``piece_length``:
+    path is resampled evenly); ``turn_price`` (omni robots; s per rad): a radian of yaw
+    travel costs what this many seconds of travel cost there, (rho_T + w_q c) each, the
+    front end's turn_radius / vmax_lon (0: turns are free); ``piece_length``:
     metres per piece in the initial guess. L-BFGS stops at ||g|| <= g_epsilon
     max(1, ||x||), when the objective fell by less than ``rel_cost_tol`` (relative)
-    over 3 iterations, or after ``max_iterations`` (0: none). The limits are penalties
+    over 10 iterations, or after ``max_iterations`` (0: none). The limits are penalties
     in the objective, so the solution may pass them slightly: time is then stretched
     uniformly until every limit holds on samples at ``check_rate`` Hz
     (:func:`within_limits`). Single-threaded.
@@ -229,7 +232,7 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     start = time.perf_counter()
     problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
                            penalty=penalty, esdf_margin=esdf_margin, samples=samples,
-                           piece_length=piece_length, corners=corners)
+                           piece_length=piece_length, corners=corners, turn_price=turn_price)
     lbfgs = _core.trajectory_lbfgs()
     lbfgs.g_epsilon, lbfgs.delta, lbfgs.max_iterations = g_epsilon, rel_cost_tol, max_iterations
     out = problem.optimize(lbfgs)
