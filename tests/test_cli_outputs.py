@@ -51,31 +51,6 @@ def test_figures_and_exports_into_missing_folders_are_one_line(store, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
 
-@pytest.fixture
-def mounted(tmp_path):
-    """mount(options) -> a fresh tmpfs mounted with ``options`` (root only; skips otherwise),
-    unmounted afterwards."""
-    import os
-    import subprocess
-
-    if os.geteuid() != 0:
-        pytest.skip("mounting a tmpfs needs root")
-    points = []
-
-    def mount(options):
-        point = tmp_path / f"mnt{len(points)}"
-        point.mkdir()
-        done = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(point)], capture_output=True)
-        if done.returncode != 0:
-            pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
-        points.append(point)
-        return point
-
-    yield mount
-    for point in points:
-        subprocess.run(["umount", str(point)], check=False)
-
-
 def test_writes_onto_read_only_storage_are_one_line(store, tmp_path, mounted):
     """A real read-only mount (root can write into chmod 555 folders, so those prove nothing):
     every writing command says so in one line, exit 2, and leaves nothing."""

@@ -99,29 +99,6 @@ def failing_write(monkeypatch):
     monkeypatch.setattr(local, "_put", real)
 
 
-@pytest.fixture
-def mounted(tmp_path):
-    """mount(options) -> a fresh tmpfs mounted with ``options`` (root only; skips
-    otherwise), unmounted afterwards."""
-    if os.geteuid() != 0:
-        pytest.skip("mounting a tmpfs needs root")
-    points = []
-
-    def mount(options):
-        point = tmp_path / f"mnt{len(points)}"
-        point.mkdir()
-        done = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(point)], check=False,
-                              capture_output=True)
-        if done.returncode != 0:
-            pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
-        points.append(point)
-        return point
-
-    yield mount
-    for point in points:
-        subprocess.run(["umount", str(point)], check=False)
-
-
 # -- storage faults mid-write -------------------------------------------------------------
 
 
