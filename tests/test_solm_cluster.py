@@ -176,3 +176,21 @@ def test_a_store_in_a_missing_or_unwritable_folder_is_refused_before_the_cluster
     assert done.returncode == 2 and "is not a folder" in done.stderr and "Traceback" not in done.stderr
     done = run_cli("solm", "build", path, "-o", tmp_path / "s.zarr", "--res", "2", "--engine", "spark")
     assert done.returncode == 2 and "unknown engine 'spark'" in done.stderr
+
+
+def test_a_full_disk_under_the_ray_engine_is_the_local_engines_one_line(town, whole, cluster, tmp_path, mounted):
+    """A worker's StorageError keeps its class through Ray: the build says, in one line,
+    which tile's chunk failed, what it kept and how to resume, and the rerun with space
+    freed completes to the local engine's store."""
+    from lf3pm.errors import StorageError
+
+    world, sensor, grid = town
+    disk = mounted("size=1m")
+    # Room for the store's metadata and about half its 340 kB of tiles.
+    (disk / "filler").write_bytes(b"\0" * (1024 * 1024 - 80 * 1024))
+    with pytest.raises(StorageError, match="failed on the cluster") as caught:
+        build_solm(world, sensor, grid, disk / "r.zarr", tile=8, engine="ray")
+    assert "\n" not in str(caught.value) and "resume" in str(caught.value)
+    (disk / "filler").unlink()
+    assert build_solm(world, sensor, grid, disk / "r.zarr", tile=8, engine="ray")["complete"]
+    assert_same_store(disk / "r.zarr", whole)

@@ -166,10 +166,12 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
             with writing(where):
                 yield
         except StorageError as err:
+            if str(err).endswith(RESUME_HINT):  # said by an inner write (a tile's done flag)
+                raise
             raise StorageError(f"{err}; the build stopped with {kept} of {ty_n * tx_n} tiles finished and kept "
                                f"in {out}: free space or fix the storage, then run `lf3pm solm build "
                                f"{world.source} -o {out}` with the same options (or the same build_solm call) "
-                               "again to resume it") from None
+                               f"{RESUME_HINT}") from None
 
     if ground_robot:
         occupied = grid_occupancy(world.points, grid, ground, job.robot_radius, job.floor_clearance)
@@ -189,7 +191,8 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     if engine == "ray":
         from lf3pm.solm.cluster import build_tiles
 
-        build_tiles(world, job, todo, ground, Path(out), finished)
+        with storing(out):  # a worker's StorageError keeps its class through Ray (cluster.py)
+            build_tiles(world, job, todo, ground, Path(out), finished)
     else:
         if isinstance(world, MapPoints) and not crop and world.size <= layout.crop_above:
             world = world.indexed(scan.threads)   # small enough to index whole: faster than crops
@@ -203,6 +206,10 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
             finished(ty, tx, cells)
     return {"tiles": ty_n * tx_n, "built_now": len(todo), "complete": kept == ty_n * tx_n,
             "on_crops": engine == "ray" or bool(crop)}
+
+
+#: How a storage fault's message ends once it says what the build kept.
+RESUME_HINT = "again to resume it"
 
 
 def _integer(value) -> bool:

@@ -72,7 +72,12 @@ def build_tiles(world: Map | MapPoints, job: TileJob, todo: list, ground, out: P
             try:
                 cells = ray.get(ref)
             except ray.exceptions.RayError as err:
-                raise Lf3pmError(f"tile ({ty}, {tx}) failed on the cluster: {_first_line(err)}") from None
+                # A worker's own error (a full disk under its chunks: StorageError) keeps its
+                # class, so that the build says what it kept and how to resume, as a local one does.
+                cause = getattr(err, "cause", None)
+                kind = type(cause) if isinstance(cause, Lf3pmError) else Lf3pmError
+                text = str(cause) if isinstance(cause, Lf3pmError) else _first_line(err)
+                raise kind(f"tile ({ty}, {tx}) failed on the cluster: {text}") from None
             finished(ty, tx, cells)
 
 
