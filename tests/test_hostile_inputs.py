@@ -366,3 +366,20 @@ def test_a_read_only_output_fails_before_the_work(tmp_path, boxes):
         assert list(mount.iterdir()) == []
     finally:
         subprocess.run(["umount", str(mount)], check=False)
+
+
+# --- command lines click cannot parse ----------------------------------------------------
+
+
+@pytest.mark.parametrize("args, text", [(["plann"], "No such command 'plann'"),
+                                        (["solm", "build", "m.pcd", "-o", "s.zarr", "--max-cells", "abc"],
+                                         "Invalid value for '--max-cells'"),
+                                        (["plan", "--solm", "s.zarr"], "Missing option")])
+def test_a_command_line_that_does_not_parse_is_one_line(args, text):
+    """Not click's usage box (five lines and a frame): one line naming what is wrong and the
+    command whose --help lists what it takes, exit 2."""
+    done = run_cli(*args)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lf3pm: error: ") and text in lines[0], done.stderr
+    assert "--help` lists what it takes" in lines[0]

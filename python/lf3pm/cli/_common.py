@@ -63,9 +63,14 @@ def user_errors():
         with one_line_warnings():
             yield
     except Lf3pmError as err:
-        err_console.print(Text.assemble(("lf3pm: error:", "bold red"), " ", one_line(err)), highlight=False,
-                          soft_wrap=True)
+        print_error(err)
         raise typer.Exit(2) from None
+
+
+def print_error(text) -> None:
+    """``lf3pm: error: TEXT`` on stderr, one line, TEXT verbatim."""
+    err_console.print(Text.assemble(("lf3pm: error:", "bold red"), " ", one_line(text)), highlight=False,
+                      soft_wrap=True)
 
 
 def check_output(path: Path | None, *, folder: bool = False, parents: bool = False, new: bool = False) -> None:
