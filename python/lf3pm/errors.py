@@ -7,6 +7,14 @@ traceback for these.
 """
 
 
+def one_line_warning(message, category=None, filename=None, lineno=None, line=None) -> str:
+    """A ``warnings.formatwarning`` for what users read: ``lf3pm: warning: MESSAGE`` on one
+    line (a newline shown as \\n), without Python's file:line and source line (and no
+    second "lf3pm: " where the message names its source already)."""
+    text = str(message).replace("\r", "\\r").replace("\n", "\\n")
+    return f"lf3pm: warning: {text.removeprefix('lf3pm: ')}\n"
+
+
 class Lf3pmError(Exception):
     """Base class of errors caused by user input; the message is one line."""
 

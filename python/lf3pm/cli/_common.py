@@ -16,7 +16,7 @@ from rich.text import Text
 
 from lf3pm.atomic import check_replaceable
 from lf3pm.config import Config, help_with_default, load_config
-from lf3pm.errors import Lf3pmError
+from lf3pm.errors import Lf3pmError, one_line_warning
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
@@ -37,18 +37,12 @@ def print_warning(text) -> None:
                       soft_wrap=True)
 
 
-def _format_warning(message, category, filename, lineno, line=None) -> str:
-    """warnings.formatwarning for the CLI: one line, no file:line and source line (and
-    no second "lf3pm: " where the message names its source already)."""
-    return f"lf3pm: warning: {one_line(message).removeprefix('lf3pm: ')}\n"
-
-
 @contextmanager
 def one_line_warnings():
     """Python warnings (a map's dropped points, an odometry's caveat) printed as one line
     each while the block runs."""
     previous = warnings.formatwarning
-    warnings.formatwarning = _format_warning
+    warnings.formatwarning = one_line_warning
     try:
         yield
     finally:

@@ -74,9 +74,20 @@ def run_replays(tasks: list, workers: int, step) -> None:
             _run(job)
             step(label, len(todo))
         return
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+    # Spawned workers start with Python's warning format (file:line, source line): the
+    # study's own is one line (lf3pm.errors.one_line_warning).
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
+                             initializer=_one_line_warnings) as pool:
         for _ in pool.map(_run, todo):
             step(label, len(todo))
+
+
+def _one_line_warnings() -> None:
+    import warnings
+
+    from lf3pm.errors import one_line_warning
+
+    warnings.formatwarning = one_line_warning
 
 
 def _run(job) -> None:
