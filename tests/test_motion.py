@@ -190,3 +190,20 @@ def test_csv_columns_in_any_order(tmp_path):
     assert s["t"].tolist() == [0, 1] and s["x"].tolist() == [1, 3] and "extra" not in s
     with pytest.raises(Lf3pmError, match="cannot read"):
         read_csv(tmp_path / "missing.csv")
+
+
+def test_a_sparse_floor_under_a_ceiling_is_driven_on_not_the_ceiling():
+    """A hall scanned sparsely: a floor at z = 0 with a few 0.25 m columns left empty along
+    the path, a ceiling at 5 m over everything. An empty floor column reads the ceiling (its
+    lowest point); it is no ground (its component, the ceiling's, lies under few path
+    samples), so the sensor keeps its height over the floor. Before, those columns were
+    ground and the sensor rose towards the ceiling (the real hall of real_hall_run: 5 m)."""
+    floor = grid_plane((-10, -5, 0.0), (1, 0, 0), (0, 1, 0), 20, 10, 0.1)
+    holes = np.zeros(len(floor), bool)
+    for x in (-3.0, 0.0, 3.0):  # 0.6 m of floor missing under the path every 3 m: whole columns
+        holes |= (np.abs(floor[:, 0] - x) < 0.3) & (np.abs(floor[:, 1]) < 0.3)
+    ceiling = grid_plane((-10, -5, 5.0), (1, 0, 0), (0, 1, 0), 20, 10, 0.2)
+    world = lf3pm.load_map(np.ascontiguousarray(np.vstack([floor[~holes], ceiling])))
+    t = np.linspace(0, 10, 1001)
+    motion = Motion.from_arrays(t, -5 + t, 0 * t, 0 * t, np.ones_like(t), 0 * t, 0 * t, map=world)
+    assert np.max(np.abs(motion.position(t)[:, 2] - DEFAULT_HEIGHT)) < 0.01

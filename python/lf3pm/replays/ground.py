@@ -9,10 +9,11 @@ is ``v^T Hess(g) v + grad(g) . a``. The surface here is built in four steps:
 
 1. column minimum on a ``cell`` grid over the region the path covers (plus a
    margin for the smoothing);
-2. ground = the cells the path can reach by steps of at most ``max_step``
-   between neighbouring columns (a plateau behind a wall -- a box top, a roof
-   -- is no ground: its columns take the value of the nearest ground column,
-   as do empty columns);
+2. ground = the cells reached by steps of at most ``max_step`` between
+   neighbouring columns from the columns under most of the path (a plateau behind
+   a wall -- a box top, a roof -- is no ground, nor is the ceiling a column reads
+   where a sparse scan left its floor empty: their columns take the value of the
+   nearest ground column, as do empty columns);
 3. a Gaussian of standard deviation ``smoothing`` (m): the wheels and the
    suspension average the ground over the robot's footprint, and the Gaussian
    bounds the curvature (about step / smoothing^2 for a step of that height);
@@ -119,7 +120,11 @@ def smooth_ground(points: np.ndarray, path_xy: np.ndarray, *, cell: float = GROU
     _, label = connected_components(graph, directed=False)
     ij = np.floor((path_xy - lo) / cell).astype(int)
     on_path = index[np.clip(ij[:, 1], 0, ny - 1), np.clip(ij[:, 0], 0, nx - 1)]
-    ground = np.isin(label, np.unique(label[on_path])).reshape(ny, nx) & known
+    # The robot drives on one connected surface: the component under most of the path. A
+    # column the floor left empty in a sparse scan reads the ceiling above it, and its own
+    # component (the ceiling's) is no ground: it takes the nearest ground column's height.
+    surface_label = np.bincount(label[on_path]).argmax()
+    ground = (label == surface_label).reshape(ny, nx) & known
 
     surface = gaussian_filter(_nearest_fill(filled, ground, distance_transform_edt), smoothing / cell,
                               mode="nearest", truncate=3.0)
