@@ -7,12 +7,16 @@ traceback for these.
 """
 
 
+def one_line(text) -> str:
+    """``text`` on one line: a newline in a path or a message shown as \\n."""
+    return str(text).replace("\r", "\\r").replace("\n", "\\n")
+
+
 def one_line_warning(message, category=None, filename=None, lineno=None, line=None) -> str:
     """A ``warnings.formatwarning`` for what users read: ``lf3pm: warning: MESSAGE`` on one
-    line (a newline shown as \\n), without Python's file:line and source line (and no
-    second "lf3pm: " where the message names its source already)."""
-    text = str(message).replace("\r", "\\r").replace("\n", "\\n")
-    return f"lf3pm: warning: {text.removeprefix('lf3pm: ')}\n"
+    line (:func:`one_line`), without Python's file:line and source line (and no second
+    "lf3pm: " where the message names its source already)."""
+    return f"lf3pm: warning: {one_line(message).removeprefix('lf3pm: ')}\n"
 
 
 class Lf3pmError(Exception):

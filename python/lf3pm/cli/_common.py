@@ -16,7 +16,7 @@ from rich.text import Text
 
 from lf3pm.atomic import check_replaceable
 from lf3pm.config import Config, help_with_default, load_config
-from lf3pm.errors import Lf3pmError, one_line_warning
+from lf3pm.errors import Lf3pmError, one_line, one_line_warning
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="LiDAR perception-aware planning: where will LiDAR localization hold?")
@@ -24,11 +24,6 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
 # and Rich would take "[red]" in a path or "[nan, 0.0]" in a message for a tag and drop it.
 console = Console(markup=False)
 err_console = Console(stderr=True, markup=False)
-
-
-def one_line(text) -> str:
-    """``text`` on one line: a newline in a path or a message shown as \\n."""
-    return str(text).replace("\r", "\\r").replace("\n", "\\n")
 
 
 def print_warning(text) -> None:

@@ -154,24 +154,30 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     total = grid.layers * grid.ny * grid.nx
     out = Path(out)
 
+    depth = 0  # storing() blocks open: the outermost says what was kept (the Ray engine nests them)
+
     @contextmanager
     def storing(where: Path):
         """A write into the store (``where``: the chunk or array written). A storage fault
         stops the build in one line: the file, the finished tiles kept, how to resume."""
+        nonlocal depth
         if not (out / "zarr.json").is_file():  # zarr would recreate the folders of a chunk it writes
             raise StorageError(f"{out}/zarr.json: the store vanished during the build (removed, or its disk "
                                f"unmounted); nothing of it is kept: remove what is left at {out}, then run "
                                f"`lf3pm solm build {world.source} -o {out}` with the same options again")
+        depth += 1
         try:
             with writing(where):
                 yield
         except StorageError as err:
-            if str(err).endswith(RESUME_HINT):  # said by an inner write (a tile's done flag)
+            if depth > 1:
                 raise
             raise StorageError(f"{err}; the build stopped with {kept} of {ty_n * tx_n} tiles finished and kept "
                                f"in {out}: free space or fix the storage, then run `lf3pm solm build "
                                f"{world.source} -o {out}` with the same options (or the same build_solm call) "
-                               f"{RESUME_HINT}") from None
+                               "again to resume it") from None
+        finally:
+            depth -= 1
 
     if ground_robot:
         occupied = grid_occupancy(world.points, grid, ground, job.robot_radius, job.floor_clearance)
@@ -206,10 +212,6 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
             finished(ty, tx, cells)
     return {"tiles": ty_n * tx_n, "built_now": len(todo), "complete": kept == ty_n * tx_n,
             "on_crops": engine == "ray" or bool(crop)}
-
-
-#: How a storage fault's message ends once it says what the build kept.
-RESUME_HINT = "again to resume it"
 
 
 def _integer(value) -> bool:
