@@ -128,10 +128,17 @@ def withheld_reason(calibration: dict | None, value: float, **conditions) -> str
     (:func:`calibration_applies`' keywords), in one line; None when it gives one."""
     if calibration is None:
         return "no fit is shipped with this lf3pm"
-    name = calibration["predictor"]
     mismatch = _mismatch(calibration, **conditions)
     if mismatch is not None:
         return f"not fitted for this query: {mismatch}"
+    return unsupported_reason(calibration, value)
+
+
+def unsupported_reason(calibration: dict, value: float) -> str | None:
+    """Why ``calibration`` gives no prediction at predictor ``value`` whatever the query's
+    conditions (a degenerate pose, a value outside its :func:`support`), in one line;
+    None when the value is inside it."""
+    name = calibration["predictor"]
     if not math.isfinite(value):
         return f"{name} is infinite: the pose is degenerate"
     if not _supported(calibration, value):

@@ -415,7 +415,7 @@ class ViewApp:
         q_n (experiments/localization_error.py), here the SOLM's q_n over the samples where
         it is known; or None and why, in one line. (None, None) without a SOLM or a fit."""
         from lf3pm.calibration import (LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error,
-                                       withheld_reason)
+                                       unsupported_reason)
 
         solm, fit = self.inputs.solm, packaged_calibration(LOCALIZATION_PACKAGED)
         if solm is None or fit is None:
@@ -428,11 +428,7 @@ class ViewApp:
             return None, "the SOLM has no q_n along the plan"
         mean = float(np.mean(known))
         predicted = predict_localization_error(fit, mean)
-        if predicted is None:
-            return None, withheld_reason(fit, mean, sensor=fit["provenance"].get("sensors", ["?"])[0], dof=6,
-                                         association="knn", scan_voxel=0, noise_is_default=True,
-                                         w1=fit["provenance"]["w1"])
-        return predicted[0], None
+        return (None, unsupported_reason(fit, mean)) if predicted is None else (predicted[0], None)
 
     # -- progress, errors and shutdown ---------------------------------------------------
 
