@@ -5,7 +5,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" "cmeel-eigen>=3.4"
 
-.PHONY: demo test build bench clean
+.PHONY: demo test lint build bench clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -25,9 +25,15 @@ build: $(STAMP)
 demo: build
 	$(PY) -m lf3pm.demo --out out
 
+# ruff (lint and format, pyproject.toml) on the Python, clang-format (.clang-format) on the C++.
+lint: build
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+	$(VENV)/bin/clang-format --dry-run --Werror $$(find cpp -name '*.[ch]pp')
+
 # The browser test of `lf3pm view` needs Debian's chromium: installed here when we may
 # (as root), else that one test is skipped with its reason.
-test: build
+test: lint
 	@command -v chromium >/dev/null 2>&1 || { [ "$$(id -u)" = 0 ] && { apt-get install -y -q chromium >/dev/null 2>&1 \
 	  || { apt-get update -q >/dev/null 2>&1 && apt-get install -y -q chromium >/dev/null 2>&1; }; }; } \
 	  || echo "chromium not installed: the browser test of lf3pm view will be skipped"

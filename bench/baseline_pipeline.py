@@ -52,8 +52,7 @@ def voxel_mesh(points: np.ndarray, normals: np.ndarray, voxel: float = 0.1):
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     v = np.cross(mean, u)
     half = 0.75 * voxel
-    corners = np.stack([centres + half * (su * u + sv * v) for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))],
-                       axis=1)
+    corners = np.stack([centres + half * (su * u + sv * v) for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))], axis=1)
     vertices = corners.reshape(-1, 3).astype(np.float32)
     quad = np.array([[0, 1, 2], [0, 2, 3]], np.uint32)
     triangles = (np.arange(len(centres), dtype=np.uint32)[:, None, None] * 4 + quad).reshape(-1, 3)
@@ -89,12 +88,13 @@ class BaselinePipeline:
         return association_and_metric(self.tree, self.map_points, hits, pose[:3, 3], self.threads)
 
 
-def association_and_metric(tree: cKDTree, map_points: np.ndarray, hits: np.ndarray,
-                           position: np.ndarray, workers: int = 1) -> float:
+def association_and_metric(
+    tree: cKDTree, map_points: np.ndarray, hits: np.ndarray, position: np.ndarray, workers: int = 1
+) -> float:
     """FAST-LIO association as a NumPy user writes it (5-NN, PCA planes, the
     0.1 m validity and sqrt(5) m gates), then q_n by SVD of A."""
     dist, idx = tree.query(hits, k=5, workers=workers)
-    nb = map_points[idx]                                     # (m, 5, 3)
+    nb = map_points[idx]  # (m, 5, 3)
     centroid = nb.mean(axis=1)
     cov = np.einsum("mki,mkj->mij", nb - centroid[:, None], nb - centroid[:, None])
     _, vecs = np.linalg.eigh(cov)

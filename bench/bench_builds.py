@@ -35,9 +35,22 @@ LEVELS = ("x86-64-v3", "x86-64", "native")
 def build_native() -> None:
     """Configure (once) and build the core with LF3PM_ARCH=native into NATIVE_BUILD."""
     if not (NATIVE_BUILD / "build.ninja").exists():
-        subprocess.run(["cmake", "-S", str(ROOT), "-B", str(NATIVE_BUILD), "-G", "Ninja", "-DLF3PM_ARCH=native",
-                        f"-DPython_EXECUTABLE={sys.executable}", "-DCMAKE_BUILD_TYPE=Release"],
-                       check=True, stdout=subprocess.DEVNULL)
+        subprocess.run(
+            [
+                "cmake",
+                "-S",
+                str(ROOT),
+                "-B",
+                str(NATIVE_BUILD),
+                "-G",
+                "Ninja",
+                "-DLF3PM_ARCH=native",
+                f"-DPython_EXECUTABLE={sys.executable}",
+                "-DCMAKE_BUILD_TYPE=Release",
+            ],
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
     start = time.perf_counter()
     subprocess.run(["cmake", "--build", str(NATIVE_BUILD)], check=True, stdout=subprocess.DEVNULL)
     print(f"native core built in {NATIVE_BUILD.relative_to(ROOT)} ({time.perf_counter() - start:.0f} s)")
@@ -52,7 +65,7 @@ class _BuildFolder(importlib.abc.MetaPathFinder):
 
     def find_spec(self, name, path=None, target=None):
         prefix = "lf3pm._core."
-        candidate = self.folder / (name[len(prefix):] + self.suffix)
+        candidate = self.folder / (name[len(prefix) :] + self.suffix)
         if name.startswith(prefix) and candidate.exists():
             return importlib.util.spec_from_file_location(name, candidate)
         return None
@@ -66,16 +79,16 @@ def child(level: str, repeat: int) -> None:
     import hashlib
 
     import numpy as np
-
-    import lf3pm
     from bench_evaluate import town_map
     from bench_planner_backend import scenario
+
+    import lf3pm
     from lf3pm import _core
     from lf3pm.config import scan_params
     from lf3pm.experiments.free_poses import random_free_poses
     from lf3pm.metric import eval_params
-    from lf3pm.trajectory import Robot, make_problem
     from lf3pm.solm.tiles import pose_matrices
+    from lf3pm.trajectory import Robot, make_problem
 
     assert _core.ARCH == level, _core.ARCH
     digest = hashlib.sha256()
@@ -102,18 +115,22 @@ def child(level: str, repeat: int) -> None:
 
     gobi = lf3pm.load_map(lf3pm.build_scene("gobi").points)
     mid70 = lf3pm.get_sensor("mid70")
-    poses = np.array(random_free_poses(gobi, 64, np.random.default_rng(0), sensor_height=1.0,
-                                       region=(-40.0, -40.0, 40.0, 40.0)))
+    poses = np.array(
+        random_free_poses(gobi, 64, np.random.default_rng(0), sensor_height=1.0, region=(-40.0, -40.0, 40.0, 40.0))
+    )
     matrices = pose_matrices(*poses.T)
     streams = np.arange(len(matrices), dtype=np.uint64)
     cells = eval_params(mid70.min_range, mid70.max_range, threads=2)
-    out["solm"], many = median(lambda: _core.evaluate_many(gobi.index, matrices, streams, mid70.directions, cells),
-                               max(1, repeat // 5))
+    out["solm"], many = median(
+        lambda: _core.evaluate_many(gobi.index, matrices, streams, mid70.directions, cells), max(1, repeat // 5)
+    )
     digest.update(np.ascontiguousarray(many["q_n"]).tobytes())
 
     waypoints, cost, esdf = scenario(0)
-    for kind, robot in (("omni", Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0)),
-                        ("car", Robot("car", vmax_lon=1.5, wmax=1.0, min_turn_radius=2.0))):
+    for kind, robot in (
+        ("omni", Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0)),
+        ("car", Robot("car", vmax_lon=1.5, wmax=1.0, min_turn_radius=2.0)),
+    ):
         problem = make_problem(waypoints, cost, esdf, robot, samples=16, piece_length=2.0)
         lbfgs = _core.trajectory_lbfgs()
         out[kind], result = median(lambda: problem.optimize(lbfgs), max(3, repeat // 3))
@@ -123,8 +140,14 @@ def child(level: str, repeat: int) -> None:
     print(json.dumps(out))
 
 
-COLUMNS = (("index", "index (1 thread)"), ("cast", "VLP-16 cast"), ("evaluate", "VLP-16 evaluate"),
-           ("solm", "64 gobi cells (Mid-70, 2 threads)"), ("omni", "trajectory omni"), ("car", "trajectory car"))
+COLUMNS = (
+    ("index", "index (1 thread)"),
+    ("cast", "VLP-16 cast"),
+    ("evaluate", "VLP-16 evaluate"),
+    ("solm", "64 gobi cells (Mid-70, 2 threads)"),
+    ("omni", "trajectory omni"),
+    ("car", "trajectory car"),
+)
 
 
 def main() -> None:
@@ -142,8 +165,13 @@ def main() -> None:
     rows = {}
     for _ in range(args.rounds):
         for level in LEVELS:
-            run = subprocess.run([sys.executable, __file__, "--child", level, "--repeat", str(args.repeat)],
-                                 check=True, capture_output=True, text=True, cwd=Path(__file__).parent)
+            run = subprocess.run(
+                [sys.executable, __file__, "--child", level, "--repeat", str(args.repeat)],
+                check=True,
+                capture_output=True,
+                text=True,
+                cwd=Path(__file__).parent,
+            )
             row = json.loads(run.stdout.strip().splitlines()[-1])
             best = rows.setdefault(level, row)
             for key, _ in COLUMNS:

@@ -38,7 +38,7 @@ def exact_distance(blocked, px, py, chunk=4000):
     ny, nx = blocked.shape
     out = np.empty(px.shape)
     for a in range(0, px.size, chunk):
-        x, y = px[a:a + chunk, None], py[a:a + chunk, None]
+        x, y = px[a : a + chunk, None], py[a : a + chunk, None]
 
         def nearest(cells):
             if len(cells) == 0:
@@ -46,10 +46,11 @@ def exact_distance(blocked, px, py, chunk=4000):
             dx = np.maximum(np.maximum(cells[:, 1] - x, x - cells[:, 1] - 1), 0)
             dy = np.maximum(np.maximum(cells[:, 0] - y, y - cells[:, 0] - 1), 0)
             return np.hypot(dx, dy).min(axis=1)
+
         outside = nearest(np.argwhere(blocked))
         edge = np.minimum.reduce([x[:, 0], nx - x[:, 0], y[:, 0], ny - y[:, 0]])
         inside = np.minimum(nearest(np.argwhere(~blocked)), np.maximum(edge, 0))
-        out[a:a + chunk] = np.where(outside > 0, outside, -inside)
+        out[a : a + chunk] = np.where(outside > 0, outside, -inside)
     return out
 
 
@@ -60,7 +61,7 @@ def mask(kind: str, rng):
     blocked = np.zeros((24, 30), bool)
     for _ in range(5):
         y, x = rng.integers(0, 24), rng.integers(0, 30)
-        blocked[y:y + rng.integers(1, 6), x:x + rng.integers(1, 6)] = True
+        blocked[y : y + rng.integers(1, 6), x : x + rng.integers(1, 6)] = True
     return blocked
 
 
@@ -90,9 +91,11 @@ def accuracy(kind: str, masks: int, points: int):
             for lo, hi in BANDS:
                 bands[name, (lo, hi)].append(-error[(exact >= lo) & (exact < hi)])
             centres[name].append((at_centres - values)[~blocked])
-    print(f"{kind}: largest optimism (field - exact), cells, outside / inside obstacles: "
-          f"old {optimism['old'][0]:+.3f} / {optimism['old'][1]:+.3f}, "
-          f"ours {optimism['ours'][0]:+.2e} / {optimism['ours'][1]:+.2e}")
+    print(
+        f"{kind}: largest optimism (field - exact), cells, outside / inside obstacles: "
+        f"old {optimism['old'][0]:+.3f} / {optimism['old'][1]:+.3f}, "
+        f"ours {optimism['ours'][0]:+.2e} / {optimism['ours'][1]:+.2e}"
+    )
     print("  pessimism (exact - field), cells, by exact distance: mean / median / max (old | ours)")
     for lo, hi in BANDS:
         cols = []
@@ -102,8 +105,10 @@ def accuracy(kind: str, masks: int, points: int):
         print(f"  [{lo:4.2f}, {hi:4.2f}): " + " | ".join(cols))
     for name in optimism:
         p = np.concatenate(centres[name])
-        print(f"  free centres, {name}: mean {p.mean():+.3f}, median {np.median(p):+.3f}, "
-              f"min {p.min():+.3f}, max {p.max():+.3f}")
+        print(
+            f"  free centres, {name}: mean {p.mean():+.3f}, median {np.median(p):+.3f}, "
+            f"min {p.min():+.3f}, max {p.max():+.3f}"
+        )
 
 
 def timing(shape, repeat):
@@ -111,7 +116,7 @@ def timing(shape, repeat):
     blocked = np.zeros(shape, bool)
     for _ in range(blocked.size // 350):
         y, x = rng.integers(0, shape[0]), rng.integers(0, shape[1])
-        blocked[y:y + rng.integers(1, 6), x:x + rng.integers(1, 6)] = True
+        blocked[y : y + rng.integers(1, 6), x : x + rng.integers(1, 6)] = True
     times = {}
     for name, build in (("old", lambda: old_values(blocked)), ("ours", lambda: Esdf.from_mask(blocked, 0, 0, 1.0))):
         start = time.perf_counter()
@@ -119,8 +124,10 @@ def timing(shape, repeat):
             build()
         times[name] = (time.perf_counter() - start) / repeat
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"build on {shape[0]} x {shape[1]}: old {times['old'] * 1e3:.1f} ms, ours {times['ours'] * 1e3:.0f} ms, "
-          f"ours / old = {times['ours'] / times['old']:.0f}; peak resident so far {peak:.0f} MB")
+    print(
+        f"build on {shape[0]} x {shape[1]}: old {times['old'] * 1e3:.1f} ms, ours {times['ours'] * 1e3:.0f} ms, "
+        f"ours / old = {times['ours'] / times['old']:.0f}; peak resident so far {peak:.0f} MB"
+    )
 
 
 def main():

@@ -33,7 +33,6 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-
 from bench_maps import MAPS, ground_height
 
 import lf3pm
@@ -59,8 +58,9 @@ def embree_scene(world):
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     a, b = u * radius, np.cross(normals, u) * radius
     corners = [centres - a - b, centres + a - b, centres + a + b, centres - a + b]
-    triangles = np.concatenate([np.stack([corners[0], corners[1], corners[2]], axis=1),
-                                np.stack([corners[0], corners[2], corners[3]], axis=1)]).astype(np.float32)
+    triangles = np.concatenate(
+        [np.stack([corners[0], corners[1], corners[2]], axis=1), np.stack([corners[0], corners[2], corners[3]], axis=1)]
+    ).astype(np.float32)
     scene = rtcore_scene.EmbreeScene()
     TriangleMesh(scene, triangles)
     return scene
@@ -136,36 +136,53 @@ def run_map(name: str, sensors, heights, repeat: int) -> list[dict]:
     scene = embree_scene(world)
     if scene is None:
         print("Embree baseline skipped: pip install embreex")
-    print(f"{name}: {world.size:,} points, indexed in {index_s:.1f} s ({world.index.memory_bytes / 2**20:.0f} MiB)",
-          flush=True)
+    print(
+        f"{name}: {world.size:,} points, indexed in {index_s:.1f} s ({world.index.memory_bytes / 2**20:.0f} MiB)",
+        flush=True,
+    )
     rows = []
     for sensor_name in sensors:
         sensor = lf3pm.get_sensor(sensor_name)
         for height in heights:
-            per_pose = [measure(world, scene, sensor, pose_matrix(
-                (x, y, ground_height(world.points, (x, y)) + height, 0.0)), repeat) for x, y in positions]
+            per_pose = [
+                measure(
+                    world, scene, sensor, pose_matrix((x, y, ground_height(world.points, (x, y)) + height, 0.0)), repeat
+                )
+                for x, y in positions
+            ]
             keys = ("cast", "association", "metric", "evaluate", "api", "embree")
             row = {k: float(np.sum([p[k] for p in per_pose])) for k in keys}
-            row.update(map=name, points=world.size, sensor=sensor_name, height=height, poses=len(per_pose),
-                       rays=sum(p["rays"] for p in per_pose), hits=sum(p["hits"] for p in per_pose),
-                       agree=float(np.mean([p["agree"] for p in per_pose])))
+            row.update(
+                map=name,
+                points=world.size,
+                sensor=sensor_name,
+                height=height,
+                poses=len(per_pose),
+                rays=sum(p["rays"] for p in per_pose),
+                hits=sum(p["hits"] for p in per_pose),
+                agree=float(np.mean([p["agree"] for p in per_pose])),
+            )
             rows.append(row)
             print(format_row(row), flush=True)
     return rows
 
 
-HEADER = ("| map | points | sensor | height (m) | hits / rays | cast (ms) | association (ms) | metric (µs) | "
-          "Embree (ms) | cast / Embree | evaluate / Embree | api overhead (ms) | agree |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+HEADER = (
+    "| map | points | sensor | height (m) | hits / rays | cast (ms) | association (ms) | metric (µs) | "
+    "Embree (ms) | cast / Embree | evaluate / Embree | api overhead (ms) | agree |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+)
 
 
 def format_row(r: dict) -> str:
     n = r["poses"]
-    return (f"| {r['map']} | {r['points'] / 1e6:.2f} M | {r['sensor']} | {r['height']:.1f} | "
-            f"{r['hits'] / r['rays']:.0%} of {r['rays'] // n:,} | {r['cast'] / n * 1e3:.1f} | "
-            f"{r['association'] / n * 1e3:.1f} | {r['metric'] / n * 1e6:.0f} | {r['embree'] / n * 1e3:.1f} | "
-            f"**{r['cast'] / r['embree']:.2f}×** | **{r['evaluate'] / r['embree']:.2f}×** | "
-            f"{r['api'] / n * 1e3:.2f} | {r['agree']:.1%} |")
+    return (
+        f"| {r['map']} | {r['points'] / 1e6:.2f} M | {r['sensor']} | {r['height']:.1f} | "
+        f"{r['hits'] / r['rays']:.0%} of {r['rays'] // n:,} | {r['cast'] / n * 1e3:.1f} | "
+        f"{r['association'] / n * 1e3:.1f} | {r['metric'] / n * 1e6:.0f} | {r['embree'] / n * 1e3:.1f} | "
+        f"**{r['cast'] / r['embree']:.2f}×** | **{r['evaluate'] / r['embree']:.2f}×** | "
+        f"{r['api'] / n * 1e3:.2f} | {r['agree']:.1%} |"
+    )
 
 
 def main() -> None:
@@ -185,11 +202,13 @@ def main() -> None:
     rows = [row for name in maps for row in run_map(name, args.sensors.split(","), heights, args.repeat)]
     worst_cast = max(rows, key=lambda r: r["cast"] / r["embree"])
     worst_eval = max(rows, key=lambda r: r["evaluate"] / r["embree"])
-    summary = (f"\nworst cast / Embree {worst_cast['cast'] / worst_cast['embree']:.2f}x "
-               f"({worst_cast['map']}, {worst_cast['sensor']} at {worst_cast['height']} m); "
-               f"worst evaluate / Embree {worst_eval['evaluate'] / worst_eval['embree']:.2f}x "
-               f"({worst_eval['map']}, {worst_eval['sensor']} at {worst_eval['height']} m); "
-               f"api overhead at most {max(r['api'] / r['poses'] for r in rows) * 1e3:.2f} ms")
+    summary = (
+        f"\nworst cast / Embree {worst_cast['cast'] / worst_cast['embree']:.2f}x "
+        f"({worst_cast['map']}, {worst_cast['sensor']} at {worst_cast['height']} m); "
+        f"worst evaluate / Embree {worst_eval['evaluate'] / worst_eval['embree']:.2f}x "
+        f"({worst_eval['map']}, {worst_eval['sensor']} at {worst_eval['height']} m); "
+        f"api overhead at most {max(r['api'] / r['poses'] for r in rows) * 1e3:.2f} ms"
+    )
     print(summary)
     if args.markdown:
         args.markdown.parent.mkdir(parents=True, exist_ok=True)

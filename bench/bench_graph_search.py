@@ -107,16 +107,20 @@ def car_row(name, cost, esdf, start, goal, epsilon: float = 1.0) -> None:
     """One car query: Hybrid-A* (heuristic weight epsilon) against r2 A* on the cells at
     the same clearance."""
     try:
-        car = search_car_path(cost, esdf, start, goal, radius=CAR_R, weight=WEIGHT, clearance=CAR_CLEARANCE,
-                              heuristic_weight=epsilon)
+        car = search_car_path(
+            cost, esdf, start, goal, radius=CAR_R, weight=WEIGHT, clearance=CAR_CLEARANCE, heuristic_weight=epsilon
+        )
     except Lf3pmError as err:
         print(f"car {name}, epsilon {epsilon}: {err}")
         return
     grid = search_path(cost, esdf, esdf, start, goal, weight=WEIGHT, r_safe=CAR_CLEARANCE)
-    print(f"car {name}, epsilon {epsilon}: hybrid {car.time:.3f} s, {car.expanded} expanded (+ {car.relaxed_cells} x-y cells "
-          f"backward), {car.analytic_tries} Dubins tries, length {car.length:.2f} m, cost {car.cost:.3f}; "
-          f"r2 A* {grid.time:.3f} s, length {grid.length:.2f} m, cost {grid.cost:.3f}; "
-          f"hybrid / r2 A* {car.time / grid.time:.1f}x time, {car.cost / grid.cost:.3f}x cost")
+    print(
+        f"car {name}, epsilon {epsilon}: hybrid {car.time:.3f} s, {car.expanded} expanded "
+        f"(+ {car.relaxed_cells} x-y cells "
+        f"backward), {car.analytic_tries} Dubins tries, length {car.length:.2f} m, cost {car.cost:.3f}; "
+        f"r2 A* {grid.time:.3f} s, length {grid.length:.2f} m, cost {grid.cost:.3f}; "
+        f"hybrid / r2 A* {car.time / grid.time:.1f}x time, {car.cost / grid.cost:.3f}x cost"
+    )
 
 
 def boxes_solm(path: str | None):
@@ -125,8 +129,10 @@ def boxes_solm(path: str | None):
     if path:
         return Solm.open(path)
     tmp = Path(tempfile.mkdtemp())
-    for args in (["scene", "boxes", "-o", tmp / "boxes.pcd"],
-                 ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"]):
+    for args in (
+        ["scene", "boxes", "-o", tmp / "boxes.pcd"],
+        ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"],
+    ):
         subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
     return Solm.open(tmp / "boxes.zarr")
 
@@ -138,7 +144,7 @@ def car_cases(trav, cost, angle, boxes: str | None) -> None:
     for route, (start, goal) in routes(esdf.traversable(CAR_CLEARANCE + 0.3)).items():
         # Corner to corner, epsilon = 1 gives up after 2 M expansions (G's 1 / kappa leaves
         # ~8 % of slack over 140 m); weighted A* with 1.2 finds a path within 2 %.
-        for epsilon in ((1.2,) if route == "corner to corner" else (1.0, 1.2)):
+        for epsilon in (1.2,) if route == "corner to corner" else (1.0, 1.2):
             car_row(f"{n} x {n} {route}", cost, esdf, start, goal, epsilon)
     solm = boxes_solm(boxes)
     esdf = Esdf.from_solm(solm)
@@ -159,9 +165,11 @@ def car_cases(trav, cost, angle, boxes: str | None) -> None:
             continue
         grid = search_path(layer, esdf, esdf, a, b, weight=WEIGHT, r_safe=CAR_CLEARANCE)
         total_car, total_grid, count = total_car + car.time, total_grid + grid.time, count + 1
-    print(f"car boxes ({esdf.nx} x {esdf.ny} cells of {esdf.res} m), 20 random queries: hybrid "
-          f"{1e3 * total_car / count:.2f} ms, r2 A* {1e3 * total_grid / count:.2f} ms per query, "
-          f"{total_car / total_grid:.1f}x")
+    print(
+        f"car boxes ({esdf.nx} x {esdf.ny} cells of {esdf.res} m), 20 random queries: hybrid "
+        f"{1e3 * total_car / count:.2f} ms, r2 A* {1e3 * total_grid / count:.2f} ms per query, "
+        f"{total_car / total_grid:.1f}x"
+    )
 
 
 def main() -> None:
@@ -187,16 +195,22 @@ def main() -> None:
     dist = dijkstra(graph, indices=10 * n + 10)
     scipy_s = time.perf_counter() - t
     del graph
-    print(f"r2 scipy csgraph.dijkstra from the first corner: {scipy_s:.2f} s (graph build {build_s:.2f} s "
-          f"not counted), cost to the other {dist[(n - 11) * n + (n - 11)]:.4f}")
+    print(
+        f"r2 scipy csgraph.dijkstra from the first corner: {scipy_s:.2f} s (graph build {build_s:.2f} s "
+        f"not counted), cost to the other {dist[(n - 11) * n + (n - 11)]:.4f}"
+    )
     for route, (start, goal) in routes(trav).items():
         p = {}
         for name, heuristic in (("Dijkstra", False), ("A*", True)):
             p[name] = search_path(cost, trav, grid, start, goal, weight=WEIGHT, heuristic=heuristic)
-            print(f"r2 {route}, ours {name:8s}: {p[name].time:.3f} s, {p[name].expanded} expanded, "
-                  f"cost {p[name].cost:.4f}, scipy / ours {scipy_s / p[name].time:.1f}x")
-        print(f"r2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.2f}x time, "
-              f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded")
+            print(
+                f"r2 {route}, ours {name:8s}: {p[name].time:.3f} s, {p[name].expanded} expanded, "
+                f"cost {p[name].cost:.4f}, scipy / ours {scipy_s / p[name].time:.1f}x"
+            )
+        print(
+            f"r2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.2f}x time, "
+            f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded"
+        )
     if args.no_se2:
         car_cases(trav, cost, angle, args.boxes)
         return
@@ -205,8 +219,10 @@ def main() -> None:
     yaw = np.arange(bins)[:, None, None] * 2 * math.pi / bins
     # Perception cost depends on heading: better when facing a direction that varies over the map.
     cost3 = cost[None] * (1.0 + 0.5 * np.cos(yaw - angle[None]))
-    print(f"se2 {n} x {n} x {bins} = {cost3.size / 1e6:.0f} M states, turn radius 0.5 m; "
-          f"process peak RSS before {peak_mb():.0f} MB")
+    print(
+        f"se2 {n} x {n} x {bins} = {cost3.size / 1e6:.0f} M states, turn radius 0.5 m; "
+        f"process peak RSS before {peak_mb():.0f} MB"
+    )
     for route, (start, goal) in routes(trav).items():
         p = {}
         for name, heuristic in (("A*", True), ("Dijkstra", False)):
@@ -216,12 +232,16 @@ def main() -> None:
             # g and the state byte per state, the heap; A*: the x-y pass's two doubles and two bytes per cell.
             core_mb = (cost3.size * 9 + q.heap_peak * 16 + (n * n * 18 if heuristic else 0)) / 2**20
             relaxed = f" (+ {q.relaxed_expanded} x-y cells backward)" if heuristic else ""
-            print(f"se2 {route}, ours {name:8s}: {q.time:.2f} s search ({wall:.2f} s with input checks), "
-                  f"{q.expanded} expanded{relaxed}, cost {q.cost:.4f}, heap peak {q.heap_peak}, "
-                  f"search memory {core_mb:.0f} MB, "
-                  f"process peak RSS {peak_mb():.0f} MB")
-        print(f"se2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.1f}x time, "
-              f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded")
+            print(
+                f"se2 {route}, ours {name:8s}: {q.time:.2f} s search ({wall:.2f} s with input checks), "
+                f"{q.expanded} expanded{relaxed}, cost {q.cost:.4f}, heap peak {q.heap_peak}, "
+                f"search memory {core_mb:.0f} MB, "
+                f"process peak RSS {peak_mb():.0f} MB"
+            )
+        print(
+            f"se2 {route}: Dijkstra / A* {p['Dijkstra'].time / p['A*'].time:.1f}x time, "
+            f"{p['Dijkstra'].expanded / p['A*'].expanded:.1f}x expanded"
+        )
     car_cases(trav, cost, angle, args.boxes)
 
 

@@ -9,14 +9,14 @@ positions the sensor stands on, ground height there). Real maps come from
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 GROUND_STEP = 0.10  # m: ground sampling of every synthetic map
-WALL_STEP = 0.05    # m: walls, trunks and vaults
-ROUGHNESS = 0.005   # m: Gaussian jitter of every synthetic point
+WALL_STEP = 0.05  # m: walls, trunks and vaults
+ROUGHNESS = 0.005  # m: Gaussian jitter of every synthetic point
 
 
 @dataclass(frozen=True)
@@ -42,8 +42,12 @@ def _wall(x0, y0, x1, y1, height, step=WALL_STEP):
 
 def _box(cx, cy, w, d, h, step=WALL_STEP):
     x0, x1, y0, y1 = cx - w / 2, cx + w / 2, cy - d / 2, cy + d / 2
-    return [_wall(x0, y0, x1, y0, h, step), _wall(x0, y1, x1, y1, h, step),
-            _wall(x0, y0, x0, y1, h, step), _wall(x1, y0, x1, y1, h, step)]
+    return [
+        _wall(x0, y0, x1, y0, h, step),
+        _wall(x0, y1, x1, y1, h, step),
+        _wall(x0, y0, x0, y1, h, step),
+        _wall(x1, y0, x1, y1, h, step),
+    ]
 
 
 def _finish(parts, seed):
@@ -93,6 +97,7 @@ def forest(seed: int = 0, half: float = 40.0, trunks: int = 400):
 def tunnel(seed: int = 0):
     """lf3pm's tunnel scene (docs/scenes.md): a vaulted tunnel with a structured lane."""
     from lf3pm.scenes import build_scene
+
     scene = build_scene("tunnel", seed=seed)
     x, y = scene.reference_pose[:2]
     return scene.points, np.array([(x, y), (x + 10.0, y), (x - 10.0, y)])
@@ -114,6 +119,7 @@ def free_positions(points: np.ndarray, count: int = 3, clearance: float = 0.4, s
     `clearance` m of free space: on a `step` m lattice over the map's central half, the
     ones nearest the centre, at least 3 m apart, over ground (ground_height) seen by 10 points."""
     from scipy.spatial import cKDTree
+
     tree = cKDTree(points)
     lo, hi = np.percentile(points[:, :2], [25, 75], axis=0)
     centre = 0.5 * (lo + hi)
@@ -128,8 +134,7 @@ def free_positions(points: np.ndarray, count: int = 3, clearance: float = 0.4, s
             continue
         ground = ground_height(column, xy)
         probes = [(xy[0], xy[1], ground + h) for h in (0.5, 1.0)]
-        if (min(tree.query(probes)[0]) >= clearance
-                and all(np.hypot(*(xy - c)) >= 3.0 for c in chosen)):
+        if min(tree.query(probes)[0]) >= clearance and all(np.hypot(*(xy - c)) >= 3.0 for c in chosen):
             chosen.append(xy)
             if len(chosen) == count:
                 break
@@ -138,20 +143,26 @@ def free_positions(points: np.ndarray, count: int = 3, clearance: float = 0.4, s
 
 def real_map(file: str):
     def build():
-        from lf3pm.io import load_points
         from lf3pm.experiments.data import shared_data_dir
+        from lf3pm.io import load_points
+
         points = load_points(str(shared_data_dir() / file))
         return points, free_positions(points)
+
     return build
 
 
-MAPS = {m.name: m for m in (
-    BenchMap("town", "120 m street grid, 10 cm ground, 5 cm walls", town),
-    BenchMap("street", "140 m street, 10 cm ground, 5 cm facades", street),
-    BenchMap("tunnel", "lf3pm's tunnel scene", tunnel),
-    BenchMap("forest", "400 trunks on 10 cm ground", forest),
-    BenchMap("room", "indoor_pcl_room_scan1 (real)", real_map("indoor_pcl_room_scan1.pcd"), True),
-    BenchMap("urban64", "outdoor_urban64 scan (real)",
-             real_map("outdoor_urban64_2021-10-26-16-21-29-468.pcd"), True),
-    BenchMap("site", "220 m street grid, 10 M points", site),
-)}
+MAPS = {
+    m.name: m
+    for m in (
+        BenchMap("town", "120 m street grid, 10 cm ground, 5 cm walls", town),
+        BenchMap("street", "140 m street, 10 cm ground, 5 cm facades", street),
+        BenchMap("tunnel", "lf3pm's tunnel scene", tunnel),
+        BenchMap("forest", "400 trunks on 10 cm ground", forest),
+        BenchMap("room", "indoor_pcl_room_scan1 (real)", real_map("indoor_pcl_room_scan1.pcd"), True),
+        BenchMap(
+            "urban64", "outdoor_urban64 scan (real)", real_map("outdoor_urban64_2021-10-26-16-21-29-468.pcd"), True
+        ),
+        BenchMap("site", "220 m street grid, 10 M points", site),
+    )
+}

@@ -41,8 +41,9 @@ def main() -> None:
     t = np.arange(int(args.seconds * 100) + 1) / 100.0
     # A smooth drive with a turn: values, rates and accelerations of a known curve.
     p, v, a = np.sin(0.3 * t) * 10, 3 * np.cos(0.3 * t), -0.9 * np.sin(0.3 * t)
-    base_s, base = best_of(args.repeats, lambda: PPoly.from_bernstein_basis(
-        BPoly.from_derivatives(t, np.column_stack([p, v, a]))))
+    base_s, base = best_of(
+        args.repeats, lambda: PPoly.from_bernstein_basis(BPoly.from_derivatives(t, np.column_stack([p, v, a])))
+    )
     ours_s, ours = best_of(args.repeats, lambda: quintic_hermite(t, p, v, a))
     at = rng.uniform(t[0], t[-1], 10_000)
     diffs = [float(np.max(np.abs(base(at, k) - ours(at, k)))) for k in range(3)]
@@ -55,8 +56,9 @@ def main() -> None:
     xs, ys = np.meshgrid(np.arange(-5.0, 5.0 + args.seconds, 0.5), np.arange(-5.0, 5.1, 0.5))
     world = lf3pm.load_map(np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)]))
     zero = np.zeros_like(t)
-    motion_s, _ = best_of(args.repeats, lambda: Motion.from_arrays(t, t, zero, zero, np.ones_like(t), zero, zero,
-                                                                   map=world))
+    motion_s, _ = best_of(
+        args.repeats, lambda: Motion.from_arrays(t, t, zero, zero, np.ones_like(t), zero, zero, map=world)
+    )
     print(f"Motion.from_arrays, straight {args.seconds:g} s drive (ground fit included): {motion_s:.3f} s")
 
 

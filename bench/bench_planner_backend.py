@@ -67,8 +67,14 @@ def scipy_baseline(problem, tol):
         if len(history) > 3 and history[-4] - history[-1] <= tol * max(1.0, abs(history[-1])):
             raise StopIteration
 
-    r = minimize(problem.evaluate, problem.initial.copy(), jac=True, method="L-BFGS-B", callback=stop,
-                 options={"maxcor": 8, "maxiter": 100000, "maxfun": 1000000, "ftol": 0.0, "gtol": 1e-6})
+    r = minimize(
+        problem.evaluate,
+        problem.initial.copy(),
+        jac=True,
+        method="L-BFGS-B",
+        callback=stop,
+        options={"maxcor": 8, "maxiter": 100000, "maxfun": 1000000, "ftol": 0.0, "gtol": 1e-6},
+    )
     return problem.details(r.x)["total"], r.nit
 
 
@@ -79,12 +85,16 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     waypoints, cost, esdf = scenario(args.seed)
-    print(f"path ~{np.sum(np.hypot(*np.diff(waypoints[:, :2], axis=0).T)):.0f} m, seed {args.seed}, "
-          f"rel_cost_tol {args.rel_cost_tol}, one thread")
-    robots = {"omni box": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0, vmax_norm=math.inf),
-              "omni": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0),
-              "diff": Robot("diff", vmax_lon=1.5, wmax=1.0),
-              "car": Robot("car", vmax_lon=1.5, wmax=1.0, min_turn_radius=2.0)}
+    print(
+        f"path ~{np.sum(np.hypot(*np.diff(waypoints[:, :2], axis=0).T)):.0f} m, seed {args.seed}, "
+        f"rel_cost_tol {args.rel_cost_tol}, one thread"
+    )
+    robots = {
+        "omni box": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0, vmax_norm=math.inf),
+        "omni": Robot("omni", vmax_lon=1.5, vmax_lat=1.0, wmax=1.0),
+        "diff": Robot("diff", vmax_lon=1.5, wmax=1.0),
+        "car": Robot("car", vmax_lon=1.5, wmax=1.0, min_turn_radius=2.0),
+    }
     for kind, robot in robots.items():
         problem = make_problem(waypoints, cost, esdf, robot, samples=16, piece_length=2.0)
         row = {}
@@ -95,8 +105,10 @@ def main() -> None:
                 f, iterations = fn(problem, args.rel_cost_tol)
                 times.append(time.perf_counter() - start)
             row[name] = min(times)
-            print(f"{kind:8s} {name:18s} {1e3 * min(times):9.1f} ms  objective {f:9.3f}  "
-                  f"iterations {iterations:6d}  ({problem.dimension} variables)")
+            print(
+                f"{kind:8s} {name:18s} {1e3 * min(times):9.1f} ms  objective {f:9.3f}  "
+                f"iterations {iterations:6d}  ({problem.dimension} variables)"
+            )
         ours_t, base_t = row["ours (C++ L-BFGS)"], row["scipy L-BFGS-B"]
         print(f"{kind:8s} speed-up {base_t / ours_t:.1f}x (scipy / ours)")
 

@@ -29,15 +29,16 @@ from kinematics import kinematic_checks  # noqa: E402
 
 from lf3pm.errors import Lf3pmError  # noqa: E402
 from lf3pm.planner import Planner  # noqa: E402
-from lf3pm.trajectory import Robot  # noqa: E402
 from lf3pm.solm.reader import Solm  # noqa: E402
+from lf3pm.trajectory import Robot  # noqa: E402
 
 
 def build_boxes(folder: Path) -> Path:
     """The `boxes` scene's SOLM, as tests/test_plan.py builds it."""
-    for args in (["scene", "boxes", "-o", folder / "boxes.pcd"],
-                 ["solm", "build", folder / "boxes.pcd", "-o", folder / "boxes.zarr", "--res", "0.5",
-                  "--ray-stride", "4"]):
+    for args in (
+        ["scene", "boxes", "-o", folder / "boxes.pcd"],
+        ["solm", "build", folder / "boxes.pcd", "-o", folder / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"],
+    ):
         subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
     return folder / "boxes.zarr"
 
@@ -78,8 +79,10 @@ def run(solm_path: Path, kind: str, seed: int, queries: int = 20) -> None:
             feasible += 1
         else:
             failures.append((done, [name for name, ok in result.items() if not ok]))
-    print(f"{kind}, seed {seed}: {feasible}/{queries} plans meet every limit; {no_path} queries had no plan; "
-          f"median plan time {1e3 * np.median(times):.0f} ms")
+    print(
+        f"{kind}, seed {seed}: {feasible}/{queries} plans meet every limit; {no_path} queries had no plan; "
+        f"median plan time {1e3 * np.median(times):.0f} ms"
+    )
     for number, names in failures:
         print(f"  query {number}: misses {', '.join(names)}")
 

@@ -13,7 +13,6 @@ import argparse
 import time
 
 import numpy as np
-
 from bench_evaluate import embree_scene
 
 import lf3pm
@@ -35,8 +34,9 @@ def main() -> None:
     world = lf3pm.load_map(build_scene("gobi", seed=args.seed).points, threads=0)
     sensor = lf3pm.get_sensor("vlp16")
     lo, hi = world.bounds
-    cells = random_free_poses(world, args.cells, np.random.default_rng(args.seed), sensor_height=1.0,
-                              region=(lo[0], lo[1], hi[0], hi[1]))
+    cells = random_free_poses(
+        world, args.cells, np.random.default_rng(args.seed), sensor_height=1.0, region=(lo[0], lo[1], hi[0], hi[1])
+    )
     poses = [pose_matrix((x, y, z, 0.0)) for x, y, z in np.asarray(cells)[:, :3]]
     scene = embree_scene(world)
     if scene is None:
@@ -48,21 +48,24 @@ def main() -> None:
         dirs = (sensor.directions @ pose[:3, :3].T).astype(np.float32)
         origins = np.repeat(pose[None, :3, 3], len(dirs), axis=0).astype(np.float32)
         scene.run(origins, dirs, output=1)  # the BVH is built outside the timing
-        for name, run in (("embree", lambda: scene.run(origins, dirs, output=1)),
-                          ("cast", lambda: _core.simulate_scan(world.index, pose, sensor.directions, cast_params)),
-                          ("cell", lambda: _core.evaluate(world.index, pose, sensor.directions, eval_params))):
+        for name, run in (
+            ("embree", lambda: scene.run(origins, dirs, output=1)),
+            ("cast", lambda: _core.simulate_scan(world.index, pose, sensor.directions, cast_params)),
+            ("cell", lambda: _core.evaluate(world.index, pose, sensor.directions, eval_params)),
+        ):
             best = np.inf
             for _ in range(3):
                 t = time.perf_counter()
                 run()
                 best = min(best, time.perf_counter() - t)
             times[name] += best / len(poses)
-    print(f"gobi: {world.size:,} points, {len(poses)} random free cells, VLP-16 ({sensor.num_rays:,} rays), "
-          f"one thread")
-    print("| per cell, one core | ms | whole gobi R² 0.2 m on "
-          f"{args.cores} cores |\n|---|---|---|")
-    for label, key in (("Embree casting alone (the floor)", "embree"), ("lf3pm casting alone", "cast"),
-                       ("lf3pm exact cell (cast, association, metric)", "cell")):
+    print(f"gobi: {world.size:,} points, {len(poses)} random free cells, VLP-16 ({sensor.num_rays:,} rays), one thread")
+    print(f"| per cell, one core | ms | whole gobi R² 0.2 m on {args.cores} cores |\n|---|---|---|")
+    for label, key in (
+        ("Embree casting alone (the floor)", "embree"),
+        ("lf3pm casting alone", "cast"),
+        ("lf3pm exact cell (cast, association, metric)", "cell"),
+    ):
         minutes = GOBI_CELLS * times[key] / args.cores / 60
         print(f"| {label} | {times[key] * 1e3:.1f} | {minutes:.0f} min |")
 

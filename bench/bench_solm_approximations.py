@@ -16,10 +16,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from bench_maps import MAPS, ground_height
 from scipy.spatial import cKDTree
 from scipy.stats import spearmanr
-
-from bench_maps import MAPS, ground_height
 
 import lf3pm
 from lf3pm import _core
@@ -28,10 +27,10 @@ from lf3pm.pose import pose_matrix
 from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.yaw_reuse import sector_layout
 
-HEIGHT = 1.0        # m above the ground
+HEIGHT = 1.0  # m above the ground
 STRIDES = (2, 4, 16)
 BINS = 36
-CLEARANCE = 0.4     # m of free space around every position
+CLEARANCE = 0.4  # m of free space around every position
 
 
 def positions(points: np.ndarray, base: np.ndarray, count: int, seed: int = 0) -> np.ndarray:
@@ -82,30 +81,41 @@ def run_map(name: str, count: int, threads: int) -> dict:
     rays, half = sector_layout(mid70, BINS)
     params = eval_params(mid70.min_range, mid70.max_range, threads=threads)
     sectors, fast_s = timed(lambda: _core.evaluate_yaw_sectors(world.index, xyz, streams, rays, BINS, half, params))
-    yaw_poses = np.ascontiguousarray([pose_matrix((x, y, z, 2 * np.pi * b / BINS)) for x, y, z in xyz
-                                      for b in range(BINS)])
-    exact, exact_s = timed(lambda: _core.evaluate_many(world.index, yaw_poses,
-                                                       np.arange(len(yaw_poses), dtype=np.uint64),
-                                                       mid70.directions, params))
+    yaw_poses = np.ascontiguousarray(
+        [pose_matrix((x, y, z, 2 * np.pi * b / BINS)) for x, y, z in xyz for b in range(BINS)]
+    )
+    exact, exact_s = timed(
+        lambda: _core.evaluate_many(
+            world.index, yaw_poses, np.arange(len(yaw_poses), dtype=np.uint64), mid70.directions, params
+        )
+    )
     fast = sectors["q_n"].ravel()
-    row["yaw_reuse"] = (*relative_error(fast, exact["q_n"]), exact_s / fast_s,
-                        float(spearmanr(fast, exact["q_n"]).statistic))
+    row["yaw_reuse"] = (
+        *relative_error(fast, exact["q_n"]),
+        exact_s / fast_s,
+        float(spearmanr(fast, exact["q_n"]).statistic),
+    )
     row["se2_cell_s"] = exact_s / len(xyz) * threads  # one core's seconds for a cell's 36 exact scans
     row["se2_rays"] = BINS * mid70.num_rays
     return row
 
 
-HEADER = ("| map | positions | stride 2: q_n error median / p95, speed-up | stride 4 | stride 16 | "
-          "yaw reuse: q_n error median / p95, speed-up, Spearman | exact SE(2) cell, 1 core (36 x 10,000 rays) |\n"
-          "|---|---|---|---|---|---|---|")
+HEADER = (
+    "| map | positions | stride 2: q_n error median / p95, speed-up | stride 4 | stride 16 | "
+    "yaw reuse: q_n error median / p95, speed-up, Spearman | exact SE(2) cell, 1 core (36 x 10,000 rays) |\n"
+    "|---|---|---|---|---|---|---|"
+)
 
 
 def format_row(r: dict) -> str:
-    strides = " | ".join(f"{r[f'stride{k}'][0]:.1%} / {r[f'stride{k}'][1]:.1%}, {r[f'stride{k}'][2]:.1f}×"
-                         for k in STRIDES)
+    strides = " | ".join(
+        f"{r[f'stride{k}'][0]:.1%} / {r[f'stride{k}'][1]:.1%}, {r[f'stride{k}'][2]:.1f}×" for k in STRIDES
+    )
     y = r["yaw_reuse"]
-    return (f"| {r['map']} | {r['positions']} | {strides} | {y[0]:.1%} / {y[1]:.1%}, {y[2]:.1f}×, {y[3]:.2f} | "
-            f"{r['se2_cell_s'] * 1e3:.0f} ms ({r['se2_cell_s'] / r['se2_rays'] * 1e9:.0f} ns a ray) |")
+    return (
+        f"| {r['map']} | {r['positions']} | {strides} | {y[0]:.1%} / {y[1]:.1%}, {y[2]:.1f}×, {y[3]:.2f} | "
+        f"{r['se2_cell_s'] * 1e3:.0f} ms ({r['se2_cell_s'] / r['se2_rays'] * 1e9:.0f} ns a ray) |"
+    )
 
 
 def main() -> None:

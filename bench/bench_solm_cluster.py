@@ -48,12 +48,17 @@ def main() -> None:
     job = make_job(sensor, grid, tile=args.tile, noise=0.0)
     crop = world.crop(job.bounds(0, 0), crop_margin(job, world))
     tiles = int(np.ceil(grid.ny / args.tile) * np.ceil(grid.nx / args.tile))
-    print(f"map: {world.size:,} points, index {world.index.memory_bytes / 2**20:.0f} MiB; grid {grid.shape} "
-          f"at {args.res} m, {tiles} tiles of {args.tile} x {args.tile} cells")
-    print(f"one tile's crop (margin {crop_margin(job, world):.1f} m): {crop.size:,} points, "
-          f"index {crop.index.memory_bytes / 2**20:.0f} MiB")
+    print(
+        f"map: {world.size:,} points, index {world.index.memory_bytes / 2**20:.0f} MiB; grid {grid.shape} "
+        f"at {args.res} m, {tiles} tiles of {args.tile} x {args.tile} cells"
+    )
+    print(
+        f"one tile's crop (margin {crop_margin(job, world):.1f} m): {crop.size:,} points, "
+        f"index {crop.index.memory_bytes / 2**20:.0f} MiB"
+    )
     runs = {}
     with tempfile.TemporaryDirectory() as tmp:
+
         def timed(name, **kwargs):
             out = Path(tmp) / f"{name}.zarr"
             t = time.perf_counter()
@@ -71,8 +76,10 @@ def main() -> None:
         print("| engine | s | tiles/s | cells/s | speed-up vs local 1 thread | store bitwise local |")
         print("|---|---|---|---|---|---|")
         for name, (seconds, out) in runs.items():
-            print(f"| {name} | {seconds:.1f} | {tiles / seconds:.2f} | {grid.nx * grid.ny / seconds:.0f} | "
-                  f"{base_s / seconds:.2f}x | {stores_equal(base_out, out)} |")
+            print(
+                f"| {name} | {seconds:.1f} | {tiles / seconds:.2f} | {grid.nx * grid.ny / seconds:.0f} | "
+                f"{base_s / seconds:.2f}x | {stores_equal(base_out, out)} |"
+            )
         shutil.rmtree(tmp, ignore_errors=True)
 
 

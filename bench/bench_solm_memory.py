@@ -47,8 +47,28 @@ def site_points(millions: float, seed: int = 0) -> np.ndarray:
 def run(map_path: Path, out: Path, extra: list[str]) -> tuple[float, float]:
     """(peak RSS in GiB, wall seconds) of one build of the central tile."""
     h = 8.0  # 16 m: one 32-cell tile at 0.5 m
-    cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "lf3pm.cli", "solm", "build", str(map_path), "-o",
-           str(out), "--res", "0.5", "--bounds", str(-h), str(-h), str(h), str(h), "--noise", "0", *extra]
+    cmd = [
+        "/usr/bin/time",
+        "-v",
+        sys.executable,
+        "-m",
+        "lf3pm.cli",
+        "solm",
+        "build",
+        str(map_path),
+        "-o",
+        str(out),
+        "--res",
+        "0.5",
+        "--bounds",
+        str(-h),
+        str(-h),
+        str(h),
+        str(h),
+        "--noise",
+        "0",
+        *extra,
+    ]
     start = time.perf_counter()
     done = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - start
@@ -61,8 +81,9 @@ def run(map_path: Path, out: Path, extra: list[str]) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--millions", type=float, nargs="+", default=[10, 30, 60])
-    parser.add_argument("--skip-whole-above", type=float, default=30.0,
-                        help="Do not index maps of more million points whole.")
+    parser.add_argument(
+        "--skip-whole-above", type=float, default=30.0, help="Do not index maps of more million points whole."
+    )
     args = parser.parse_args()
     print("| map points | map array GiB | whole index: peak GiB | s | crops: peak GiB | s |")
     print("|---|---|---|---|---|---|")

@@ -37,23 +37,41 @@ def main() -> None:
         positions = np.ascontiguousarray(np.c_[xy, np.full(len(xy), scene.reference_pose[2])])
         streams = np.arange(len(positions), dtype=np.uint64)
         t = time.perf_counter()
-        fast = _core.evaluate_yaw_sectors(world.index, positions, streams, rays, args.bins, half,
-                                          eval_params(sensor.min_range, sensor.max_range, noise=0.02, threads=2))
+        fast = _core.evaluate_yaw_sectors(
+            world.index,
+            positions,
+            streams,
+            rays,
+            args.bins,
+            half,
+            eval_params(sensor.min_range, sensor.max_range, noise=0.02, threads=2),
+        )
         fast_s = time.perf_counter() - t
-        poses = np.ascontiguousarray(np.array([pose_matrix((x, y, z, 2 * np.pi * k / args.bins))
-                                               for x, y, z in positions for k in range(args.bins)]))
+        poses = np.ascontiguousarray(
+            np.array(
+                [pose_matrix((x, y, z, 2 * np.pi * k / args.bins)) for x, y, z in positions for k in range(args.bins)]
+            )
+        )
         t = time.perf_counter()
-        exact = _core.evaluate_many(world.index, poses, np.arange(len(poses), dtype=np.uint64),
-                                    sensor.directions,
-                                    eval_params(sensor.min_range, sensor.max_range, noise=0.02, threads=2))
+        exact = _core.evaluate_many(
+            world.index,
+            poses,
+            np.arange(len(poses), dtype=np.uint64),
+            sensor.directions,
+            eval_params(sensor.min_range, sensor.max_range, noise=0.02, threads=2),
+        )
         exact_s = time.perf_counter() - t
-        print(f"{name}: {len(poses)} cells x bins; exact {exact_s:.2f} s, sector Grams {fast_s:.2f} s, "
-              f"ratio {exact_s / fast_s:.1f}x ({len(rays)} rays per sector, {2 * half + 1} sectors per bin)")
+        print(
+            f"{name}: {len(poses)} cells x bins; exact {exact_s:.2f} s, sector Grams {fast_s:.2f} s, "
+            f"ratio {exact_s / fast_s:.1f}x ({len(rays)} rays per sector, {2 * half + 1} sectors per bin)"
+        )
         for q in ("q_min", "q_n", "q_max"):
             rel = np.abs(fast[q].ravel() / exact[q] - 1)
             rho = spearmanr(fast[q].ravel(), exact[q]).statistic
-            print(f"  {q}: relative error median {np.median(rel):.3f}, p95 {np.percentile(rel, 95):.3f}; "
-                  f"Spearman {rho:.3f}")
+            print(
+                f"  {q}: relative error median {np.median(rel):.3f}, p95 {np.percentile(rel, 95):.3f}; "
+                f"Spearman {rho:.3f}"
+            )
 
 
 if __name__ == "__main__":

@@ -39,18 +39,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp  # noqa: E402
 
 import lf3pm  # noqa: E402
+from lf3pm.experiments.free_poses import GroundGrid  # noqa: E402
 from lf3pm.replays.imu import simulate_imu  # noqa: E402
 from lf3pm.replays.lio import run_lio  # noqa: E402
-from lf3pm.scan.moving_scan import simulate_moving_scan  # noqa: E402
-from lf3pm.trajectory.sampling import LinearMotion  # noqa: E402
 from lf3pm.replays.trajectory_metrics import ape_translation  # noqa: E402
-from lf3pm.experiments.free_poses import GroundGrid  # noqa: E402
+from lf3pm.scan.moving_scan import simulate_moving_scan  # noqa: E402
 from lf3pm.scenes import build_scene  # noqa: E402
 from lf3pm.sensors import get_sensor  # noqa: E402
+from lf3pm.trajectory.sampling import LinearMotion  # noqa: E402
 
 PERIOD = 0.1
-GOBI = dict(length=115.0, width=90.0, west=25.0, town_radius=25.0, warehouse_distance=60.0, buildings=4,
-            stones=150)
+GOBI = dict(length=115.0, width=90.0, west=25.0, town_radius=25.0, warehouse_distance=60.0, buildings=4, stones=150)
 
 
 @dataclass(frozen=True)
@@ -91,8 +90,9 @@ def scenario(name):
         xy, swing, rate = [(0, 0), (10, 2.5), (20, 3.0), (28, 5.0)], 1.2, 0.5
     curve = GroundSpline(xy, GroundGrid(world))
     speed = 1.5
-    motion = CurveMotion(Warp(1.0, 2.0, curve.length / speed - 2.0, speed), curve,
-                         TangentHeading(curve, swing=swing, swing_rate=rate))
+    motion = CurveMotion(
+        Warp(1.0, 2.0, curve.length / speed - 2.0, speed), curve, TangentHeading(curve, swing=swing, swing_rate=rate)
+    )
     return world, motion, get_sensor("mid70")
 
 
@@ -101,8 +101,19 @@ def make_scans(world, motion, sensor, noise):
     scans = []
     for k in range(int(math.floor((motion.t1 - motion.t0) / PERIOD + 1e-9))):
         end = motion.t0 + (k + 1) * PERIOD
-        s = simulate_moving_scan(world.index, LinearMotion(t, poses), end, PERIOD, sensor.scan_directions(k), sensor.min_range,
-                                 sensor.max_range, noise=noise, seed=0, stream=k, threads=1)
+        s = simulate_moving_scan(
+            world.index,
+            LinearMotion(t, poses),
+            end,
+            PERIOD,
+            sensor.scan_directions(k),
+            sensor.min_range,
+            sensor.max_range,
+            noise=noise,
+            seed=0,
+            stream=k,
+            threads=1,
+        )
         scans.append(Scan(end, s.points, end - (1.0 - s.timestamps) * PERIOD))
     return scans
 
@@ -121,8 +132,9 @@ def rko(scans, imu, sensor, first, voxel_size=1.0):
     from rko_lio import LIO
     from rko_lio.config import LIOConfig
 
-    lio = LIO(LIOConfig(voxel_size=voxel_size, max_range=sensor.max_range, min_range=sensor.min_range,
-                        max_num_threads=1))
+    lio = LIO(
+        LIOConfig(voxel_size=voxel_size, max_range=sensor.max_range, min_range=sensor.min_range, max_num_threads=1)
+    )
     origin = min(imu.t[0], scans[0].stamps.min())
 
     def ns(t):
@@ -135,8 +147,9 @@ def rko(scans, imu, sensor, first, voxel_size=1.0):
             j += 1
         start = time.perf_counter()
         try:
-            lio.register_scan(scan.points, ns(scan.stamps), start_time_ns=int(ns(scan.stamps[0])),
-                              end_time_ns=int(ns(scan.end)))
+            lio.register_scan(
+                scan.points, ns(scan.stamps), start_time_ns=int(ns(scan.stamps[0])), end_time_ns=int(ns(scan.end))
+            )
         except Exception:  # noqa: BLE001 -- RKO-LIO raises InputError / RuntimeError on a scan it cannot use
             refused += 1
         seconds += time.perf_counter() - start
@@ -151,6 +164,7 @@ def main():
     args = parser.parse_args()
     try:
         import rko_lio  # noqa: F401
+
         have_rko = True
     except ImportError:
         have_rko = False
@@ -158,8 +172,9 @@ def main():
     backends = [("genz-lio", genz, {})]
     if have_rko:
         backends += [("rko-lio", rko, {}), ("rko-lio voxel 0.25", rko, {"voxel_size": 0.25})]
-    print(f"{'scenario':10} {'odometry':19} {'data':6} {'rmse m':>7} {'max m':>7} {'ms/scan':>8} "
-          f"{'lost':>5} {'same':>5}")
+    print(
+        f"{'scenario':10} {'odometry':19} {'data':6} {'rmse m':>7} {'max m':>7} {'ms/scan':>8} {'lost':>5} {'same':>5}"
+    )
     for name in args.scenarios:
         world, motion, sensor = scenario(name)
         first_time = motion.t0 + PERIOD
@@ -172,14 +187,19 @@ def main():
                 poses, ms, lost = run(scans, imu, sensor, first, **kwargs)
                 same = np.array_equal(poses, run(scans, imu, sensor, first, **kwargs)[0])
                 ape = ape_translation(truth, poses)
-                print(f"{name:10} {label:19} {'noisy' if noisy else 'clean':6} {ape['rmse']:7.3f} "
-                      f"{ape['max']:7.3f} {ms:8.1f} {lost:5d} {str(same):>5}", flush=True)
+                print(
+                    f"{name:10} {label:19} {'noisy' if noisy else 'clean':6} {ape['rmse']:7.3f} "
+                    f"{ape['max']:7.3f} {ms:8.1f} {lost:5d} {str(same):>5}",
+                    flush=True,
+                )
         if name == "gobi_yaw":
             # Two OpenMP threads: faster, still deterministic?
             poses, ms, _ = genz(scans, imu, sensor, first, threads=2)
             same = np.array_equal(poses, genz(scans, imu, sensor, first, threads=2)[0])
-            print(f"{name:10} {'genz-lio 2 threads':19} {'noisy':6} "
-                  f"{ape_translation(truth, poses)['rmse']:7.3f} {'':7} {ms:8.1f} {'':5} {str(same):>5}")
+            print(
+                f"{name:10} {'genz-lio 2 threads':19} {'noisy':6} "
+                f"{ape_translation(truth, poses)['rmse']:7.3f} {'':7} {ms:8.1f} {'':5} {str(same):>5}"
+            )
 
 
 if __name__ == "__main__":

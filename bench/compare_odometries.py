@@ -42,10 +42,10 @@ from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp  # noqa
 
 import lf3pm  # noqa: E402
 from lf3pm.experiments.gobi import REDUCED  # noqa: E402
-from lf3pm.scenes import build_scene  # noqa: E402
 from lf3pm.replays.lio import ODOMETRIES, runs_on  # noqa: E402
 from lf3pm.replays.motion import Motion  # noqa: E402
 from lf3pm.replays.trajectory_metrics import time_offset  # noqa: E402
+from lf3pm.scenes import build_scene  # noqa: E402
 from lf3pm.sensors import get_sensor  # noqa: E402
 
 RATE = 100.0  # motion samples per second, as a plan's CSV
@@ -64,8 +64,9 @@ def drive(world, start, turn_rate: float, seconds: float) -> Motion:
 
     yaw = start[2] + integral(w)
     vx, vy = v * np.cos(yaw), v * np.sin(yaw)
-    return Motion.from_arrays(t, start[0] + integral(vx), start[1] + integral(vy), yaw, vx, vy, w, map=world,
-                              height=1.0)
+    return Motion.from_arrays(
+        t, start[0] + integral(vx), start[1] + integral(vy), yaw, vx, vy, w, map=world, height=1.0
+    )
 
 
 def figure_of_eight(world) -> Motion:
@@ -74,8 +75,9 @@ def figure_of_eight(world) -> Motion:
     analytic = CurveMotion(Warp(0.0, 1.0, 2.5, 1.0), curve, TangentHeading(curve, swing=0.6, swing_rate=2.0))
     t = np.arange(analytic.t0, analytic.t1 + 1e-9, 1.0 / RATE)
     p, v = analytic.position(t), analytic.velocity(t)
-    return Motion.from_arrays(t, p[:, 0], p[:, 1], analytic.yaw(t), v[:, 0], v[:, 1], analytic.yaw_rate(t),
-                              map=world, height=1.0)
+    return Motion.from_arrays(
+        t, p[:, 0], p[:, 1], analytic.yaw(t), v[:, 0], v[:, 1], analytic.yaw_rate(t), map=world, height=1.0
+    )
 
 
 def scenarios(names):
@@ -92,8 +94,11 @@ def scenarios(names):
             yield "gobi town", world, drive(world, (0.0, 0.0, 0.0), 0.3, 8.0)
         elif name in ("hall", "hall3"):
             height = 11.0 if name == "hall" else 3.0
-            world = lf3pm.load_map(build_scene("boxes", room_length=29.0, room_width=29.0, room_height=height,
-                                               boxes=40, spacing=0.1).points)
+            world = lf3pm.load_map(
+                build_scene(
+                    "boxes", room_length=29.0, room_width=29.0, room_height=height, boxes=40, spacing=0.1
+                ).points
+            )
             yield name, world, drive(world, (-6.0, -11.0, 0.785), 0.02, 25.0)
         elif name == "tunnel":
             world = lf3pm.load_map(build_scene("tunnel").points)
@@ -108,14 +113,23 @@ def main() -> None:
     parser.add_argument("--sensors", nargs="+", default=["vlp16", "mid70"])
     parser.add_argument("--odometries", nargs="+", default=list(ODOMETRIES), choices=list(ODOMETRIES))
     parser.add_argument("--seeds", type=int, default=1, help="Noisy runs on seeds 0 .. N-1.")
-    parser.add_argument("--settings", type=json.loads, default=None,
-                        help="Odometry settings (JSON) run beside the defaults, e.g. GenZ-LIO's by section.")
+    parser.add_argument(
+        "--settings",
+        type=json.loads,
+        default=None,
+        help="Odometry settings (JSON) run beside the defaults, e.g. GenZ-LIO's by section.",
+    )
     args = parser.parse_args()
     variants = [("defaults", {})] + ([("settings", args.settings)] if args.settings else [])
     columns = [(odometry, label, settings) for odometry in args.odometries for label, settings in variants]
-    print(f"{'scene':10s} {'sensor':7s} {'data':10s}" + "".join(
-        f" | {odometry + (' ' + label if args.settings else '') + ' APE rmse/max (m)':>34s} {'shift s':>7s}"
-        f" {'aligned':>7s} {'tilt':>5s} {'ms/scan':>7s} {'rest m':>7s}" for odometry, label, _ in columns))
+    print(
+        f"{'scene':10s} {'sensor':7s} {'data':10s}"
+        + "".join(
+            f" | {odometry + (' ' + label if args.settings else '') + ' APE rmse/max (m)':>34s} {'shift s':>7s}"
+            f" {'aligned':>7s} {'tilt':>5s} {'ms/scan':>7s} {'rest m':>7s}"
+            for odometry, label, _ in columns
+        )
+    )
     for scene, world, motion in scenarios(args.scenes):
         for sensor in args.sensors:
             runs = [("noise-free", 0, {"noise": 0.0, "imu_noise": False})]
@@ -126,15 +140,18 @@ def main() -> None:
                     if not runs_on(odometry, get_sensor(sensor)):
                         row += f" | {'n/a (no rings)':>34s} {'':7s} {'':7s} {'':5s} {'':7s} {'':7s}"
                         continue
-                    result = lf3pm.replay(world, motion, sensor, "lio", seed=seed, odometry=odometry, **noise,
-                                          **settings)
+                    result = lf3pm.replay(
+                        world, motion, sensor, "lio", seed=seed, odometry=odometry, **noise, **settings
+                    )
                     shift = time_offset(result.times, result.estimate, motion.pose)["offset"]
                     rest = f"{result.rest['drift_m']:.3f}" + ("" if result.rest["steady"] else "*")
                     up = result.estimate[-1, :3, 2] @ result.truth[-1, :3, 2]
                     tilt = np.degrees(np.arccos(np.clip(up, -1.0, 1.0)))
-                    row += (f" | {result.ape['rmse']:20.3f} / {result.ape['max']:9.3f} {shift:+7.3f} "
-                            f"{result.ape_aligned['rmse']:7.3f} {tilt:5.2f} "
-                            f"{result.seconds_per_scan['estimate'] * 1e3:7.1f} {rest:>7s}")
+                    row += (
+                        f" | {result.ape['rmse']:20.3f} / {result.ape['max']:9.3f} {shift:+7.3f} "
+                        f"{result.ape_aligned['rmse']:7.3f} {tilt:5.2f} "
+                        f"{result.seconds_per_scan['estimate'] * 1e3:7.1f} {rest:>7s}"
+                    )
                 print(row, flush=True)
 
 

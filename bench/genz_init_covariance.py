@@ -37,13 +37,13 @@ from pathlib import Path
 
 import numpy as np
 from scipy.stats import spearmanr
+from study_inputs import study_case
 
 import lf3pm
 from lf3pm.experiments.map_cases import load_case_map
 from lf3pm.replays.lio import GENZ_INIT_POSE_VARIANCE
 from lf3pm.replays.motion import Motion
 from lf3pm.replays.replay import replay_rest
-from study_inputs import study_case
 
 #: GenZ-LIO's own initial variance, then lf3pm's.
 VARIANCES = (1.0, GENZ_INIT_POSE_VARIANCE)
@@ -60,8 +60,12 @@ def still_starts(world, folder: Path):
     for csv in sorted(folder.glob("*_none.csv")):
         x, y, yaw = (float(v) for v in csv.read_text().splitlines()[1].split(",")[1:4])
         t = np.array([0.0, 0.5])
-        yield csv.name[:2], Motion.from_arrays(t, np.full(2, x), np.full(2, y), np.full(2, yaw), 0 * t, 0 * t,
-                                               0 * t, map=world, height=1.0)
+        yield (
+            csv.name[:2],
+            Motion.from_arrays(
+                t, np.full(2, x), np.full(2, y), np.full(2, yaw), 0 * t, 0 * t, 0 * t, map=world, height=1.0
+            ),
+        )
 
 
 def main() -> None:
@@ -95,14 +99,30 @@ def still_rests(world, sensor, folder: Path, map_name: str, variances) -> None:
     for variance in variances:
         setting = {"initial_covariance": {"pose_variance": variance}}
         for label in ("noise-free", "noisy"):
-            rests = [(k, replay_rest(world, motion, sensor, seed, threads=1,
-                                     **({"noise": 0.0, "imu_noise": False} if exact else {}), **setting))
-                     for k, (_, motion) in enumerate(starts) for name, seed, exact in RESTS if name == label]
+            rests = [
+                (
+                    k,
+                    replay_rest(
+                        world,
+                        motion,
+                        sensor,
+                        seed,
+                        threads=1,
+                        **({"noise": 0.0, "imu_noise": False} if exact else {}),
+                        **setting,
+                    ),
+                )
+                for k, (_, motion) in enumerate(starts)
+                for name, seed, exact in RESTS
+                if name == label
+            ]
             drift = np.array([r["drift_m"] for _, r in rests])
             rho = spearmanr(q_n[[k for k, _ in rests]], drift).statistic
-            print(f"| {variance:g} | {label} {len(rests)} | {np.median(drift):.3f} / {drift.max():.3f} | "
-                  f"{sum(not r['steady'] for _, r in rests)} | {rho:.2f} |", flush=True)
-
+            print(
+                f"| {variance:g} | {label} {len(rests)} | {np.median(drift):.3f} / {drift.max():.3f} | "
+                f"{sum(not r['steady'] for _, r in rests)} | {rho:.2f} |",
+                flush=True,
+            )
 
 
 def replay_plans(world, sensor, folder: Path, plans, variances) -> None:
@@ -112,12 +132,22 @@ def replay_plans(world, sensor, folder: Path, plans, variances) -> None:
     for plan in plans:
         name, seed = plan.split(":")
         for variance in variances:
-            result = lf3pm.replay(world, folder / f"{name}.csv", sensor, "lio", int(seed), threads=1,
-                                  initial_covariance={"pose_variance": variance})
+            result = lf3pm.replay(
+                world,
+                folder / f"{name}.csv",
+                sensor,
+                "lio",
+                int(seed),
+                threads=1,
+                initial_covariance={"pose_variance": variance},
+            )
             error = np.linalg.norm(result.estimate[:, :3, 3] - result.truth[:, :3, 3], axis=1)
             every = int(round(5 * result.params["rate"]))
-            print(f"| {plan} | {variance:g} | {result.ape['rmse']:.3f} | {result.rest['drift_m']:.3f} | "
-                  f"{result.rest['speed_mps']:.3f} | {' '.join(f'{e:.2f}' for e in error[::every])} |", flush=True)
+            print(
+                f"| {plan} | {variance:g} | {result.ape['rmse']:.3f} | {result.rest['drift_m']:.3f} | "
+                f"{result.rest['speed_mps']:.3f} | {' '.join(f'{e:.2f}' for e in error[::every])} |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -23,9 +23,9 @@ import numpy as np
 import lf3pm
 from lf3pm.experiments.benefit import CASES as STUDY_MAPS
 from lf3pm.experiments.map_cases import load_case_map
-from lf3pm.trajectory.trajectory import read_csv
 from lf3pm.replays.imu import simulate_imu
 from lf3pm.replays.motion import Motion
+from lf3pm.trajectory.trajectory import read_csv
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_imu import strapdown  # noqa: E402  (the suite's float64 reference)
@@ -34,10 +34,12 @@ from test_imu import strapdown  # noqa: E402  (the suite's float64 reference)
 PLANS = ("00_omni_default", "04_omni_default")
 SETTLED_S = 4.0
 #: (start yaw, end yaw) in radians: yaw 0 faces open ground, about pi the building.
-TURNS = {"ground in view, no turn": (0.0, 0.0),
-         "ground in view, turn to the building": (0.0, -2.8),
-         "building in view, turn to ground": (-2.8, 0.0),
-         "building in view, turn 46 deg within view": (-2.8, -2.0)}
+TURNS = {
+    "ground in view, no turn": (0.0, 0.0),
+    "ground in view, turn to the building": (0.0, -2.8),
+    "building in view, turn to ground": (-2.8, 0.0),
+    "building in view, turn 46 deg within view": (-2.8, -2.0),
+}
 TURN_S, HOLD_S = 6.0, 4.0
 
 
@@ -53,17 +55,24 @@ def plan_variants(world, csv: Path) -> dict:
     yaw = np.unwrap(np.asarray(s["yaw"], float))
     settled = yaw[int(np.searchsorted(t, SETTLED_S))]
     held = np.where(t < SETTLED_S, settled, yaw)
-    count = int(abs(settled - yaw[0]) / 0.5 * 100) + 1   # in place at 0.5 rad/s on average, 100 Hz
+    count = int(abs(settled - yaw[0]) / 0.5 * 100) + 1  # in place at 0.5 rad/s on average, 100 Hz
     first = np.linspace(0.0, (count - 1) / 100, count)
-    arrays = {"as planned": (t, x, y, yaw, vx, vy),
-              "no start turn": (t, x, y, held, vx, vy),
-              "turn in place first": (np.concatenate([first, first[-1] + 0.01 + t]),
-                                      np.concatenate([np.full(count, x[0]), x]),
-                                      np.concatenate([np.full(count, y[0]), y]),
-                                      np.concatenate([smooth(yaw[0], settled, count), held]),
-                                      np.concatenate([np.zeros(count), vx]), np.concatenate([np.zeros(count), vy]))}
-    return {label: Motion.from_arrays(tt, xx, yy, ww, ux, uy, np.gradient(ww, tt), map=world, height=1.0)
-            for label, (tt, xx, yy, ww, ux, uy) in arrays.items()}
+    arrays = {
+        "as planned": (t, x, y, yaw, vx, vy),
+        "no start turn": (t, x, y, held, vx, vy),
+        "turn in place first": (
+            np.concatenate([first, first[-1] + 0.01 + t]),
+            np.concatenate([np.full(count, x[0]), x]),
+            np.concatenate([np.full(count, y[0]), y]),
+            np.concatenate([smooth(yaw[0], settled, count), held]),
+            np.concatenate([np.zeros(count), vx]),
+            np.concatenate([np.zeros(count), vy]),
+        ),
+    }
+    return {
+        label: Motion.from_arrays(tt, xx, yy, ww, ux, uy, np.gradient(ww, tt), map=world, height=1.0)
+        for label, (tt, xx, yy, ww, ux, uy) in arrays.items()
+    }
 
 
 def turn_in_place(world, yaw0: float, yaw1: float) -> Motion:
@@ -91,8 +100,9 @@ def main() -> None:
     for label, (yaw0, yaw1) in TURNS.items():
         motion = turn_in_place(world, yaw0, yaw1)
         imu = simulate_imu(motion, noise=False)
-        positions, _ = strapdown(imu, motion.position(imu.t[0])[0], motion.velocity(imu.t[0])[0],
-                                 motion.pose(imu.t[0])[0][:3, :3])
+        positions, _ = strapdown(
+            imu, motion.position(imu.t[0])[0], motion.velocity(imu.t[0])[0], motion.pose(imu.t[0])[0][:3, :3]
+        )
         drift = np.abs(positions - motion.position(imu.t)).max()
         ape = [lf3pm.replay(world, motion, "mid70", "lio", seed=0, noise=noise).ape["rmse"] for noise in (0.0, None)]
         print(f"| {label} | {drift:.1e} | {ape[0]:.3f} | {ape[1]:.3f} |", flush=True)

@@ -13,17 +13,20 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from study_inputs import study_case, study_plan
 
 import lf3pm
 from lf3pm.experiments.map_cases import load_case_map
-from study_inputs import study_case, study_plan
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--study", type=Path, default=Path("out/benefit3"))
-    parser.add_argument("--plan", action="append", help="MAP/PLAN of the study's trajectories "
-                        "(default: houses/00_omni_default and tunnel/00_omni_default)")
+    parser.add_argument(
+        "--plan",
+        action="append",
+        help="MAP/PLAN of the study's trajectories (default: houses/00_omni_default and tunnel/00_omni_default)",
+    )
     parser.add_argument("--odometry", default="dlio")
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--seed", type=int, default=0)
@@ -35,11 +38,14 @@ def main() -> None:
         map_name, _, plan = name.partition("/")
         case, csv = study_case(map_name), study_plan(args.study, map_name, plan)
         world, _ = load_case_map(case)
-        runs = [lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1, odometry=args.odometry)
-                for _ in range(args.runs)]
+        runs = [
+            lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1, odometry=args.odometry)
+            for _ in range(args.runs)
+        ]
         apes = ", ".join(f"{1000 * r.ape['rmse']:.3f}" for r in runs)
-        apart = ", ".join(f"{1000 * np.abs(r.estimate[:, :3, 3] - runs[0].estimate[:, :3, 3]).max():.2f}"
-                          for r in runs[1:])
+        apart = ", ".join(
+            f"{1000 * np.abs(r.estimate[:, :3, 3] - runs[0].estimate[:, :3, 3]).max():.2f}" for r in runs[1:]
+        )
         print(f"| {name} | {case.sensor} | {apes} | {apart} |", flush=True)
 
 

@@ -63,8 +63,17 @@ def load(name: str):
 def still(world, pose) -> Motion:
     t = np.linspace(0.0, STILL, 11)
     x, y, _, yaw = pose
-    return Motion.from_arrays(t, np.full_like(t, x), np.full_like(t, y), np.full_like(t, yaw),
-                              np.zeros_like(t), np.zeros_like(t), np.zeros_like(t), map=world, height=1.0)
+    return Motion.from_arrays(
+        t,
+        np.full_like(t, x),
+        np.full_like(t, y),
+        np.full_like(t, yaw),
+        np.zeros_like(t),
+        np.zeros_like(t),
+        np.zeros_like(t),
+        map=world,
+        height=1.0,
+    )
 
 
 def rests(maps, poses: int, seeds: int, odometries) -> None:
@@ -75,13 +84,25 @@ def rests(maps, poses: int, seeds: int, odometries) -> None:
         picked = random_free_poses(world, poses, np.random.default_rng(7), sensor_height=1.0, region=region)
         for odometry in odometries:
             for noisy in (False, True):
-                rows = [replay_rest(world, still(world, p), sensor, seed, odometry=odometry,
-                                    **({} if noisy else {"noise": 0.0, "imu_noise": False}))
-                        for p in picked for seed in (range(seeds) if noisy else [0])]
+                rows = [
+                    replay_rest(
+                        world,
+                        still(world, p),
+                        sensor,
+                        seed,
+                        odometry=odometry,
+                        **({} if noisy else {"noise": 0.0, "imu_noise": False}),
+                    )
+                    for p in picked
+                    for seed in (range(seeds) if noisy else [0])
+                ]
                 drift = np.array([r["drift_m"] for r in rows])
                 unsteady = sum(not r["steady"] for r in rows)
-                print(f"| {name} | {sensor} | {odometry} | {'noisy' if noisy else 'none'} | {len(rows)} | "
-                      f"{np.median(drift):.3f} / {drift.max():.3f} | {unsteady} |", flush=True)
+                print(
+                    f"| {name} | {sensor} | {odometry} | {'noisy' if noisy else 'none'} | {len(rows)} | "
+                    f"{np.median(drift):.3f} / {drift.max():.3f} | {unsteady} |",
+                    flush=True,
+                )
 
 
 def identical(scans_fed: int = 8) -> None:
@@ -114,14 +135,20 @@ def identical(scans_fed: int = 8) -> None:
             if odometry.map_size > 0 and math.isnan(sigma):
                 sigma = float(np.sqrt(np.diag(np.asarray(odometry.covariance))[3:6]).max())  # the rotation block
             seeded = odometry.map_size > 0
-            odometry.register_scan(np.ascontiguousarray(scan.points, dtype=np.float64), float(stamps[0]), end,
-                                   np.column_stack([t[before:upto], rows[before:upto]]),
-                                   timestamps=stamps - stamps[0])
+            odometry.register_scan(
+                np.ascontiguousarray(scan.points, dtype=np.float64),
+                float(stamps[0]),
+                end,
+                np.column_stack([t[before:upto], rows[before:upto]]),
+                timestamps=stamps - stamps[0],
+            )
             before = upto
             if seeded:
                 p = np.asarray(odometry.lidar_pose)
-                moves.append(f"{np.degrees(np.linalg.norm(Rotation.from_matrix(p[:3, :3]).as_rotvec())):.2f}, "
-                             f"{np.linalg.norm(p[:3, 3]):.3f}")
+                moves.append(
+                    f"{np.degrees(np.linalg.norm(Rotation.from_matrix(p[:3, :3]).as_rotvec())):.2f}, "
+                    f"{np.linalg.norm(p[:3, 3]):.3f}"
+                )
         label = f"({pose[0]:.1f}, {pose[1]:.1f}, yaw {math.degrees(pose[3]):.0f} deg)"
         print(f"| {label} | {'; '.join(moves[:4])} | {sigma:.2f} |", flush=True)
 

@@ -29,8 +29,14 @@ from lf3pm.experiments.replay_tasks import load_replay, replay_json, run_replays
 METHODS = ("lio", "localization")
 #: One change at a time from the default guided plan: the front end's turn price
 #: (turn_radius, m) and the yaw rate the plan may use (wmax, rad/s; the robot's is 1).
-VARIANTS = {"none": {"metric": "none"}, "default": {}, "turn 2 m": {"turn_radius": 2.0},
-            "turn 5 m": {"turn_radius": 5.0}, "wmax 0.3": {"wmax": 0.3}, "wmax 0.5": {"wmax": 0.5}}
+VARIANTS = {
+    "none": {"metric": "none"},
+    "default": {},
+    "turn 2 m": {"turn_radius": 2.0},
+    "turn 5 m": {"turn_radius": 5.0},
+    "wmax 0.3": {"wmax": 0.3},
+    "wmax 0.5": {"wmax": 0.5},
+}
 
 
 def yaw_swept(csv: Path) -> float:
@@ -44,8 +50,9 @@ def plan_variant(planner, pair: dict, variant: dict):
 
     g, v = DEFAULTS.guidance, dict(variant)
     robot = Robot("omni", wmax=v.pop("wmax", DEFAULTS.robot.wmax))
-    return planner.plan(pair["start"], pair["goal"], robot=robot, metric=v.pop("metric", g.metric),
-                        weight=g.weight, power=g.power, **v)
+    return planner.plan(
+        pair["start"], pair["goal"], robot=robot, metric=v.pop("metric", g.metric), weight=g.weight, power=g.power, **v
+    )
 
 
 def main() -> None:
@@ -67,19 +74,30 @@ def main() -> None:
                 csv = out / "trajectories" / name / f"{tag[:-1]}.csv"
                 write_plan(plan.trajectory, csv, out / "replays" / name, tag)
                 rows.append((p, label, csv, plan.summary()["trajectory_length_m"]))
-                tasks += [(cases[name], str(csv), method, seed, replay_json(out / "replays" / name, tag, method, seed))
-                          for method in METHODS for seed in range(seeds)]
+                tasks += [
+                    (cases[name], str(csv), method, seed, replay_json(out / "replays" / name, tag, method, seed))
+                    for method in METHODS
+                    for seed in range(seeds)
+                ]
         print(f"{name}: {len(mine)} omni pairs planned", flush=True)
     run_replays(tasks, 2, lambda *a, **k: None)
 
     def ape(p, label, method):
         tag = f"{p['pair']:02d}_{label.replace(' ', '')}_"
-        return float(np.median([load_replay(replay_json(out / "replays" / p["case"], tag, method, s))["ape_rmse"]
-                                for s in range(seeds)]))
+        return float(
+            np.median(
+                [
+                    load_replay(replay_json(out / "replays" / p["case"], tag, method, s))["ape_rmse"]
+                    for s in range(seeds)
+                ]
+            )
+        )
 
     print(f"\nMedian over {seeds} seeds; ratios to the unguided plan of the same pair.\n")
-    print("| map | pair | plan | swept (deg) | max yaw rate (rad/s) | length (m) | LIO APE (m) | LIO ratio | "
-          "localization APE (mm) | localization ratio |")
+    print(
+        "| map | pair | plan | swept (deg) | max yaw rate (rad/s) | length (m) | LIO APE (m) | LIO ratio | "
+        "localization APE (mm) | localization ratio |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     ratios = {label: {m: [] for m in METHODS} for label in VARIANTS}
     for p, label, csv, length in rows:
@@ -87,15 +105,19 @@ def main() -> None:
         for m in METHODS:
             ratios[label][m].append(got[m] / ape(p, "none", m))
         rate = np.max(np.abs(np.loadtxt(csv, delimiter=",", skiprows=1)[:, 6]))
-        print(f"| {p['case']} | {p['pair']} | {label} | {yaw_swept(csv):.0f} | {rate:.2f} | {length:.1f} | "
-              f"{got['lio']:.3f} | {ratios[label]['lio'][-1]:.2f} | {1000 * got['localization']:.1f} | "
-              f"{ratios[label]['localization'][-1]:.2f} |")
+        print(
+            f"| {p['case']} | {p['pair']} | {label} | {yaw_swept(csv):.0f} | {rate:.2f} | {length:.1f} | "
+            f"{got['lio']:.3f} | {ratios[label]['lio'][-1]:.2f} | {1000 * got['localization']:.1f} | "
+            f"{ratios[label]['localization'][-1]:.2f} |"
+        )
     print("\n| plan | pairs | LIO ratio: median, worst | localization ratio: median, worst |")
     print("|---|---|---|---|")
     for label in VARIANTS:
         r = ratios[label]
-        print(f"| {label} | {len(r['lio'])} | {np.median(r['lio']):.2f}, {np.max(r['lio']):.2f} | "
-              f"{np.median(r['localization']):.2f}, {np.max(r['localization']):.2f} |")
+        print(
+            f"| {label} | {len(r['lio'])} | {np.median(r['lio']):.2f}, {np.max(r['lio']):.2f} | "
+            f"{np.median(r['localization']):.2f}, {np.max(r['localization']):.2f} |"
+        )
 
 
 if __name__ == "__main__":

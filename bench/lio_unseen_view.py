@@ -18,16 +18,16 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from study_inputs import study_arguments, study_case, study_plan
 
 import lf3pm
 from lf3pm.config import DEFAULT_HEIGHT
 from lf3pm.experiments.map_cases import load_case_map
 from lf3pm.replays.motion import Motion
 from lf3pm.scan.scans import ScanStream
-from study_inputs import study_arguments, study_case, study_plan
 
-VOXEL = 0.5            # m, an odometry map's cell
-ABOVE_GROUND = 0.3     # m, a return counted as structure
+VOXEL = 0.5  # m, an odometry map's cell
+ABOVE_GROUND = 0.3  # m, a return counted as structure
 
 
 def seen_shares(world, csv: Path, sensor) -> list[tuple]:
@@ -60,8 +60,10 @@ def main() -> None:
         for t, share, tall, tall_share in rows:
             print(f"| {t:.0f} | {share:.2f} | {tall} | {tall_share:.2f} |")
         shares = np.array([r[1] for r in rows])
-        print(f"\nlowest share seen {shares.min():.2f} (t = {rows[int(shares.argmin())][0]:.0f} s), "
-              f"median {np.median(shares):.2f}")
+        print(
+            f"\nlowest share seen {shares.min():.2f} (t = {rows[int(shares.argmin())][0]:.0f} s), "
+            f"median {np.median(shares):.2f}"
+        )
 
 
 if __name__ == "__main__":

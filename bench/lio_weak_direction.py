@@ -18,11 +18,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from study_inputs import study_arguments, study_case, study_plan
 
 import lf3pm
 from lf3pm.errors import PoseError
 from lf3pm.experiments.map_cases import load_case_map
-from study_inputs import study_arguments, study_case, study_plan
 
 
 def main() -> None:
@@ -36,15 +36,21 @@ def main() -> None:
         csv = study_plan(args.study, args.map, f"{args.pair}_{guidance}")
         result = lf3pm.replay(world, csv, case.sensor, "lio", args.seed, threads=1, odometry=args.odometry)
         error = result.estimate[:, :3, 3] - result.truth[:, :3, 3]
-        print(f"\n{args.map} {args.pair} {guidance}, seed {args.seed}, odometry {args.odometry}: "
-              f"LIO APE {result.ape['rmse']:.3f} m\n")
-        print("| t (s) | error x, y, z (m) | sensor yaw (deg) | q_n | q_max | weakest eigenvalue | its direction (deg) |")
+        print(
+            f"\n{args.map} {args.pair} {guidance}, seed {args.seed}, odometry {args.odometry}: "
+            f"LIO APE {result.ape['rmse']:.3f} m\n"
+        )
+        print(
+            "| t (s) | error x, y, z (m) | sensor yaw (deg) | q_n | q_max | weakest eigenvalue | its direction (deg) |"
+        )
         print("|---|---|---|---|---|---|---|")
         every = max(1, int(round(result.params["rate"])))
         for k in range(0, len(result.times), every):
             pose = result.truth[k]
-            row = (f"| {result.times[k]:.0f} | {error[k, 0]:+.3f}, {error[k, 1]:+.3f}, {error[k, 2]:+.3f} | "
-                   f"{math.degrees(math.atan2(pose[1, 0], pose[0, 0])):.0f} |")
+            row = (
+                f"| {result.times[k]:.0f} | {error[k, 0]:+.3f}, {error[k, 1]:+.3f}, {error[k, 2]:+.3f} | "
+                f"{math.degrees(math.atan2(pose[1, 0], pose[0, 0])):.0f} |"
+            )
             try:
                 view = lf3pm.evaluate(world, pose, case.sensor, observations=True)
             except PoseError:  # the sensor within clearance of a map point (a bush beside the route)
@@ -53,8 +59,11 @@ def main() -> None:
             a = np.asarray(view.observations["A"])
             values, vectors = np.linalg.eigh(a.T @ a)
             weak = vectors[:, 0]
-            print(f"{row} {view.q_n:.3f} | {view.q_max:.1f} | {values[0]:.3g} | "
-                  f"{math.degrees(math.atan2(weak[1], weak[0])) % 180:.0f} |", flush=True)
+            print(
+                f"{row} {view.q_n:.3f} | {view.q_max:.1f} | {values[0]:.3g} | "
+                f"{math.degrees(math.atan2(weak[1], weak[0])) % 180:.0f} |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -17,8 +17,8 @@ import numpy as np
 import lf3pm
 from lf3pm.experiments.gobi import FULL, map_case
 from lf3pm.experiments.map_cases import load_case_map
-from lf3pm.trajectory.trajectory import read_csv
 from lf3pm.replays.motion import Motion
+from lf3pm.trajectory.trajectory import read_csv
 
 SEEDS = 3
 
@@ -32,17 +32,29 @@ def path_fraction(s: dict) -> np.ndarray:
 def with_yaw(world, positions: dict, headings: dict) -> Motion:
     """``positions``' path and timing with ``headings``' yaw at the same path fraction."""
     yaw = np.interp(path_fraction(positions), path_fraction(headings), np.unwrap(headings["yaw"]))
-    return Motion.from_arrays(positions["t"], positions["x"], positions["y"], yaw, positions["vx"],
-                              positions["vy"], np.gradient(yaw, positions["t"]), map=world, height=1.0)
+    return Motion.from_arrays(
+        positions["t"],
+        positions["x"],
+        positions["y"],
+        yaw,
+        positions["vx"],
+        positions["vy"],
+        np.gradient(yaw, positions["t"]),
+        map=world,
+        height=1.0,
+    )
 
 
 def main() -> None:
     folder = Path(sys.argv[1] if len(sys.argv) > 1 else "out/gobi_full") / "trajectories"
     world, _ = load_case_map(map_case(FULL))
     plans = {name: read_csv(folder / f"{name}.csv") for name in ("none", "default")}
-    cases = {"none": ("none", "none"), "default": ("default", "default"),
-             "none positions, default yaw": ("none", "default"),
-             "default positions, none yaw": ("default", "none")}
+    cases = {
+        "none": ("none", "none"),
+        "default": ("default", "default"),
+        "none positions, default yaw": ("none", "default"),
+        "default positions, none yaw": ("default", "none"),
+    }
     for label, (positions, headings) in cases.items():
         motion = with_yaw(world, plans[positions], plans[headings])
         errors = [lf3pm.replay(world, motion, "mid70", "lio", seed=seed).ape["rmse"] for seed in range(SEEDS)]

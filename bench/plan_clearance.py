@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
+from study_inputs import study_case
 
 from lf3pm.config import DEFAULT_HEIGHT, DEFAULTS
 from lf3pm.experiments.map_cases import load_case_map
 from lf3pm.replays.motion import Motion
-from study_inputs import study_case
 
 
 def clearance(motion: Motion, points: np.ndarray, tree: cKDTree, search: float) -> float:
@@ -52,11 +52,16 @@ def main() -> None:
     for map_dir in sorted(p for p in folder.iterdir() if p.is_dir()):
         world, _ = load_case_map(study_case(map_dir.name))
         tree = cKDTree(world.points[:, :2])
-        found = {csv.stem: clearance(Motion.from_csv(csv, world), world.points, tree, 2 * args.radius)
-                 for csv in sorted(map_dir.glob("*.csv"))}
+        found = {
+            csv.stem: clearance(Motion.from_csv(csv, world), world.points, tree, 2 * args.radius)
+            for csv in sorted(map_dir.glob("*.csv"))
+        }
         close = sorted((d, name) for name, d in found.items() if d < args.radius)
-        print(f"| {map_dir.name} | {len(found)} | {len(close)} | {min(found.values()):.2f} | "
-              f"{', '.join(f'{n} {d:.2f}' for d, n in close[:8])}{' ...' if len(close) > 8 else ''} |", flush=True)
+        print(
+            f"| {map_dir.name} | {len(found)} | {len(close)} | {min(found.values()):.2f} | "
+            f"{', '.join(f'{n} {d:.2f}' for d, n in close[:8])}{' ...' if len(close) > 8 else ''} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

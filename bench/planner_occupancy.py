@@ -44,8 +44,10 @@ def main() -> None:
     stores = sorted((args.study / "solm").glob("*.zarr"))
     if not stores:
         raise SystemExit(f"no SOLMs in {args.study / 'solm'}: run lf3pm experiment benefit -o {args.study} first")
-    print(f"| map | SOLM cells | occupancy cells (k) | ESDF on occupancy (s) | on the obstacle mask (s) | ratio "
-          f"| traversable at r_safe {args.r_safe:g}: occupancy / mask |")
+    print(
+        f"| map | SOLM cells | occupancy cells (k) | ESDF on occupancy (s) | on the obstacle mask (s) | ratio "
+        f"| traversable at r_safe {args.r_safe:g}: occupancy / mask |"
+    )
     print("|---|---|---|---|---|---|---|")
     for path in stores:
         solm = Solm.open(path)
@@ -53,9 +55,12 @@ def main() -> None:
         occupied, k = solm.occupancy()
         fine_s, fine = best_time(lambda: Esdf.from_solm(solm))
         coarse_s, coarse = best_time(lambda: coarse_esdf(solm))
-        print(f"| {path.stem} | {g.nx} x {g.ny} of {g.res:g} m | {occupied.shape[1]} x {occupied.shape[0]} ({k}) "
-              f"| {fine_s:.2f} | {coarse_s:.3f} | {fine_s / coarse_s:.0f}x "
-              f"| {fine.traversable(args.r_safe).sum():,} / {coarse.traversable(args.r_safe).sum():,} |", flush=True)
+        print(
+            f"| {path.stem} | {g.nx} x {g.ny} of {g.res:g} m | {occupied.shape[1]} x {occupied.shape[0]} ({k}) "
+            f"| {fine_s:.2f} | {coarse_s:.3f} | {fine_s / coarse_s:.0f}x "
+            f"| {fine.traversable(args.r_safe).sum():,} / {coarse.traversable(args.r_safe).sum():,} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ import json
 import math
 
 import numpy as np
+from study_inputs import study_arguments, study_case
 
 from lf3pm.config import DEFAULTS
 from lf3pm.planner.esdf import Esdf, solm_masks
@@ -34,7 +35,6 @@ from lf3pm.planner.graph_search import search_path
 from lf3pm.planner.plan import Planner
 from lf3pm.solm import Solm
 from lf3pm.trajectory.robots import Robot
-from study_inputs import study_arguments, study_case
 
 
 def along(values: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -57,14 +57,18 @@ def path_cost(values: np.ndarray, cells: np.ndarray, res: float, weight: float, 
 
 def main() -> None:
     parser = study_arguments(__doc__.split("\n\n")[0])
-    parser.add_argument("--coarse-mask", action="store_true",
-                        help="traversable cells from the SOLM's obstacle mask, not its occupancy layer")
+    parser.add_argument(
+        "--coarse-mask",
+        action="store_true",
+        help="traversable cells from the SOLM's obstacle mask, not its occupancy layer",
+    )
     args = parser.parse_args()
     case = study_case(args.map)
     summary = json.loads((args.study / "summary.json").read_text())
     number, kind = args.pair.split("_")
-    pair = next((p for p in summary["pairs"] if p["case"] == args.map and p["pair"] == int(number)
-                 and p["robot"] == kind), None)
+    pair = next(
+        (p for p in summary["pairs"] if p["case"] == args.map and p["pair"] == int(number) and p["robot"] == kind), None
+    )
     if pair is None:
         raise SystemExit(f"no pair {args.pair} on {args.map} in {args.study}/summary.json")
     planner = Planner(Solm.open(args.study / "solm" / f"{args.map}.zarr"))
@@ -73,21 +77,31 @@ def main() -> None:
     traversable = planner.esdf
     if args.coarse_mask:
         obstacle, unknown = solm_masks(planner.solm)
-        traversable = Esdf.from_mask(obstacle, grid.x0, grid.y0, grid.res, unknown=unknown,
-                                     body_radius=float(planner.solm.attrs["robot_radius"])).traversable(robot.r_safe)
+        traversable = Esdf.from_mask(
+            obstacle, grid.x0, grid.y0, grid.res, unknown=unknown, body_radius=float(planner.solm.attrs["robot_radius"])
+        ).traversable(robot.r_safe)
     turn_radius = DEFAULTS.guidance.turn_radius
     rho = turn_radius * 2 * math.pi / max(grid.yaw_bins, 1)
     guidance = summary["guidance"]
     layers, paths = {}, {}
     for g in guidance:
         layers[g["name"]] = planner.cost_layer(g["channel"], g["power"])
-        paths[g["name"]] = search_path(layers[g["name"]], traversable, grid, pair["start"], pair["goal"],
-                                       weight=g["weight"], r_safe=robot.r_safe, turn_radius=turn_radius)
+        paths[g["name"]] = search_path(
+            layers[g["name"]],
+            traversable,
+            grid,
+            pair["start"],
+            pair["goal"],
+            weight=g["weight"],
+            r_safe=robot.r_safe,
+            turn_radius=turn_radius,
+        )
     for g in guidance:
         own = path_cost(layers[g["name"]].filled, paths[g["name"]].cells, grid.res, g["weight"], rho)
         if not math.isclose(own, paths[g["name"]].cost, rel_tol=1e-6):
-            raise SystemExit(f"pricing check failed for {g['name']}: {own} against the search's "
-                             f"{paths[g['name']].cost}")
+            raise SystemExit(
+                f"pricing check failed for {g['name']}: {own} against the search's {paths[g['name']].cost}"
+            )
 
     names = [g["name"] for g in guidance]
     mask = "the SOLM's coarse obstacle mask" if args.coarse_mask else "the occupancy layer"

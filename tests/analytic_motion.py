@@ -13,9 +13,9 @@ from lf3pm.pose import pose_matrices
 def _smootherstep(tau):
     """h(tau) = 6 tau^5 - 15 tau^4 + 10 tau^3, its integral and its derivative on
     [0, 1]: a speed ramp with zero acceleration at both ends."""
-    h = tau ** 3 * (10 + tau * (-15 + 6 * tau))
-    integral = tau ** 4 * (2.5 + tau * (-3 + tau))
-    dh = 30 * tau ** 2 * (1 - tau) ** 2
+    h = tau**3 * (10 + tau * (-15 + 6 * tau))
+    integral = tau**4 * (2.5 + tau * (-3 + tau))
+    dh = 30 * tau**2 * (1 - tau) ** 2
     return h, integral, dh
 
 
@@ -70,7 +70,7 @@ class CurveMotion:
 
     def acceleration(self, t):
         u, du, ddu = self._u(t)
-        return self.curve(u, 2) * (du ** 2)[:, None] + self.curve(u, 1) * ddu[:, None]
+        return self.curve(u, 2) * (du**2)[:, None] + self.curve(u, 1) * ddu[:, None]
 
     def yaw(self, t):
         u, _, _ = self._u(t)
@@ -103,7 +103,7 @@ class Lissajous:
             return self.c + self.a * np.sin(arg)
         if nu == 1:
             return self.a * self.w * np.cos(arg)
-        return -self.a * self.w ** 2 * np.sin(arg)
+        return -self.a * self.w**2 * np.sin(arg)
 
 
 class TangentHeading:

@@ -8,8 +8,9 @@ def grid_plane(origin, u, v, extent_u, extent_v, spacing):
     a = np.arange(0.0, extent_u + 1e-9, spacing)
     b = np.arange(0.0, extent_v + 1e-9, spacing)
     aa, bb = np.meshgrid(a, b, indexing="ij")
-    return (np.asarray(origin, float) + aa.reshape(-1, 1) * np.asarray(u, float)
-            + bb.reshape(-1, 1) * np.asarray(v, float))
+    return (
+        np.asarray(origin, float) + aa.reshape(-1, 1) * np.asarray(u, float) + bb.reshape(-1, 1) * np.asarray(v, float)
+    )
 
 
 def box_room(half, spacing=0.05):
@@ -31,8 +32,11 @@ def ray_box_distance(origin, directions, half):
     """Distance from an inside origin along unit directions to the box's boundary."""
     half = np.asarray(half, float)
     with np.errstate(divide="ignore"):
-        t = np.where(directions > 0, (half - origin) / directions,
-                     np.where(directions < 0, (-half - origin) / directions, np.inf))
+        t = np.where(
+            directions > 0,
+            (half - origin) / directions,
+            np.where(directions < 0, (-half - origin) / directions, np.inf),
+        )
     return t.min(axis=1)
 
 
@@ -40,8 +44,9 @@ def spinning_directions(elevations_deg, azimuths):
     el = np.deg2rad(np.asarray(elevations_deg, float))
     az = np.arange(azimuths) * 2 * np.pi / azimuths
     A, E = np.meshgrid(az, el, indexing="ij")
-    return np.ascontiguousarray(np.stack([np.cos(E) * np.cos(A), np.cos(E) * np.sin(A), np.sin(E)],
-                                         axis=-1).reshape(-1, 3))
+    return np.ascontiguousarray(
+        np.stack([np.cos(E) * np.cos(A), np.cos(E) * np.sin(A), np.sin(E)], axis=-1).reshape(-1, 3)
+    )
 
 
 def random_directions(rng, count):

@@ -37,11 +37,23 @@ def screenshot(url: str, path: Path, *, seconds: float = 20.0, size=(1280, 800),
         raise RuntimeError("no Chromium found (Debian: apt-get install chromium)")
     with tempfile.TemporaryDirectory() as profile:
         debug_port = free_port()
-        proc = subprocess.Popen([browser, "--headless=new", "--no-sandbox", "--use-angle=swiftshader",
-                                 "--enable-unsafe-swiftshader", "--no-first-run", "--disable-extensions",
-                                 f"--remote-debugging-port={debug_port}", f"--window-size={size[0]},{size[1]}",
-                                 f"--user-data-dir={profile}", "about:blank"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            [
+                browser,
+                "--headless=new",
+                "--no-sandbox",
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
+                "--no-first-run",
+                "--disable-extensions",
+                f"--remote-debugging-port={debug_port}",
+                f"--window-size={size[0]},{size[1]}",
+                f"--user-data-dir={profile}",
+                "about:blank",
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         try:
             page = _page(debug_port)
             with websockets.sync.client.connect(page["webSocketDebuggerUrl"], max_size=None) as ws:

@@ -17,8 +17,10 @@ def boxes_planner(tmp_path_factory):
     from lf3pm.solm.reader import Solm
 
     tmp = tmp_path_factory.mktemp("boxes")
-    for args in (["scene", "boxes", "-o", tmp / "boxes.pcd"],
-                 ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"]):
+    for args in (
+        ["scene", "boxes", "-o", tmp / "boxes.pcd"],
+        ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"],
+    ):
         subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
     return Planner(Solm.open(tmp / "boxes.zarr"))
 

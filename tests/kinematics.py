@@ -21,11 +21,13 @@ def kinematic_checks(trajectory, robot, slack: float = 0.02, rate: float = 100.0
     s, v_lon, v_lat = body_speeds(trajectory, rate)
     c, si = np.cos(s["yaw"]), np.sin(s["yaw"])
     lim = 1 + slack
-    out = {"v_lon": np.max(np.abs(v_lon)) <= lim * robot.vmax_lon,
-           "omega": np.max(np.abs(s["omega"])) <= lim * robot.wmax,
-           "a_lon": np.max(np.abs(s["ax"] * c + s["ay"] * si)) <= lim * robot.amax_lon,
-           "a_lat": np.max(np.abs(-s["ax"] * si + s["ay"] * c)) <= lim * robot.amax_lat,
-           "alpha": np.max(np.abs(np.gradient(s["omega"], s["t"]))) <= lim * robot.alpha_max}
+    out = {
+        "v_lon": np.max(np.abs(v_lon)) <= lim * robot.vmax_lon,
+        "omega": np.max(np.abs(s["omega"])) <= lim * robot.wmax,
+        "a_lon": np.max(np.abs(s["ax"] * c + s["ay"] * si)) <= lim * robot.amax_lon,
+        "a_lat": np.max(np.abs(-s["ax"] * si + s["ay"] * c)) <= lim * robot.amax_lat,
+        "alpha": np.max(np.abs(np.gradient(s["omega"], s["t"]))) <= lim * robot.alpha_max,
+    }
     if robot.kind == "omni":
         out["v_lat"] = np.max(np.abs(v_lat)) <= lim * robot.vmax_lat
         if robot.vmax_norm is not None:

@@ -17,7 +17,10 @@ def reference_metric(A: np.ndarray, b: np.ndarray, w1: float = 0.5, w2: float = 
     lam = np.maximum(lam, 0.0)
     if m > n + 1:
         lam[: m - n - 1] = 0.0  # exactly zero in exact arithmetic (rank <= n + 1)
-    q = lambda value: np.sqrt(w1 * value + w2) / sigma1
+
+    def q(value):
+        return np.sqrt(w1 * value + w2) / sigma1
+
     ata_eig = s[::-1] ** 2
     return {
         "sigma1": sigma1,

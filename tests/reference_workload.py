@@ -27,8 +27,9 @@ BOUNDS = (-3.5, -3.5, 3.5, 3.5)
 
 def scenes(out: dict) -> None:
     out["scene/meadow"] = lf3pm.build_scene("meadow", seed=3, extent=8.0).points
-    out["scene/gobi"] = lf3pm.build_scene("gobi", seed=3, ground_spacing=0.5, wall_spacing=0.3, roof_spacing=0.5,
-                                          stone_spacing=0.1).points
+    out["scene/gobi"] = lf3pm.build_scene(
+        "gobi", seed=3, ground_spacing=0.5, wall_spacing=0.3, roof_spacing=0.5, stone_spacing=0.1
+    ).points
 
 
 def evaluations(out: dict) -> None:
@@ -47,8 +48,9 @@ def solms_and_plans(out: dict, folder: Path) -> None:
     r2 = folder / "r2.zarr"
     build_solm(world, lf3pm.get_sensor("vlp16"), make_grid(world, "r2", 0.5, bounds=BOUNDS), r2, tile=5)
     se2 = folder / "se2.zarr"
-    build_solm(world, lf3pm.get_sensor("mid70"), make_grid(world, "se2", 1.0, bounds=BOUNDS, yaw_bins=12), se2,
-               yaw_reuse=True)
+    build_solm(
+        world, lf3pm.get_sensor("mid70"), make_grid(world, "se2", 1.0, bounds=BOUNDS, yaw_bins=12), se2, yaw_reuse=True
+    )
     for name, path in (("r2", r2), ("se2", se2)):
         solm = Solm.open(path)
         for channel in solm.channels:

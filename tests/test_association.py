@@ -24,8 +24,9 @@ def angle(a, b):
 
 
 @pytest.mark.parametrize("k", [3, 5, 12])
-@pytest.mark.parametrize("extent", [(0.1, 0.1, 0.005), (0.1, 0.1, 0.0), (0.1, 0.01, 0.001),
-                                    (0.1, 1e-3, 1e-5), (0.1, 0.1, 0.1)])
+@pytest.mark.parametrize(
+    "extent", [(0.1, 0.1, 0.005), (0.1, 0.1, 0.0), (0.1, 0.01, 0.001), (0.1, 1e-3, 1e-5), (0.1, 0.1, 0.1)]
+)
 def test_fit_plane_matches_eigh(k, extent):
     """Nearly planar, exactly planar, elongated, nearly collinear and isotropic
     sets, far from the origin: normals within 1e-9 rad wherever the two smallest
@@ -68,16 +69,17 @@ def test_knn_ties_go_to_the_smaller_index():
     pts = np.ascontiguousarray(np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3))
     index = _core.MapIndex(pts)
     rng = np.random.default_rng(2)
-    queries = np.ascontiguousarray(np.vstack([index.points[rng.integers(0, index.size, 300)],
-                                              rng.integers(-80, 81, size=(300, 3)) / 64.0]))
+    queries = np.ascontiguousarray(
+        np.vstack([index.points[rng.integers(0, index.size, 300)], rng.integers(-80, 81, size=(300, 3)) / 64.0])
+    )
     for k, radius in ((5, 2.0), (12, 0.25), (1, 1.0)):
         idx, dist = index.nearest(queries, k, radius)
         d = np.linalg.norm(index.points[None, :, :] - queries[:, None, :], axis=2)
         for qi in range(len(queries)):
             order = np.lexsort((np.arange(index.size), d[qi]))[:k]
             order = order[d[qi, order] <= radius]
-            np.testing.assert_array_equal(idx[qi, :len(order)], order)
-            np.testing.assert_array_equal(dist[qi, :len(order)], d[qi, order])
+            np.testing.assert_array_equal(idx[qi, : len(order)], order)
+            np.testing.assert_array_equal(dist[qi, : len(order)], d[qi, order])
 
 
 def test_knn_in_sparse_regions_matches_brute_force():

@@ -5,11 +5,11 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from analytic_scenes import grid_plane
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
 import lf3pm
-from analytic_scenes import grid_plane
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.bag import cloud_dtype, write_bag
 from lf3pm.replays.motion import Motion
@@ -22,8 +22,12 @@ TYPES = get_typestore(Stores.ROS2_HUMBLE)
 @pytest.fixture(scope="module")
 def room():
     """A 20 x 20 m floor with a wall along x = 6, and a 1 s drive along x."""
-    pts = np.vstack([grid_plane((-10, -10, 0), (1, 0, 0), (0, 1, 0), 20, 20, 0.1),
-                     grid_plane((6, -10, 0.1), (0, 1, 0), (0, 0, 1), 20, 3, 0.1)])
+    pts = np.vstack(
+        [
+            grid_plane((-10, -10, 0), (1, 0, 0), (0, 1, 0), 20, 20, 0.1),
+            grid_plane((6, -10, 0.1), (0, 1, 0), (0, 0, 1), 20, 3, 0.1),
+        ]
+    )
     world = lf3pm.load_map(np.ascontiguousarray(pts))
     t = np.linspace(0.0, 1.0, 101)
     return world, Motion.from_arrays(t, t, 0 * t, 0.2 * t, np.ones_like(t), 0 * t, np.full_like(t, 0.2), map=world)
@@ -65,13 +69,12 @@ def test_bag_counts_stamps_and_points(room, tmp_path, sensor, layout):
         assert msg.header.frame_id == "lidar" and msg.width == scans.hits[k] > 1000
         record = np.frombuffer(msg.data.tobytes(), dtype=cloud_dtype(layout))
         scan = scans[k]
-        np.testing.assert_allclose(np.column_stack([record["x"], record["y"], record["z"]]), scan.points,
-                                   atol=1e-5)
+        np.testing.assert_allclose(np.column_stack([record["x"], record["y"], record["z"]]), scan.points, atol=1e-5)
         offsets = record["t"] * 1e-9 if layout == "ouster" else record["time"].astype(float)
         np.testing.assert_allclose(offsets, scan.stamps - (end - 0.1), atol=1e-6)
         assert offsets.min() > 0 and offsets.max() <= 0.1 + 1e-6
         rings = spinning_rings(scans.sensor)
-        expected = 0 if rings is None else rings[scan.ray]          # 0 is the lowest beam
+        expected = 0 if rings is None else rings[scan.ray]  # 0 is the lowest beam
         np.testing.assert_array_equal(record["ring"], expected)
     stamps = [logged for logged, _ in messages(path, "/imu")]
     assert stamps == [round((t + offset) * 1e9) for t in imu.t]
@@ -80,7 +83,9 @@ def test_bag_counts_stamps_and_points(room, tmp_path, sensor, layout):
     assert logged == round((0.5 + offset) * 1e9) and odom.child_frame_id == "base_link"
     p = motion.position([0.5])[0]
     assert [odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z] == pytest.approx(p)
-    assert odom.pose.pose.orientation.z == pytest.approx(np.sin(0.05)) and odom.twist.twist.angular.z == pytest.approx(0.2)
+    assert odom.pose.pose.orientation.z == pytest.approx(np.sin(0.05)) and odom.twist.twist.angular.z == pytest.approx(
+        0.2
+    )
     # The body frame's forward speed: 1 m/s along x, turned by yaw 0.1.
     assert odom.twist.twist.linear.x == pytest.approx(np.cos(0.1), abs=1e-6)
     static = messages(path, "/tf_static")[0][1].transforms

@@ -83,8 +83,13 @@ def test_numpy_without_its_vector_kernels_computes_the_same_bits(reference, tmp_
 
 def test_a_level_not_built_or_not_run_here_is_one_line(tmp_path):
     for asked, says in (("x86-64-v9", "this build has the core for"), ("", None)):
-        run = subprocess.run([sys.executable, "-m", "lf3pm", "sensors"], capture_output=True, text=True,
-                             env={**os.environ, "LF3PM_CORE": asked}, timeout=120)
+        run = subprocess.run(
+            [sys.executable, "-m", "lf3pm", "sensors"],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "LF3PM_CORE": asked},
+            timeout=120,
+        )
         if says is None:
             assert run.returncode == 0, run.stderr
             continue

@@ -24,8 +24,16 @@ def test_fit_is_monotone_and_intervals_bracket_it():
 
 def test_packaged_calibration_has_provenance():
     cal = packaged_calibration()
-    assert cal["predictor"] in ("q_min", "q_n", "q_max", "zhang", "condition_number", "cov_trace",
-                                "step_norm", "scaled_cov_trace")
+    assert cal["predictor"] in (
+        "q_min",
+        "q_n",
+        "q_max",
+        "zhang",
+        "condition_number",
+        "cov_trace",
+        "step_norm",
+        "scaled_cov_trace",
+    )
     for key in ("command", "sensor", "poses", "trials", "sigma_t", "lf3pm_version"):
         assert key in cal["provenance"]
 

@@ -26,8 +26,26 @@ def one_line_error(done, text):
 
 
 def plan(store, csv, png):
-    return CliRunner().invoke(app, ["plan", "--solm", store, "--start", *START, "--goal", *GOAL, "--robot", "diff",
-                                    "--r-safe", "0.1", "-o", str(csv), "--png", str(png)])
+    return CliRunner().invoke(
+        app,
+        [
+            "plan",
+            "--solm",
+            store,
+            "--start",
+            *START,
+            "--goal",
+            *GOAL,
+            "--robot",
+            "diff",
+            "--r-safe",
+            "0.1",
+            "-o",
+            str(csv),
+            "--png",
+            str(png),
+        ],
+    )
 
 
 def test_plan_writes_both_outputs_or_neither(store, tmp_path):
@@ -42,11 +60,13 @@ def test_plan_writes_both_outputs_or_neither(store, tmp_path):
 
 
 def test_figures_and_exports_into_missing_folders_are_one_line(store, tmp_path):
-    one_line_error(CliRunner().invoke(app, ["solm", "view", store, "-o", str(tmp_path / "no" / "q.png")]),
-                   "cannot write the file")
+    one_line_error(
+        CliRunner().invoke(app, ["solm", "view", store, "-o", str(tmp_path / "no" / "q.png")]), "cannot write the file"
+    )
     (tmp_path / "file").write_text("x")
-    one_line_error(CliRunner().invoke(app, ["solm", "export", store, str(tmp_path / "file" / "ros")]),
-                   "cannot create the folder")
+    one_line_error(
+        CliRunner().invoke(app, ["solm", "export", store, str(tmp_path / "file" / "ros")]), "cannot create the folder"
+    )
     one_line_error(CliRunner().invoke(app, ["solm", "view", store, "-o", str(tmp_path)]), "is a directory")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
@@ -58,9 +78,11 @@ def test_writes_onto_read_only_storage_are_one_line(store, tmp_path, mounted):
     runner = CliRunner()
     world = tmp_path / "boxes.npy"
     np.save(world, lf3pm.build_scene("boxes").points)
-    for args in (["scene", "boxes", "-o", str(ro / "x.pcd")],
-                 ["evaluate", str(world), "--pose", "0", "0", "1", "0", "--save-observations", str(ro / "o.npz")],
-                 ["solm", "view", store, "-o", str(ro / "v.png")]):
+    for args in (
+        ["scene", "boxes", "-o", str(ro / "x.pcd")],
+        ["evaluate", str(world), "--pose", "0", "0", "1", "0", "--save-observations", str(ro / "o.npz")],
+        ["solm", "view", store, "-o", str(ro / "v.png")],
+    ):
         one_line_error(runner.invoke(app, args), "Read-only file system")
     one_line_error(plan(store, ro / "t.csv", tmp_path / "p.png"), "Read-only file system")
     one_line_error(plan(store, tmp_path / "t.csv", ro / "p.png"), "Read-only file system")

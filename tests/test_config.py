@@ -12,8 +12,7 @@ from typer.testing import CliRunner
 import lf3pm
 from lf3pm import _core
 from lf3pm.cli import app
-from lf3pm.config import (DEFAULTS, ConfigError, MapConfig, MetricConfig, ScanConfig, load_config,
-                          to_yaml)
+from lf3pm.config import DEFAULTS, ConfigError, MapConfig, MetricConfig, ScanConfig, load_config, to_yaml
 from lf3pm.scenes import build_scene
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "config"
@@ -104,18 +103,21 @@ def test_robot_and_guidance_from_a_file():
     assert omni.robot.vmax_norm == 2.0  # derived from the new limit, not the default's 1
 
 
-@pytest.mark.parametrize("content, message", [
-    ("scan: {noise: .inf}\n", "c.yaml: scan.noise must be finite"),
-    ("scan: {seed: -1}\n", "c.yaml: scan.seed must be greater than or equal to 0, got -1"),
-    ("scan: {bogus: 1}\n", "c.yaml: scan.bogus is not a parameter lf3pm knows"),
-    ("bogus: {a: 1}\n", "c.yaml: bogus is not a parameter lf3pm knows"),
-    ("solm: {space: r4}\n", "c.yaml: solm.space must be 'r2', 'se2' or 'r3', got 'r4'"),
-    ("metric: {dof: 2.5}\n", "c.yaml: metric.dof must be 3 or 6"),
-    ("robot: {vmax_lon: 0}\n", "c.yaml: robot.vmax_lon must be greater than or equal to 0.001"),
-    ("robot: {wheels: 4}\n", "c.yaml: robot.wheels is not a parameter lf3pm knows"),
-    ("- a\n- b\n", "c.yaml: a config is a mapping of sections, got list"),
-    ("scan: [1, 2\n", "c.yaml: not YAML"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("scan: {noise: .inf}\n", "c.yaml: scan.noise must be finite"),
+        ("scan: {seed: -1}\n", "c.yaml: scan.seed must be greater than or equal to 0, got -1"),
+        ("scan: {bogus: 1}\n", "c.yaml: scan.bogus is not a parameter lf3pm knows"),
+        ("bogus: {a: 1}\n", "c.yaml: bogus is not a parameter lf3pm knows"),
+        ("solm: {space: r4}\n", "c.yaml: solm.space must be 'r2', 'se2' or 'r3', got 'r4'"),
+        ("metric: {dof: 2.5}\n", "c.yaml: metric.dof must be 3 or 6"),
+        ("robot: {vmax_lon: 0}\n", "c.yaml: robot.vmax_lon must be greater than or equal to 0.001"),
+        ("robot: {wheels: 4}\n", "c.yaml: robot.wheels is not a parameter lf3pm knows"),
+        ("- a\n- b\n", "c.yaml: a config is a mapping of sections, got list"),
+        ("scan: [1, 2\n", "c.yaml: not YAML"),
+    ],
+)
 def test_a_bad_config_file_is_one_line_naming_it(boxes, tmp_path, content, message):
     config = tmp_path / "c.yaml"
     config.write_text(content)
@@ -124,8 +126,9 @@ def test_a_bad_config_file_is_one_line_naming_it(boxes, tmp_path, content, messa
 
 
 def test_a_missing_config_file_is_one_line(boxes, tmp_path):
-    done = CliRunner().invoke(app, ["solm", "build", boxes, "-o", str(tmp_path / "s.zarr"),
-                                    "--config", str(tmp_path / "none.yaml")])
+    done = CliRunner().invoke(
+        app, ["solm", "build", boxes, "-o", str(tmp_path / "s.zarr"), "--config", str(tmp_path / "none.yaml")]
+    )
     assert "none.yaml: cannot read the config" in one_error_line(done)
     assert not (tmp_path / "s.zarr").exists()
 
@@ -142,4 +145,5 @@ def test_the_library_validates_through_the_same_sections(boxes):
         lf3pm.make_grid(world, "r2", 0.0)
     with pytest.raises(ConfigError, match="mde.trials must be greater than or equal to 1"):
         from lf3pm.validation import mde
+
         mde(world, (0, 0, 0.5, 0), trials=0)

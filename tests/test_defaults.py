@@ -14,8 +14,8 @@ from lf3pm.cli import app
 from lf3pm.config import DEFAULTS
 from lf3pm.experiments import benefit, correlation, table1
 from lf3pm.planner import Planner
-from lf3pm.trajectory import Robot
 from lf3pm.scenes import build_scene
+from lf3pm.trajectory import Robot
 
 #: A function's parameter named otherwise than its configuration parameter.
 ALIASES = {"sigma_r_deg": "sigma_r"}
@@ -104,7 +104,11 @@ OTHER_MEANINGS = {
     ("experiments/paired_stats.py", "compare", "seed"): "the bootstrap's own stream",
     ("planner/esdf.py", "traversable", "r_safe"): "0: no clearance beyond the robot radius",
     ("planner/esdf.py", "blocked_reason", "r_safe"): "0: no clearance beyond the robot radius",
-    ("planner/graph_search.py", "search_path", "r_safe"): "the bare search: 0, no clearance; Planner passes the robot's",
+    (
+        "planner/graph_search.py",
+        "search_path",
+        "r_safe",
+    ): "the bare search: 0, no clearance; Planner passes the robot's",
     ("planner/graph_search.py", "search_path", "weight"): "the bare search's lambda; Planner passes the guidance's",
     ("planner/shortcut.py", "shortcut_path", "weight"): "0: geometry only; Planner passes the guidance's",
     ("scan/scan_simulator.py", "simulate_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
@@ -130,7 +134,7 @@ def literal_defaults():
                 continue
             args = node.args
             positional = args.posonlyargs + args.args
-            pairs = list(zip(positional[len(positional) - len(args.defaults):], args.defaults))
+            pairs = list(zip(positional[len(positional) - len(args.defaults) :], args.defaults))
             pairs += [(a, d) for a, d in zip(args.kwonlyargs, args.kw_defaults) if d is not None]
             for arg, default in pairs:
                 if arg.arg in names and isinstance(default, ast.Constant) and default.value is not None:
@@ -140,6 +144,9 @@ def literal_defaults():
 def test_no_configuration_default_is_written_twice():
     """No function writes a configuration parameter's default as a literal of its own:
     it reads lf3pm.config.DEFAULTS (or the parameter means something else, listed above)."""
-    found = [f"{module}: {function}({name}={value!r})" for module, function, name, value in literal_defaults()
-             if (module, function, name) not in OTHER_MEANINGS]
+    found = [
+        f"{module}: {function}({name}={value!r})"
+        for module, function, name, value in literal_defaults()
+        if (module, function, name) not in OTHER_MEANINGS
+    ]
     assert not found, "defaults written outside lf3pm.config: " + "; ".join(found)

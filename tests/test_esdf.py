@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import lf3pm.planner.esdf as esdf_module
-from lf3pm.planner.esdf import Esdf
 from lf3pm.grid_field import GridField
+from lf3pm.planner.esdf import Esdf
 
 
 def box_distance(cells, x0, y0, res, px, py):
@@ -38,10 +38,12 @@ def query_points(rng, shape, x0, y0, res):
     ny, nx = shape
     vx, vy = rng.integers(0, nx + 1, 600), rng.integers(0, ny + 1, 600)
     cx, cy = rng.integers(0, nx, 300) + 0.5, rng.integers(0, ny, 300) + 0.5
-    u = np.concatenate([rng.uniform(-1, nx + 1, 3000), vx + rng.normal(0, 0.03, 600), vx[:200],
-                        cx, rng.integers(0, nx + 1, 300)])
-    v = np.concatenate([rng.uniform(-1, ny + 1, 3000), vy + rng.normal(0, 0.03, 600), vy[:200],
-                        cy, rng.uniform(0, ny, 300)])
+    u = np.concatenate(
+        [rng.uniform(-1, nx + 1, 3000), vx + rng.normal(0, 0.03, 600), vx[:200], cx, rng.integers(0, nx + 1, 300)]
+    )
+    v = np.concatenate(
+        [rng.uniform(-1, ny + 1, 3000), vy + rng.normal(0, 0.03, 600), vy[:200], cy, rng.uniform(0, ny, 300)]
+    )
     return x0 + u * res, y0 + v * res
 
 
@@ -133,8 +135,13 @@ def test_bilinear_gradient_matches_finite_differences():
     y = rng.uniform(2.0 + 0.2, 2.0 + 15 * 0.4 - 0.2, 50)
     value, grad = esdf.distance(x, y)
     h = 1e-6
-    num = np.stack([(esdf.distance(x + h, y)[0] - esdf.distance(x - h, y)[0]) / (2 * h),
-                    (esdf.distance(x, y + h)[0] - esdf.distance(x, y - h)[0]) / (2 * h)], axis=-1)
+    num = np.stack(
+        [
+            (esdf.distance(x + h, y)[0] - esdf.distance(x - h, y)[0]) / (2 * h),
+            (esdf.distance(x, y + h)[0] - esdf.distance(x, y - h)[0]) / (2 * h),
+        ],
+        axis=-1,
+    )
     assert value.shape == (50,) and grad.shape == (50, 2)
     np.testing.assert_allclose(grad, num, atol=1e-5)
     assert np.abs(grad).max() > 0.1  # the field is not flat where sampled

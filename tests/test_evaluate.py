@@ -6,20 +6,21 @@ import sys
 
 import numpy as np
 import pytest
+from analytic_scenes import box_room, grid_plane
+from reference_metric import reference_metric
+from shared_data import shared_file
 
 import lf3pm
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError, MapError, PoseError, SensorError
 from lf3pm.io import write_points
-from analytic_scenes import box_room, grid_plane
-from reference_metric import reference_metric
-from shared_data import shared_file
 
 
 def metric_of_rows(A, b):
     """The metric of explicit rows: NumPy Gram, then the core's Gram path."""
     M = np.hstack([A, b[:, None]])
     return _core.metric_from_gram(M.T @ M, len(b)).as_dict()
+
 
 REQUIRED = ("sigma1", "xi", "q_min", "q_n", "q_max", "m")
 
@@ -37,8 +38,9 @@ def room_file(tmp_path_factory):
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", *map(str, args)], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_python_api_fields_and_observations_match_the_reference(room_file):
@@ -80,16 +82,27 @@ def test_a_corridor_without_ends_is_degenerate_not_a_crash():
     # across a crease tilt arbitrarily (as FAST-LIO's do) and break the symmetry.
     wall = grid_plane((3.0, -200.0, -0.5), (0, 1, 0), (0, 0, 1), 400.0, 3.5, 0.1)
     floor = grid_plane((-5.0, -200.0, -1.0), (1, 0, 0), (0, 1, 0), 7.5, 400.0, 0.1)
-    res = lf3pm.evaluate(np.ascontiguousarray(np.vstack([wall, floor])), (0.0, 0.0, 0.0, 0.0),
-                         "vlp16", noise=0.0)
+    res = lf3pm.evaluate(np.ascontiguousarray(np.vstack([wall, floor])), (0.0, 0.0, 0.0, 0.0), "vlp16", noise=0.0)
     assert res.m > 1000
     assert res.degenerate and res.q_n == np.inf and res.to_dict()["q_n"] is None
 
 
 def test_cli_json_and_saved_observations(room_file, tmp_path):
     obs = tmp_path / "obs.npz"
-    out = run_cli("evaluate", room_file, "--pose", "-0.5", "0.5", "0.2", "-1.0", "--seed", "3",
-                  "--json", "--save-observations", obs)
+    out = run_cli(
+        "evaluate",
+        room_file,
+        "--pose",
+        "-0.5",
+        "0.5",
+        "0.2",
+        "-1.0",
+        "--seed",
+        "3",
+        "--json",
+        "--save-observations",
+        obs,
+    )
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     for key in REQUIRED:
@@ -114,16 +127,21 @@ def test_cli_sensors_lists_presets():
         assert name in out.stdout
 
 
-@pytest.mark.parametrize("args,needle", [
-    (("evaluate", "missing.pcd", "--pose", "0", "0", "0", "0"), "no such file"),
-    (("evaluate", "{room}", "--pose", "50", "0", "0", "0"), "outside"),
-    (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--sensor", "nosuch"), "unknown sensor"),
-    (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--dof", "4"), "dof"),
-    (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--noise", "-1"), "noise"),
-    (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--save-observations", "/nonexistent/o.npz"),
-     "cannot write"),
-    (("evaluate", "{bad}", "--pose", "0", "0", "0", "0"), "unknown suffix"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("evaluate", "missing.pcd", "--pose", "0", "0", "0", "0"), "no such file"),
+        (("evaluate", "{room}", "--pose", "50", "0", "0", "0"), "outside"),
+        (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--sensor", "nosuch"), "unknown sensor"),
+        (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--dof", "4"), "dof"),
+        (("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--noise", "-1"), "noise"),
+        (
+            ("evaluate", "{room}", "--pose", "0", "0", "0", "0", "--save-observations", "/nonexistent/o.npz"),
+            "cannot write",
+        ),
+        (("evaluate", "{bad}", "--pose", "0", "0", "0", "0"), "unknown suffix"),
+    ],
+)
 def test_cli_bad_input_is_one_line_and_nonzero(room_file, tmp_path, args, needle):
     bad = tmp_path / "map.xyz"
     bad.write_text("1 2 3\n")

@@ -18,8 +18,14 @@ from lf3pm.experiments.paired_stats import compare, median_ratio_ci, worse_beyon
 def test_paired_comparison_by_hand():
     guided = np.array([0.01, 0.02, 0.5, 0.04, 2.0])
     unguided = np.array([0.1, 0.01, 1.0, 0.4, 4.0])
-    c = compare(guided, unguided, guided_length=[11, 10, 12, 10, 10], unguided_length=[10] * 5,
-                guided_duration=[10] * 5, unguided_duration=[8] * 5)
+    c = compare(
+        guided,
+        unguided,
+        guided_length=[11, 10, 12, 10, 10],
+        unguided_length=[10] * 5,
+        guided_duration=[10] * 5,
+        unguided_duration=[8] * 5,
+    )
     ratios = guided / unguided  # 0.1, 2, 0.5, 0.1, 0.5
     assert c["pairs"] == 5 and c["median_ratio"] == pytest.approx(np.median(ratios))
     assert c["share_worse"] == pytest.approx(0.2)
@@ -66,11 +72,25 @@ def test_bad_comparisons_and_guidance_are_one_line_errors():
 
 def test_quick_study_end_to_end(tmp_path):
     out = tmp_path / "benefit"
-    bad = subprocess.run([sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "some",
-                          "-o", str(out)], capture_output=True, text=True)
+    bad = subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "some", "-o", str(out)],
+        capture_output=True,
+        text=True,
+    )
     assert bad.returncode == 2 and "--lio must be 'all' or 'default'" in bad.stderr and not out.exists()
     # The LIO on the default's and the unguided plans only (the full study replays every plan).
-    command = [sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "default", "-o", str(out)]
+    command = [
+        sys.executable,
+        "-m",
+        "lf3pm.cli",
+        "experiment",
+        "benefit",
+        "--quick",
+        "--lio",
+        "default",
+        "-o",
+        str(out),
+    ]
     run = subprocess.run(command, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
     summary = json.loads((out / "summary.json").read_text())
@@ -91,8 +111,9 @@ def test_quick_study_end_to_end(tmp_path):
     lio_plans = [p["plans"][n]["lio"] for p in summary["pairs"] for n in ("none", "default")]
     assert all(len(plan["rest_steady_per_seed"]) == 1 for plan in lio_plans)
     assert sum(v["replays"] for v in summary["lio_rest"].values()) == len(lio_plans)
-    steady_pairs = sum(all(p["plans"][n]["lio"]["rest_steady_per_seed"][0] for n in ("none", "default"))
-                       for p in summary["pairs"])
+    steady_pairs = sum(
+        all(p["plans"][n]["lio"]["rest_steady_per_seed"][0] for n in ("none", "default")) for p in summary["pairs"]
+    )
     assert summary["comparisons"]["lio_steady"]["default"]["pairs"] == steady_pairs
     loc = summary["comparisons"]["localization"]
     assert loc["default"]["pairs"] == 2 and set(loc["default_by_map"]) == {"tunnel", "orientation"}
@@ -134,8 +155,14 @@ def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
 
     csv, replays = tmp_path / "trajectories" / "00_omni_default.csv", tmp_path / "replays"
     replays.mkdir()
-    names = ["00_default_localization_0.json", "00_default_lio_2.json", "00_default_lio-genz_0.json",  # this plan's
-             "00_default_x_lio_0.json", "01_default_lio_0.json", "00_none_lio_0.json"]  # others'
+    names = [
+        "00_default_localization_0.json",
+        "00_default_lio_2.json",
+        "00_default_lio-genz_0.json",  # this plan's
+        "00_default_x_lio_0.json",
+        "01_default_lio_0.json",
+        "00_none_lio_0.json",
+    ]  # others'
     write_plan(line(1.0), csv, replays, "00_default_")
     for name in names:
         (replays / name).write_text("{}")
@@ -165,8 +192,10 @@ def test_a_lio_replay_saved_without_its_rest_gets_it_added(tmp_path, monkeypatch
     lio, localization = tmp_path / "00_none_lio_1.json", tmp_path / "00_none_localization_1.json"
     for path in (lio, localization):
         path.write_text(json.dumps(old))
-    tasks = [replay_tasks.ReplayTask(QUICK[1], "plan.csv", "lio", 1, lio, {"odometry": "genz"}),
-             replay_tasks.ReplayTask(QUICK[1], "plan.csv", "localization", 1, localization)]
+    tasks = [
+        replay_tasks.ReplayTask(QUICK[1], "plan.csv", "lio", 1, lio, {"odometry": "genz"}),
+        replay_tasks.ReplayTask(QUICK[1], "plan.csv", "localization", 1, localization),
+    ]
     replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)
     assert json.loads(lio.read_text()) == {**old, "rest": rest}
     assert json.loads(localization.read_text()) == old
@@ -183,16 +212,28 @@ def test_localization_error_fit_counts_its_own_phase(tmp_path):
     from lf3pm.experiments.localization_error import localization_error_fit
 
     case = SimpleNamespace(name="m", sensor="vlp16")
-    records = [{"case": "m", "pair": k, "plans": {g: {"csv": "unused.csv", "localization": {"ape": 0.01}}
-                                                  for g in ("none", "default")}} for k in range(2)]
+    records = [
+        {
+            "case": "m",
+            "pair": k,
+            "plans": {g: {"csv": "unused.csv", "localization": {"ape": 0.01}} for g in ("none", "default")},
+        }
+        for k in range(2)
+    ]
     for pair in records:
         for name in pair["plans"]:
             path = tmp_path / "predictors" / "m" / f"{pair['pair']:02d}_{name}.json"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps({"q_n_mean": 0.1, "degenerate_share": 0.0, "poses": 10}))
     calls = []
-    localization_error_fit(tmp_path, [case], records, seeds=1, pair_seed=0,
-                           step=lambda label, total, advance=1, restart=False: calls.append((total, advance, restart)))
+    localization_error_fit(
+        tmp_path,
+        [case],
+        records,
+        seeds=1,
+        pair_seed=0,
+        step=lambda label, total, advance=1, restart=False: calls.append((total, advance, restart)),
+    )
     assert calls[0] == (4, 0, True)
     assert sum(advance for _, advance, _ in calls) == 4 and not any(restart for *_, restart in calls[1:])
     assert (tmp_path / "localization_error.json").is_file()
@@ -204,11 +245,18 @@ def test_goal_is_not_judged_without_seed_noise():
     from lf3pm.experiments.benefit import STEADY, _goal
 
     def comparisons(worse):
-        safe = {"pairs": 10, "median_ratio": 1.0, "median_ratio_ci95": (0.97, 1.03),
-                "share_worse_beyond_noise_and_margin": worse}
+        safe = {
+            "pairs": 10,
+            "median_ratio": 1.0,
+            "median_ratio_ci95": (0.97, 1.03),
+            "share_worse_beyond_noise_and_margin": worse,
+        }
         by_risk = {"by_risk": {"default": {"no_risk": safe}}}
-        return {"localization": {**by_risk, "default": {"pairs": 10, "median_length_overhead": 0.01}},
-                "lio": by_risk, STEADY: by_risk}
+        return {
+            "localization": {**by_risk, "default": {"pairs": 10, "median_length_overhead": 0.01}},
+            "lio": by_risk,
+            STEADY: by_risk,
+        }
 
     assert _goal(comparisons(math.nan))["lio_no_risk_worse_on_at_most_10pct"] is None
     assert _goal(comparisons(0.05))["lio_no_risk_worse_on_at_most_10pct"] is True

@@ -6,12 +6,12 @@ import json
 import numpy as np
 import pytest
 from scipy.stats import spearmanr
+from shared_data import shared_file
 
 import lf3pm
 from lf3pm.experiments import correlation
 from lf3pm.experiments.free_poses import GroundGrid, random_free_poses
 from lf3pm.scenes import build_scene
-from shared_data import shared_file
 
 
 def test_free_poses_are_free_and_at_sensor_height():
@@ -19,8 +19,7 @@ def test_free_poses_are_free_and_at_sensor_height():
     world = lf3pm.load_map(scene.points)
     rng = np.random.default_rng(0)
     lower, upper = world.bounds
-    poses = random_free_poses(world, 10, rng, sensor_height=1.0,
-                              region=(lower[0], lower[1], upper[0], upper[1]))
+    poses = random_free_poses(world, 10, rng, sensor_height=1.0, region=(lower[0], lower[1], upper[0], upper[1]))
     assert len(poses) == 10
     ground = GroundGrid(world)
     probes = np.array([p[:3] for p in poses])
@@ -31,7 +30,7 @@ def test_free_poses_are_free_and_at_sensor_height():
 
 
 def test_correlation_study_writes_summary_csv_and_scatter(tmp_path):
-    for name in correlation.REAL_MAPS:   # the study reads them
+    for name in correlation.REAL_MAPS:  # the study reads them
         shared_file(name)
     summary = correlation.run(tmp_path, poses_per_map=3, trials=1, bootstrap=20)
     on_disk = json.loads((tmp_path / "summary.json").read_text())
@@ -62,9 +61,16 @@ def test_analysis_ranks_predictors_on_records_made_for_it():
     for map_name, offset in (("a", 0.0), ("b", 10.0)):
         for k in range(12):
             mde = offset + k
-            records.append({"map": map_name, "mde": mde, "q_n": mde, "zhang": -mde, "q_min": offset - k,
-                            **{name: rng.normal() for name in correlation.PREDICTORS
-                               if name not in ("q_n", "zhang", "q_min")}})
+            records.append(
+                {
+                    "map": map_name,
+                    "mde": mde,
+                    "q_n": mde,
+                    "zhang": -mde,
+                    "q_min": offset - k,
+                    **{name: rng.normal() for name in correlation.PREDICTORS if name not in ("q_n", "zhang", "q_min")},
+                }
+            )
     summary = correlation.analyse(records, 200, np.random.default_rng(0))
     p = summary["predictors"]
     assert p["q_n"]["rho"] == pytest.approx(1.0) and p["zhang"]["rho"] == pytest.approx(1.0)

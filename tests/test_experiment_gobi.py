@@ -11,8 +11,7 @@ from lf3pm.solm import Solm
 
 
 def test_reduced_gobi_experiment_writes_every_guidance(tmp_path):
-    setup = replace(gobi.REDUCED, solm_res=2.0, yaw_bins=18, mde_every=6.0, mde_trials=2, ray_stride=4,
-                    replay_seeds=1)
+    setup = replace(gobi.REDUCED, solm_res=2.0, yaw_bins=18, mde_every=6.0, mde_trials=2, ray_stride=4, replay_seeds=1)
     summary = gobi.run(tmp_path, setup)
     assert set(summary["results"]) == {"q_n", "q_min", "step_norm", "default", "none"}
     assert json.loads((tmp_path / "summary.json").read_text())["results"].keys() == summary["results"].keys()

@@ -17,8 +17,15 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.config import (MAX_CELL_SIZE, MAX_CELLS_CEILING, MAX_LIMIT, MAX_RES, MAX_TRAJECTORY_SECONDS,
-                          ConfigError, load_config)
+from lf3pm.config import (
+    MAX_CELL_SIZE,
+    MAX_CELLS_CEILING,
+    MAX_LIMIT,
+    MAX_RES,
+    MAX_TRAJECTORY_SECONDS,
+    ConfigError,
+    load_config,
+)
 from lf3pm.errors import Lf3pmError, SensorError
 from lf3pm.limits import EXCERPT, MAX_TEXT_BYTES, MAX_TRAJECTORY_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES
 from lf3pm.scenes import build_scene
@@ -57,8 +64,9 @@ def invoke(*args):
 
 def run_cli(*args, timeout=120):
     """The CLI in a subprocess (warnings are printed there, not recorded by pytest)."""
-    return subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", *map(str, args)], capture_output=True, text=True, timeout=timeout
+    )
 
 
 def alias_bomb(levels: int = 9) -> str:
@@ -72,15 +80,21 @@ def alias_bomb(levels: int = 9) -> str:
 # --- resource limits -----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("options, text", [
-    (["--res", "1e9"], f"--res must be less than or equal to {MAX_RES:g}"),   # spun forever
-    (["--res", "1e7"], f"--res must be less than or equal to {MAX_RES:g}"),   # 54 s for one cell
-    (["--res", "50"], "res 50 m is wider than the grid"),
-    (["--res", "1e-300"], "more than 10,000,000 poses"),
-    (["--res", "5e-324"], "more than 10,000,000 poses"),
-    (["--max-cells", str(10 * MAX_CELLS_CEILING)], f"--max-cells must be less than or equal to {MAX_CELLS_CEILING}"),
-    (["--space", "r3", "--res", "1e-300"], "raise --max-cells"),
-])
+@pytest.mark.parametrize(
+    "options, text",
+    [
+        (["--res", "1e9"], f"--res must be less than or equal to {MAX_RES:g}"),  # spun forever
+        (["--res", "1e7"], f"--res must be less than or equal to {MAX_RES:g}"),  # 54 s for one cell
+        (["--res", "50"], "res 50 m is wider than the grid"),
+        (["--res", "1e-300"], "more than 10,000,000 poses"),
+        (["--res", "5e-324"], "more than 10,000,000 poses"),
+        (
+            ["--max-cells", str(10 * MAX_CELLS_CEILING)],
+            f"--max-cells must be less than or equal to {MAX_CELLS_CEILING}",
+        ),
+        (["--space", "r3", "--res", "1e-300"], "raise --max-cells"),
+    ],
+)
 def test_solm_sizes_are_bounded_in_the_cli(boxes, tmp_path, options, text):
     done, started = invoke("solm", "build", boxes, "-o", tmp_path / "x.zarr", *options)
     one_line_error(done, text, within=20, started=started)
@@ -116,8 +130,9 @@ def test_a_replay_is_bounded_in_time(boxes, tmp_path):
     csv = tmp_path / "long.csv"
     csv.write_text(f"t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n{MAX_TRAJECTORY_SECONDS + 1:g},0.1,0,0,0,0,0\n")
     done, started = invoke("replay", csv, "--map", tmp_path / "missing.npy")  # refused before the map is read
-    one_line_error(done, f"more than {MAX_TRAJECTORY_SECONDS:g} s, the longest lf3pm replays", within=20,
-                   started=started)
+    one_line_error(
+        done, f"more than {MAX_TRAJECTORY_SECONDS:g} s, the longest lf3pm replays", within=20, started=started
+    )
     with open(csv, "ab") as fp:
         fp.truncate(MAX_TRAJECTORY_BYTES + 1)  # sparse: no disk used
     for path, text in (("/dev/zero", "not a regular file"), (csv, f"larger than {MAX_TRAJECTORY_BYTES:,} bytes")):
@@ -128,8 +143,23 @@ def test_a_replay_is_bounded_in_time(boxes, tmp_path):
 def test_robot_limits_are_bounded(tmp_path):
     # 1e12 m/s and friends gave a 6e6 s trajectory; refused before the SOLM is opened.
     for flag in ("--vmax-lon", "--vmax-lat", "--wmax", "--amax-lon", "--amax-lat", "--alpha-max"):
-        done, started = invoke("plan", "--solm", tmp_path / "missing.zarr", "--start", "0", "0", "0", "--goal", "1",
-                               "1", "0", "-o", tmp_path / "t.csv", flag, "1e12")
+        done, started = invoke(
+            "plan",
+            "--solm",
+            tmp_path / "missing.zarr",
+            "--start",
+            "0",
+            "0",
+            "0",
+            "--goal",
+            "1",
+            "1",
+            "0",
+            "-o",
+            tmp_path / "t.csv",
+            flag,
+            "1e12",
+        )
         one_line_error(done, f"{flag} must be less than or equal to {MAX_LIMIT:g}", within=20, started=started)
     from lf3pm.trajectory.robots import Robot
 
@@ -157,18 +187,20 @@ def test_a_sensor_pattern_is_bounded_before_it_is_read(tmp_path):
     # without reading 320 MB.
     pattern = tmp_path / "huge.npy"
     with open(pattern, "wb") as fp:
-        np.lib.format.write_array_header_1_0(fp, {"descr": "<f8", "fortran_order": False,
-                                                  "shape": (MAX_RAYS + 1, 2)})
+        np.lib.format.write_array_header_1_0(fp, {"descr": "<f8", "fortran_order": False, "shape": (MAX_RAYS + 1, 2)})
         fp.truncate(fp.tell() + 16 * (MAX_RAYS + 1))
     sensor = tmp_path / "s.yaml"
-    sensor.write_text(f"name: huge\nmin_range: 0.5\nmax_range: 100\npattern_file: {pattern}\n"
-                      "point_rate: 100000\nintegration_time: 0.1\n")
+    sensor.write_text(
+        f"name: huge\nmin_range: 0.5\nmax_range: 100\npattern_file: {pattern}\n"
+        "point_rate: 100000\nintegration_time: 0.1\n"
+    )
     started = time.monotonic()
     with pytest.raises(SensorError, match=f"more than the limit of {MAX_RAYS:,}"):
         load_sensor_yaml(sensor)
     assert time.monotonic() - started < 5
-    sensor.write_text("name: " + "n" * 1000 + "\nmin_range: 0.5\nmax_range: 100\nelevations_deg: [0]\n"
-                      "azimuth_count: 10\n")
+    sensor.write_text(
+        "name: " + "n" * 1000 + "\nmin_range: 0.5\nmax_range: 100\nelevations_deg: [0]\nazimuth_count: 10\n"
+    )
     with pytest.raises(SensorError, match="'name' must be at most 64 characters, got 1,000"):
         load_sensor_yaml(sensor)
 
@@ -201,12 +233,15 @@ def test_a_config_larger_than_the_limit_is_refused(tmp_path):
     assert CliRunner().invoke(app, ["config", "--config", str(big)]).exit_code == 0  # just below: read
 
 
-@pytest.mark.parametrize("text, message", [
-    (alias_bomb(), f"aliases expand to more than {MAX_YAML_NODES:,} values"),
-    ("scan: &a {noise: [*a]}\n", "an alias inside the node it names"),
-    ("scan: {noise: " + "[" * 400 + "]" * 400 + "}\n", f"nested deeper than {MAX_YAML_DEPTH} levels"),
-    ("1: 2\n", "key 1 is not a parameter name"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (alias_bomb(), f"aliases expand to more than {MAX_YAML_NODES:,} values"),
+        ("scan: &a {noise: [*a]}\n", "an alias inside the node it names"),
+        ("scan: {noise: " + "[" * 400 + "]" * 400 + "}\n", f"nested deeper than {MAX_YAML_DEPTH} levels"),
+        ("1: 2\n", "key 1 is not a parameter name"),
+    ],
+)
 def test_yaml_beyond_the_limits_is_one_short_line(tmp_path, text, message):
     config = tmp_path / "c.yaml"
     config.write_text(text)
@@ -218,8 +253,11 @@ def test_yaml_beyond_the_limits_is_one_short_line(tmp_path, text, message):
 
 def test_errors_quote_a_short_excerpt_of_a_value(tmp_path):
     config = tmp_path / "c.yaml"
-    for value in ('"' + "x" * 100_000 + '"', "[" + ", ".join(["[1, 2, 3]"] * 10_000) + "]",
-                  "{" + ", ".join(f"k{i}: {i}" for i in range(10_000)) + "}"):
+    for value in (
+        '"' + "x" * 100_000 + '"',
+        "[" + ", ".join(["[1, 2, 3]"] * 10_000) + "]",
+        "{" + ", ".join(f"k{i}: {i}" for i in range(10_000)) + "}",
+    ):
         config.write_text(f"scan:\n  noise: {value}\n")
         line = config_error(config)
         assert line.startswith(f"lf3pm: error: {config}: scan.noise must be") and len(line) < SHORT, line[:SHORT]
@@ -236,8 +274,13 @@ def test_sensor_files_are_read_within_the_same_limits(tmp_path, boxes):
             load_sensor_yaml(path)
         done, started = invoke("evaluate", boxes, "--pose", "0", "0", "1", "0", "--sensor", path)
         assert len(one_line_error(done, message, within=20, started=started)) < SHORT
-    sensor.write_text("name: s\nmin_range: 0.5\nmax_range: 100\nazimuth_count: 10\nelevations_deg: ["
-                      + ", ".join(["0"] * 1000) + ', "' + "y" * 10_000 + '"]\n')
+    sensor.write_text(
+        "name: s\nmin_range: 0.5\nmax_range: 100\nazimuth_count: 10\nelevations_deg: ["
+        + ", ".join(["0"] * 1000)
+        + ', "'
+        + "y" * 10_000
+        + '"]\n'
+    )
     with pytest.raises(SensorError, match="item 1000 must be a finite number") as err:
         load_sensor_yaml(sensor)
     assert len(str(err.value)) < SHORT
@@ -249,8 +292,9 @@ def test_sensor_files_are_read_within_the_same_limits(tmp_path, boxes):
 def test_paths_and_values_are_printed_verbatim(boxes, tmp_path):
     # Rich markup took "[red]" for a tag and "[nan, ...]" too: both vanished.
     one_line_error(invoke("info", "bad/[red]map.pcd")[0], "bad/[red]map.pcd: no such file")
-    one_line_error(invoke("evaluate", boxes, "--pose", "nan", "0", "1", "0")[0],
-                   "pose has non-finite values: [nan, 0.0, 1.0, 0.0]")
+    one_line_error(
+        invoke("evaluate", boxes, "--pose", "nan", "0", "1", "0")[0], "pose has non-finite values: [nan, 0.0, 1.0, 0.0]"
+    )
     one_line_error(invoke("config", "--config", tmp_path / "[bold]c.yaml")[0], "[bold]c.yaml: cannot read")
     one_line_error(invoke("info", tmp_path / "two\nlines.npy")[0], "two\\nlines.npy: no such file")
 
@@ -270,14 +314,16 @@ def test_warnings_are_one_line_without_source(tmp_path):
     np.save(path, points)
     done = run_cli("info", path)
     assert done.returncode == 0, done.stderr
-    assert done.stderr.splitlines() == [f"lf3pm: warning: {path}: dropped 3 of {len(points)} points with a NaN "
-                                        "or infinite coordinate"]
+    assert done.stderr.splitlines() == [
+        f"lf3pm: warning: {path}: dropped 3 of {len(points)} points with a NaN or infinite coordinate"
+    ]
 
 
 @pytest.mark.skipif(importlib.util.find_spec("evalio") is None, reason="the LIO is not installed")
 def test_an_odometry_on_a_sensor_it_loses_is_warned_in_one_line(boxes):
-    done = run_cli("replay", "missing.csv", "--map", boxes, "--method", "lio", "--odometry", "dlio",
-                   "--sensor", "mid70")
+    done = run_cli(
+        "replay", "missing.csv", "--map", boxes, "--method", "lio", "--odometry", "dlio", "--sensor", "mid70"
+    )
     warning, error = done.stderr.splitlines()
     assert warning.startswith("lf3pm: warning: mid70 with dlio: DLIO loses track") and "docs/lio.md" in warning
     assert error.startswith("lf3pm: error: missing.csv") and done.returncode == 2
@@ -318,18 +364,47 @@ def blocked(tmp_path):
 def test_outputs_are_checked_before_any_input_is_read(blocked, tmp_path):
     # The inputs do not exist: an error about the output proves it came first.
     missing = tmp_path / "missing"
-    for args in (["replay", missing / "t.csv", "--map", missing / "m.npy", "--png", blocked / "r.png"],
-                 ["replay", missing / "t.csv", "--map", missing / "m.npy", "--bag", blocked / "r.bag"],
-                 ["solm", "build", missing / "m.npy", "-o", blocked / "s.zarr"],
-                 ["solm", "view", missing / "s.zarr", "-o", blocked / "v.png"],
-                 ["plan", "--solm", missing / "s.zarr", "--start", "0", "0", "0", "--goal", "1", "1", "0",
-                  "-o", blocked / "t.csv"],
-                 ["plan", "--solm", missing / "s.zarr", "--start", "0", "0", "0", "--goal", "1", "1", "0",
-                  "-o", tmp_path / "t.csv", "--png", blocked / "p.png"],
-                 ["evaluate", missing / "m.npy", "--pose", "0", "0", "1", "0", "--save-observations",
-                  blocked / "o.npz"],
-                 ["experiment", "table1", "-o", blocked / "deeper" / "out"],
-                 ["scene", "boxes", "-o", blocked / "b.pcd"]):
+    for args in (
+        ["replay", missing / "t.csv", "--map", missing / "m.npy", "--png", blocked / "r.png"],
+        ["replay", missing / "t.csv", "--map", missing / "m.npy", "--bag", blocked / "r.bag"],
+        ["solm", "build", missing / "m.npy", "-o", blocked / "s.zarr"],
+        ["solm", "view", missing / "s.zarr", "-o", blocked / "v.png"],
+        [
+            "plan",
+            "--solm",
+            missing / "s.zarr",
+            "--start",
+            "0",
+            "0",
+            "0",
+            "--goal",
+            "1",
+            "1",
+            "0",
+            "-o",
+            blocked / "t.csv",
+        ],
+        [
+            "plan",
+            "--solm",
+            missing / "s.zarr",
+            "--start",
+            "0",
+            "0",
+            "0",
+            "--goal",
+            "1",
+            "1",
+            "0",
+            "-o",
+            tmp_path / "t.csv",
+            "--png",
+            blocked / "p.png",
+        ],
+        ["evaluate", missing / "m.npy", "--pose", "0", "0", "1", "0", "--save-observations", blocked / "o.npz"],
+        ["experiment", "table1", "-o", blocked / "deeper" / "out"],
+        ["scene", "boxes", "-o", blocked / "b.pcd"],
+    ):
         done, started = invoke(*args)
         one_line_error(done, f"{blocked} is not a folder", within=20, started=started)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
@@ -339,8 +414,10 @@ def test_outputs_into_missing_or_existing_places(tmp_path, boxes):
     missing = tmp_path / "missing"
     one_line_error(invoke("scene", "boxes", "-o", missing / "b.pcd")[0], f"{missing} does not exist; create it")
     (tmp_path / "old.bag").mkdir()
-    one_line_error(invoke("replay", "t.csv", "--map", boxes, "--bag", tmp_path / "old.bag")[0],
-                   "old.bag exists: lf3pm writes it as a new folder")
+    one_line_error(
+        invoke("replay", "t.csv", "--map", boxes, "--bag", tmp_path / "old.bag")[0],
+        "old.bag exists: lf3pm writes it as a new folder",
+    )
     # A folder to be created with its parents passes (its probe removed), then the next check fails.
     done = CliRunner().invoke(app, ["experiment", "table1", "-o", str(tmp_path / "a" / "b"), "--poses", "0"])
     assert done.exit_code == 2 and "--poses must be" in done.stderr
@@ -357,10 +434,12 @@ def test_a_read_only_output_fails_before_the_work(tmp_path, boxes):
     if done.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
     try:
-        for args in (["replay", tmp_path / "t.csv", "--map", boxes, "--png", mount / "r.png"],
-                     ["replay", tmp_path / "t.csv", "--map", boxes, "--bag", mount / "r.bag"],
-                     ["solm", "build", boxes, "-o", mount / "s.zarr"],
-                     ["experiment", "benefit", "-o", mount / "b"]):
+        for args in (
+            ["replay", tmp_path / "t.csv", "--map", boxes, "--png", mount / "r.png"],
+            ["replay", tmp_path / "t.csv", "--map", boxes, "--bag", mount / "r.bag"],
+            ["solm", "build", boxes, "-o", mount / "s.zarr"],
+            ["experiment", "benefit", "-o", mount / "b"],
+        ):
             done, started = invoke(*args)
             one_line_error(done, "Read-only file system", within=20, started=started)
         assert list(mount.iterdir()) == []
@@ -371,10 +450,14 @@ def test_a_read_only_output_fails_before_the_work(tmp_path, boxes):
 # --- command lines click cannot parse ----------------------------------------------------
 
 
-@pytest.mark.parametrize("args, text", [(["plann"], "No such command 'plann'"),
-                                        (["solm", "build", "m.pcd", "-o", "s.zarr", "--max-cells", "abc"],
-                                         "Invalid value for '--max-cells'"),
-                                        (["plan", "--solm", "s.zarr"], "Missing option")])
+@pytest.mark.parametrize(
+    "args, text",
+    [
+        (["plann"], "No such command 'plann'"),
+        (["solm", "build", "m.pcd", "-o", "s.zarr", "--max-cells", "abc"], "Invalid value for '--max-cells'"),
+        (["plan", "--solm", "s.zarr"], "Missing option"),
+    ],
+)
 def test_a_command_line_that_does_not_parse_is_one_line(args, text):
     """Not click's usage box (five lines and a frame): one line naming what is wrong and the
     command whose --help lists what it takes, exit 2."""

@@ -17,17 +17,18 @@ import time
 import urllib.request
 from types import SimpleNamespace
 
-import lf3pm
 import numpy as np
 import pytest
 import zarr
+from typer.testing import CliRunner
+
+import lf3pm
 from lf3pm.cli import app as cli
 from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
 from lf3pm.io import write_points
 from lf3pm.scenes import build_scene
 from lf3pm.solm import Solm, build_solm, make_grid
 from lf3pm.view import check_host, check_port, free_port, load_view_inputs, serve
-from typer.testing import CliRunner
 
 BOUNDS = (-3.5, -3.5, 3.5, 3.5)
 #: The test grid at tile 4 has 2 x 2 tiles, built in the order (0, 0), (0, 1), (1, 0), (1, 1).
@@ -71,8 +72,9 @@ def same_store(a, b) -> None:
     for name in ga.array_keys():
         x, y = ga[name][...], gb[name][...]
         assert x.dtype == y.dtype and np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), name
-    assert {k: v for k, v in ga.attrs.items() if k != "map_source"} == \
-        {k: v for k, v in gb.attrs.items() if k != "map_source"}
+    assert {k: v for k, v in ga.attrs.items() if k != "map_source"} == {
+        k: v for k, v in gb.attrs.items() if k != "map_source"
+    }
 
 
 @pytest.fixture
@@ -108,8 +110,13 @@ def test_a_full_disk_mid_build_is_one_line_and_the_rerun_resumes_identically(sit
     with pytest.raises(StorageError) as caught:
         build_solm(site.world, "mid70", site.grid, out, tile=TILE)
     text = one_line(caught.value)
-    for part in (f"{out}/q_max/c/0/1/0", "No space left on device", "2 of 4 tiles finished and kept",
-                 f"lf3pm solm build {site.world.source} -o {out}", "resume"):
+    for part in (
+        f"{out}/q_max/c/0/1/0",
+        "No space left on device",
+        "2 of 4 tiles finished and kept",
+        f"lf3pm solm build {site.world.source} -o {out}",
+        "resume",
+    ):
         assert part in text, text
     assert zarr.open_group(str(out), mode="r")["done"][...].tolist() == [[1, 1], [0, 0]]
     again = build_solm(site.world, "mid70", site.grid, out, tile=TILE)
@@ -156,11 +163,33 @@ def test_a_store_that_vanishes_mid_build_is_one_line_and_not_recreated(site, tmp
 
 def test_the_cli_build_stops_in_one_line_and_resumes(site, tmp_path, failing_write):
     out = tmp_path / "cli.zarr"
-    args = ["solm", "build", str(site.dir / "map.npy"), "-o", str(out), "--sensor", "mid70", "--space", "se2",
-            "--res", "1", "--yaw-bins", "8", "--height", "1", "--bounds", *map(str, BOUNDS)]
+    args = [
+        "solm",
+        "build",
+        str(site.dir / "map.npy"),
+        "-o",
+        str(out),
+        "--sensor",
+        "mid70",
+        "--space",
+        "se2",
+        "--res",
+        "1",
+        "--yaw-bins",
+        "8",
+        "--height",
+        "1",
+        "--bounds",
+        *map(str, BOUNDS),
+    ]
     failing_write("q_n/c/0/0/0", errno.ENOSPC)
-    cli_error(CliRunner().invoke(cli, args), f"{out}/q_n/c/0/0/0", "No space left on device",
-              "0 of 1 tiles finished", "lf3pm solm build")
+    cli_error(
+        CliRunner().invoke(cli, args),
+        f"{out}/q_n/c/0/0/0",
+        "No space left on device",
+        "0 of 1 tiles finished",
+        "lf3pm solm build",
+    )
     failing_write("nothing", errno.ENOSPC)
     done = CliRunner().invoke(cli, args)
     assert done.exit_code == 0 and "complete: True" in done.output, done.output
@@ -185,12 +214,17 @@ def test_a_build_onto_a_really_full_disk_resumes_bit_identically(site, tmp_path,
 def drive():
     """A 1 s Mid-70 scan stream and IMU samples on a floor with a wall (as tests/test_bag.py)."""
     from analytic_scenes import grid_plane
+
     from lf3pm.replays.motion import Motion
     from lf3pm.scan.scans import ScanStream
     from lf3pm.sensors import get_sensor
 
-    pts = np.vstack([grid_plane((-10, -10, 0), (1, 0, 0), (0, 1, 0), 20, 20, 0.1),
-                     grid_plane((6, -10, 0.1), (0, 1, 0), (0, 0, 1), 20, 3, 0.1)])
+    pts = np.vstack(
+        [
+            grid_plane((-10, -10, 0), (1, 0, 0), (0, 1, 0), 20, 20, 0.1),
+            grid_plane((6, -10, 0.1), (0, 1, 0), (0, 0, 1), 20, 3, 0.1),
+        ]
+    )
     world = lf3pm.load_map(np.ascontiguousarray(pts))
     t = np.linspace(0.0, 1.0, 101)
     motion = Motion.from_arrays(t, t, 0 * t, 0.2 * t, np.ones_like(t), 0 * t, np.full_like(t, 0.2), map=world)
@@ -201,8 +235,9 @@ def drive():
 
 def test_a_bag_whose_disk_fills_is_one_line_and_leaves_nothing(drive, tmp_path, monkeypatch):
     """sqlite says "database or disk is full" in its own error class, not an OSError."""
-    from lf3pm.replays.bag import write_bag
     from rosbags.rosbag2 import Writer
+
+    from lf3pm.replays.bag import write_bag
 
     def full(self, *args, **kwargs):
         raise sqlite3.OperationalError("database or disk is full")
@@ -248,8 +283,13 @@ def corrupt_copy(site, tmp_path, how: str):
     """A copy of the reference store damaged ``how``; returns it and the file damaged."""
     store = tmp_path / f"{how}.zarr"
     shutil.copytree(site.store, store)
-    target = {"garbled chunk": "q_n/c/0/0/1", "truncated chunk": "q_n/c/0/1/1", "garbled metadata": "q_n/zarr.json",
-              "missing metadata": "q_n/zarr.json", "garbled done": "done/c/0/0"}[how]
+    target = {
+        "garbled chunk": "q_n/c/0/0/1",
+        "truncated chunk": "q_n/c/0/1/1",
+        "garbled metadata": "q_n/zarr.json",
+        "missing metadata": "q_n/zarr.json",
+        "garbled done": "done/c/0/0",
+    }[how]
     path = store / target
     if how == "truncated chunk":
         path.write_bytes(path.read_bytes()[:7])
@@ -284,8 +324,9 @@ def test_a_corrupt_done_flag_is_one_line_when_opened_and_when_resumed(site, tmp_
 
 def test_lf3pm_plan_on_a_corrupt_chunk_is_one_line(site, tmp_path):
     store, damaged = corrupt_copy(site, tmp_path, "garbled chunk")
-    done = CliRunner().invoke(cli, ["plan", "--solm", str(store), "--start", *START, "--goal", *GOAL,
-                                    "-o", str(tmp_path / "t.csv")])
+    done = CliRunner().invoke(
+        cli, ["plan", "--solm", str(store), "--start", *START, "--goal", *GOAL, "-o", str(tmp_path / "t.csv")]
+    )
     cli_error(done, str(damaged), "corrupt chunk", "build it again")
     assert not (tmp_path / "t.csv").exists()
 
@@ -312,8 +353,12 @@ def test_the_viewer_shows_a_corrupt_chunk_in_the_page_and_keeps_serving(site, tm
 def test_lf3pm_view_on_a_corrupt_chunk_serves_and_says_so_in_one_line(site, tmp_path):
     store, damaged = corrupt_copy(site, tmp_path, "garbled chunk")
     port = free_port()
-    proc = subprocess.Popen([sys.executable, "-m", "lf3pm", "view", str(site.dir / "map.npy"), "--solm", str(store),
-                             "--port", str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lf3pm", "view", str(site.dir / "map.npy"), "--solm", str(store), "--port", str(port)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 90
         while time.monotonic() < deadline:
@@ -336,19 +381,22 @@ def test_lf3pm_view_on_a_corrupt_chunk_serves_and_says_so_in_one_line(site, tmp_
 # -- API misuse ---------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("args, kwargs, message", [
-    ((float("nan"), 0.0), {}, "x must be finite, got nan"),
-    ((0.0, float("inf")), {}, "y must be finite, got inf"),
-    ((0.0, 0.0, float("nan")), {}, "yaw must be finite"),
-    (("1.0", 0.0), {}, "x must be a number or an array of numbers, got '1.0'"),
-    ((None, 0.0), {}, "x must be a number"),
-    (({}, 0.0), {}, "x must be a number"),
-    ((1j, 0.0), {}, "x must be a number"),
-    (([[1.0], [1.0, 2.0]], 0.0), {}, "x must be a number"),
-    (([1.0, 2.0], [1.0, 2.0, 3.0]), {}, "shapes do not broadcast together (x (2,), y (3,), yaw ())"),
-    ((0.0, 0.0), {"channel": ["q_n"]}, "unknown channel ['q_n']"),
-    ((0.0, 0.0), {"channel": None}, "unknown channel None"),
-])
+@pytest.mark.parametrize(
+    "args, kwargs, message",
+    [
+        ((float("nan"), 0.0), {}, "x must be finite, got nan"),
+        ((0.0, float("inf")), {}, "y must be finite, got inf"),
+        ((0.0, 0.0, float("nan")), {}, "yaw must be finite"),
+        (("1.0", 0.0), {}, "x must be a number or an array of numbers, got '1.0'"),
+        ((None, 0.0), {}, "x must be a number"),
+        (({}, 0.0), {}, "x must be a number"),
+        ((1j, 0.0), {}, "x must be a number"),
+        (([[1.0], [1.0, 2.0]], 0.0), {}, "x must be a number"),
+        (([1.0, 2.0], [1.0, 2.0, 3.0]), {}, "shapes do not broadcast together (x (2,), y (3,), yaw ())"),
+        ((0.0, 0.0), {"channel": ["q_n"]}, "unknown channel ['q_n']"),
+        ((0.0, 0.0), {"channel": None}, "unknown channel None"),
+    ],
+)
 def test_bad_queries_are_lf3pm_errors(site, args, kwargs, message):
     solm = Solm.open(site.store)
     with pytest.raises(Lf3pmError) as caught:
@@ -369,20 +417,23 @@ def test_opening_a_store_that_is_not_a_path_is_an_lf3pm_error(path):
         Solm.open(path)
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"world": "map.npy"}, "build_solm needs a map"),
-    ({"world": np.zeros((10, 3))}, "build_solm needs a map"),
-    ({"grid": None}, "build_solm needs a grid"),
-    ({"out": 5}, "the SOLM store to build is a path"),
-    ({"tile": "4"}, "tile must be an integer from 1 to 1024, got '4'"),
-    ({"tile": 2.5}, "tile must be an integer"),
-    ({"tile": 10**12}, "tile must be an integer from 1 to 1024"),
-    ({"tile": 0}, "tile must be an integer"),
-    ({"max_tiles": -1}, "max_tiles must be None or an integer >= 0"),
-    ({"max_tiles": "2"}, "max_tiles must be None"),
-    ({"floor_clearance": "a"}, "floor clearance must be a number"),
-    ({"progress": 3}, "progress must be a function"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"world": "map.npy"}, "build_solm needs a map"),
+        ({"world": np.zeros((10, 3))}, "build_solm needs a map"),
+        ({"grid": None}, "build_solm needs a grid"),
+        ({"out": 5}, "the SOLM store to build is a path"),
+        ({"tile": "4"}, "tile must be an integer from 1 to 1024, got '4'"),
+        ({"tile": 2.5}, "tile must be an integer"),
+        ({"tile": 10**12}, "tile must be an integer from 1 to 1024"),
+        ({"tile": 0}, "tile must be an integer"),
+        ({"max_tiles": -1}, "max_tiles must be None or an integer >= 0"),
+        ({"max_tiles": "2"}, "max_tiles must be None"),
+        ({"floor_clearance": "a"}, "floor clearance must be a number"),
+        ({"progress": 3}, "progress must be a function"),
+    ],
+)
 def test_bad_build_arguments_are_lf3pm_errors_before_anything_is_written(site, tmp_path, change, message):
     kwargs = {"world": site.world, "sensor": "mid70", "grid": site.grid, "out": tmp_path / "x.zarr", **change}
     with pytest.raises(Lf3pmError) as caught:
@@ -415,18 +466,21 @@ def inputs(site):
     return load_view_inputs(site.dir / "map.npy")
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"host": "bad.invalid"}, "host 'bad.invalid' is not an address of this machine"),
-    ({"host": "192.0.2.1"}, "host '192.0.2.1' is not an address of this machine"),  # TEST-NET: never ours
-    ({"host": 5}, "host must be a name or an address, got int"),
-    ({"port": -5}, "port must be between 1 and 65535, got -5"),
-    ({"port": 70000}, "port must be between 1 and 65535, got 70000"),
-    ({"port": "8080"}, "port must be an integer from 1 to 65535, got '8080'"),
-    ({"port": 8080.0}, "port must be an integer"),
-    ({"port": True}, "port must be an integer"),
-    ({"robot": "omni"}, "robot must be an lf3pm.Robot"),
-    ({"sensor": "no-such-lidar"}, "no-such-lidar"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"host": "bad.invalid"}, "host 'bad.invalid' is not an address of this machine"),
+        ({"host": "192.0.2.1"}, "host '192.0.2.1' is not an address of this machine"),  # TEST-NET: never ours
+        ({"host": 5}, "host must be a name or an address, got int"),
+        ({"port": -5}, "port must be between 1 and 65535, got -5"),
+        ({"port": 70000}, "port must be between 1 and 65535, got 70000"),
+        ({"port": "8080"}, "port must be an integer from 1 to 65535, got '8080'"),
+        ({"port": 8080.0}, "port must be an integer"),
+        ({"port": True}, "port must be an integer"),
+        ({"robot": "omni"}, "robot must be an lf3pm.Robot"),
+        ({"sensor": "no-such-lidar"}, "no-such-lidar"),
+    ],
+)
 def test_bad_serve_arguments_are_lf3pm_errors_within_seconds(inputs, kwargs, message):
     started = time.monotonic()
     with pytest.raises(Lf3pmError) as caught:
@@ -480,23 +534,29 @@ def test_check_host_accepts_this_machines_addresses():
 
 
 def replay_json(tmp_path, name, **changes):
-    run = {"truth_xyz": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
-           "estimate_xyz": [[0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [2.0, 0.2, 0.0]], "errors": [0.0, 0.1, 0.2]}
+    run = {
+        "truth_xyz": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+        "estimate_xyz": [[0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [2.0, 0.2, 0.0]],
+        "errors": [0.0, 0.1, 0.2],
+    }
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps({"runs": [{**run, **changes}]}))
     return path
 
 
-@pytest.mark.parametrize("changes, message", [
-    ({"errors": ["0.0", "0.1", "0.2"]}, "errors[0] must be a number or null, got '0.0'"),
-    ({"errors": "small"}, "errors must be a list, got str"),
-    ({"errors": [0.0, -0.1, 0.2]}, "errors must be >= 0"),
-    ({"truth_xyz": [[0, 0], [1, 0, 0], [2, 0, 0]]}, "truth_xyz[0] must be [x, y, z] of numbers, got [0, 0]"),
-    ({"truth_xyz": [[0, 0, None], [1, 0, 0], [2, 0, 0]]}, "truth_xyz[0] must be [x, y, z] of numbers"),
-    ({"estimate_xyz": [[0, 0, 0], [1, 0, "x"], [2, 0, 0]]}, "estimate_xyz[1] must be [x, y, z] of numbers or null"),
-    ({"errors": [0.0, 0.1]}, "differ in length (3, 3, 2)"),
-    ({"rest": {"steady": "no"}}, "rest must be an object with steady"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"errors": ["0.0", "0.1", "0.2"]}, "errors[0] must be a number or null, got '0.0'"),
+        ({"errors": "small"}, "errors must be a list, got str"),
+        ({"errors": [0.0, -0.1, 0.2]}, "errors must be >= 0"),
+        ({"truth_xyz": [[0, 0], [1, 0, 0], [2, 0, 0]]}, "truth_xyz[0] must be [x, y, z] of numbers, got [0, 0]"),
+        ({"truth_xyz": [[0, 0, None], [1, 0, 0], [2, 0, 0]]}, "truth_xyz[0] must be [x, y, z] of numbers"),
+        ({"estimate_xyz": [[0, 0, 0], [1, 0, "x"], [2, 0, 0]]}, "estimate_xyz[1] must be [x, y, z] of numbers or null"),
+        ({"errors": [0.0, 0.1]}, "differ in length (3, 3, 2)"),
+        ({"rest": {"steady": "no"}}, "rest must be an object with steady"),
+    ],
+)
 def test_a_bad_replay_json_is_one_line_naming_the_file_and_field(site, tmp_path, changes, message):
     path = replay_json(tmp_path, "bad", **changes)
     with pytest.raises(Lf3pmError) as caught:
@@ -506,8 +566,9 @@ def test_a_bad_replay_json_is_one_line_naming_the_file_and_field(site, tmp_path,
 
 
 def test_a_replay_json_with_a_lost_estimate_is_shown(site, tmp_path):
-    path = replay_json(tmp_path, "lost", estimate_xyz=[[0, 0, 0], [None, None, None], [2, 0, 0]],
-                       errors=[0.0, None, 0.2])
+    path = replay_json(
+        tmp_path, "lost", estimate_xyz=[[0, 0, 0], [None, None, None], [2, 0, 0]], errors=[0.0, None, 0.2]
+    )
     tracks = load_view_inputs(site.dir / "map.npy", replay_paths=path).replays["replay lost"]
     assert np.isnan(tracks["errors"][1]) and tracks["hi"] == pytest.approx(0.2)
 
@@ -523,11 +584,18 @@ def test_a_replay_that_is_not_a_regular_file_is_refused_before_it_is_read(site, 
 
 def test_lf3pm_view_refuses_a_bad_replay_json_and_a_bad_host_in_one_line(site, tmp_path):
     bad = replay_json(tmp_path, "strings", errors=["x", "y", "z"])
-    for args, text in (([str(site.dir / "map.npy"), "--replay", str(bad)], "errors[0] must be a number"),
-                       ([str(site.dir / "map.npy"), "--host", "bad.invalid"], "bad.invalid")):
+    for args, text in (
+        ([str(site.dir / "map.npy"), "--replay", str(bad)], "errors[0] must be a number"),
+        ([str(site.dir / "map.npy"), "--host", "bad.invalid"], "bad.invalid"),
+    ):
         started = time.monotonic()
-        run = subprocess.run([sys.executable, "-m", "lf3pm", "view", *args, "--port", str(free_port())],
-                             check=False, capture_output=True, text=True, timeout=120)
+        run = subprocess.run(
+            [sys.executable, "-m", "lf3pm", "view", *args, "--port", str(free_port())],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert run.returncode == 2, run.stderr
         assert len(run.stderr.strip().splitlines()) == 1 and text in run.stderr, run.stderr
         assert time.monotonic() - started < 60

@@ -5,9 +5,9 @@ import math
 
 import numpy as np
 import pytest
+from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from scipy.spatial.transform import Rotation
 
-from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.imu import GRAVITY, ImuPreset, get_imu_preset, simulate_imu
 
@@ -44,8 +44,7 @@ def test_noise_free_strapdown_reproduces_the_trajectory_within_1cm_over_30s():
     imu = simulate_imu(motion, rate=200.0, noise=False)
     assert len(imu) == 6001 and imu.t[-1] == pytest.approx(motion.t1)
     t0 = np.array([motion.t0])
-    positions, rotations = strapdown(imu, motion.position(t0)[0], motion.velocity(t0)[0],
-                                     motion.pose(t0)[0, :3, :3])
+    positions, rotations = strapdown(imu, motion.position(t0)[0], motion.velocity(t0)[0], motion.pose(t0)[0, :3, :3])
     error = np.linalg.norm(positions - motion.position(imu.t), axis=1)
     assert error.max() < 0.01
     heading = np.arctan2(rotations[:, 1, 0], rotations[:, 0, 0])
@@ -68,8 +67,10 @@ def test_white_noise_has_the_preset_sigma():
     clean = simulate_imu(motion, noise=False)
     noisy = simulate_imu(motion, seed=5)
     sigmas = get_imu_preset("bmi088").sigmas(200.0)
-    for name, bias, sigma in (("accel", noisy.accel_bias, sigmas["accel_white"]),
-                              ("gyro", noisy.gyro_bias, sigmas["gyro_white"])):
+    for name, bias, sigma in (
+        ("accel", noisy.accel_bias, sigmas["accel_white"]),
+        ("gyro", noisy.gyro_bias, sigmas["gyro_white"]),
+    ):
         white = getattr(noisy, name) - getattr(clean, name) - bias
         n = white.size
         assert abs(white.std() - sigma) < 4 * sigma / math.sqrt(2 * n), name
@@ -98,8 +99,8 @@ def test_bias_random_walk_grows_as_the_preset_says():
     assert abs(steps.std() - preset.sigmas(200.0)["gyro_bias_step"]) < 4 * steps.std() / math.sqrt(2 * steps.size)
     for name, density in (("accel", preset.accel_bias_random_walk), ("gyro", preset.gyro_bias_random_walk)):
         end = np.array(ends[name])  # 300 seeds x 3 axes of b(t1), each N(0, K^2 (t1 - t0))
-        expected = density ** 2 * span
-        assert abs(np.mean(end ** 2) - expected) < 4 * expected * math.sqrt(2 / end.size), name
+        expected = density**2 * span
+        assert abs(np.mean(end**2) - expected) < 4 * expected * math.sqrt(2 / end.size), name
 
 
 def test_preset_sigmas_at_200_hz():
@@ -124,15 +125,23 @@ def test_noise_is_seeded_and_the_same_whatever_the_motion():
 def test_a_custom_preset_scales_the_noise():
     zero = ImuPreset("ideal", "no noise", 0.0, 0.0, 0.0, 0.0, "test")
     motion = figure_eight()
-    np.testing.assert_array_equal(simulate_imu(motion, preset=zero, seed=3).accel,
-                                  simulate_imu(motion, noise=False).accel)
+    np.testing.assert_array_equal(
+        simulate_imu(motion, preset=zero, seed=3).accel, simulate_imu(motion, noise=False).accel
+    )
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"rate": 0.0}, "rate"), ({"rate": float("nan")}, "rate"), ({"rate": "200"}, "rate"),
-    ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"preset": "adxl"}, "unknown IMU preset"),
-    ({"rate": 1e9}, "more than"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"rate": 0.0}, "rate"),
+        ({"rate": float("nan")}, "rate"),
+        ({"rate": "200"}, "rate"),
+        ({"seed": -1}, "seed"),
+        ({"seed": 1.5}, "seed"),
+        ({"preset": "adxl"}, "unknown IMU preset"),
+        ({"rate": 1e9}, "more than"),
+    ],
+)
 def test_bad_arguments_raise_one_line(kwargs, message):
     with pytest.raises(Lf3pmError, match=message):
         simulate_imu(figure_eight(), **kwargs)

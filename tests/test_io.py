@@ -7,12 +7,11 @@ import laspy
 import numpy as np
 import pytest
 from pypcd4 import Encoding, PointCloud
+from shared_data import shared_file
 
 import lf3pm.io.npy
 from lf3pm.errors import MapError
 from lf3pm.io import SUPPORTED_SUFFIXES, load_points, voxel_downsample, write_points
-from shared_data import shared_file
-
 
 FLOAT32_SUFFIXES = (".pcd", ".ply")
 
@@ -37,19 +36,22 @@ def expect_map_error(path, **kwargs):
 
 def truncate(path, remove_bytes):
     data = path.read_bytes()
-    path.write_bytes(data[:len(data) - remove_bytes])
+    path.write_bytes(data[: len(data) - remove_bytes])
 
 
 def pcd_header(fields, sizes, types, points, data):
-    return (f"# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {' '.join(fields)}\n"
-            f"SIZE {' '.join(map(str, sizes))}\nTYPE {' '.join(types)}\n"
-            f"COUNT {' '.join('1' * len(fields))}\nWIDTH {points}\nHEIGHT 1\n"
-            f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {points}\nDATA {data}\n").encode()
+    return (
+        f"# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {' '.join(fields)}\n"
+        f"SIZE {' '.join(map(str, sizes))}\nTYPE {' '.join(types)}\n"
+        f"COUNT {' '.join('1' * len(fields))}\nWIDTH {points}\nHEIGHT 1\n"
+        f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {points}\nDATA {data}\n"
+    ).encode()
 
 
 # Extra fields of mixed types around (and between) x, y and z, as LiDAR drivers write them.
-MIXED_DTYPE = np.dtype([("timestamp", "<f8"), ("x", "<f4"), ("ring", "<u2"), ("y", "<f4"),
-                        ("intensity", "<f4"), ("z", "<f4")])
+MIXED_DTYPE = np.dtype(
+    [("timestamp", "<f8"), ("x", "<f4"), ("ring", "<u2"), ("y", "<f4"), ("intensity", "<f4"), ("z", "<f4")]
+)
 
 
 def mixed_records(seed, n):
@@ -68,12 +70,17 @@ def xyz_of(records):
 
 
 def mixed_pcd_header(n, data):
-    return pcd_header(MIXED_DTYPE.names, [MIXED_DTYPE[name].itemsize for name in MIXED_DTYPE.names],
-                      ["U" if MIXED_DTYPE[name].kind == "u" else "F" for name in MIXED_DTYPE.names],
-                      n, data)
+    return pcd_header(
+        MIXED_DTYPE.names,
+        [MIXED_DTYPE[name].itemsize for name in MIXED_DTYPE.names],
+        ["U" if MIXED_DTYPE[name].kind == "u" else "F" for name in MIXED_DTYPE.names],
+        n,
+        data,
+    )
 
 
 # --- round trips ------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("suffix", SUPPORTED_SUFFIXES)
 def test_round_trip_every_format(tmp_path, suffix):
@@ -174,6 +181,7 @@ def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
 
 # --- PCD with extra fields -------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("data", ["binary", "ascii"])
 def test_pcd_with_mixed_type_fields_hand_written(tmp_path, data):
     records = mixed_records(seed=12, n=300)
@@ -210,8 +218,11 @@ def test_binary_pcd_and_las_read_in_chunks(tmp_path, monkeypatch):
 def test_pcd_with_mixed_type_fields_binary_compressed(tmp_path):
     records = mixed_records(seed=13, n=2000)
     records["x"] = np.round(records["x"])  # compressible
-    cloud = PointCloud.from_points([records[name] for name in MIXED_DTYPE.names], MIXED_DTYPE.names,
-                                   [MIXED_DTYPE[name] for name in MIXED_DTYPE.names])
+    cloud = PointCloud.from_points(
+        [records[name] for name in MIXED_DTYPE.names],
+        MIXED_DTYPE.names,
+        [MIXED_DTYPE[name] for name in MIXED_DTYPE.names],
+    )
     path = tmp_path / "lidar.pcd"
     cloud.save(path, encoding=Encoding.BINARY_COMPRESSED)
     assert b"DATA binary_compressed\n" in path.read_bytes()[:400]
@@ -226,6 +237,7 @@ def test_pcd_with_double_coordinates(tmp_path):
 
 
 # --- NumPy variants --------------------------------------------------------------------------
+
 
 def test_npy_with_more_than_three_columns_keeps_xyz(tmp_path):
     table = np.random.default_rng(15).normal(size=(100, 5)).astype(np.float32)
@@ -283,6 +295,7 @@ def test_npz_with_no_array_is_refused(tmp_path):
 
 # --- NaN / Inf -------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("suffix", [".npy", ".pcd"])
 def test_points_with_nan_or_inf_are_dropped_with_a_count(tmp_path, suffix):
     points = random_points(seed=18, n=10)
@@ -308,6 +321,7 @@ def test_every_point_non_finite_is_refused(tmp_path):
 
 
 # --- bad input -------------------------------------------------------------------------------
+
 
 def test_missing_file(tmp_path):
     assert "no such file" in expect_map_error(tmp_path / "nowhere.pcd")
@@ -398,8 +412,9 @@ def test_pcd_without_z(tmp_path):
 
 def test_ply_without_z(tmp_path):
     path = tmp_path / "flat.ply"
-    path.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                    "end_header\n0 0\n1 1\n")
+    path.write_text(
+        "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nend_header\n0 0\n1 1\n"
+    )
     assert "z" in expect_map_error(path)
 
 
@@ -452,19 +467,26 @@ def test_write_refuses_bad_requests(tmp_path):
 
 # --- voxel downsampling ----------------------------------------------------------------------
 
+
 def test_voxel_downsample_hand_made_example():
-    points = np.array([
-        [0.1, 0.1, 0.1], [0.3, 0.5, 0.9],        # cell (0, 0, 0)
-        [1.5, 0.2, 0.2],                          # cell (1, 0, 0)
-        [-0.5, -0.5, -0.5], [-0.1, -0.9, -0.3],  # cell (-1, -1, -1)
-        [0.5, 2.5, 0.5],                          # cell (0, 2, 0)
-    ])
-    expected = np.array([
-        [-0.3, -0.7, -0.4],
-        [0.2, 0.3, 0.5],
-        [0.5, 2.5, 0.5],
-        [1.5, 0.2, 0.2],
-    ])
+    points = np.array(
+        [
+            [0.1, 0.1, 0.1],
+            [0.3, 0.5, 0.9],  # cell (0, 0, 0)
+            [1.5, 0.2, 0.2],  # cell (1, 0, 0)
+            [-0.5, -0.5, -0.5],
+            [-0.1, -0.9, -0.3],  # cell (-1, -1, -1)
+            [0.5, 2.5, 0.5],  # cell (0, 2, 0)
+        ]
+    )
+    expected = np.array(
+        [
+            [-0.3, -0.7, -0.4],
+            [0.2, 0.3, 0.5],
+            [0.5, 2.5, 0.5],
+            [1.5, 0.2, 0.2],
+        ]
+    )
     result = voxel_downsample(points, 1.0)
     np.testing.assert_allclose(result, expected, rtol=0, atol=1e-12)
     assert result.flags.c_contiguous and result.dtype == np.float64
@@ -513,6 +535,7 @@ def test_load_points_with_voxel(tmp_path):
 
 # --- real scans ------------------------------------------------------------------------------
 
+
 def test_real_indoor_scan():
     points = load_points(shared_file("indoor_pcl_room_scan1.pcd"))
     assert points.shape == (112_586, 3) and points.dtype == np.float64 and points.flags.c_contiguous
@@ -526,8 +549,9 @@ def test_real_outdoor_scan_with_mixed_fields():
     # Independent decode: x y z intensity (float32), ring (uint16), timestamp (float64).
     raw = path.read_bytes()
     start = raw.index(b"DATA binary\n") + len(b"DATA binary\n")
-    layout = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"),
-                       ("ring", "<u2"), ("timestamp", "<f8")])
+    layout = np.dtype(
+        [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"), ("ring", "<u2"), ("timestamp", "<f8")]
+    )
     records = np.frombuffer(raw[start:], dtype=layout)
     assert len(records) == 80_787
     np.testing.assert_array_equal(points, xyz_of(records))
@@ -536,8 +560,10 @@ def test_real_outdoor_scan_with_mixed_fields():
 @pytest.mark.parametrize("encoding", ["binary", "ascii", "binary_compressed"])
 def test_a_header_declaring_more_than_the_file_holds_is_refused_before_reading(tmp_path, encoding):
     # 15,000 points whose z has a COUNT of 10^9: 60 TB declared in a file of under 200 KB.
-    header = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1000000000\nWIDTH 15000\n"
-              f"HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 15000\nDATA {encoding}\n").encode()
+    header = (
+        "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1000000000\nWIDTH 15000\n"
+        f"HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 15000\nDATA {encoding}\n"
+    ).encode()
     body = b"0 0 0\n" * 15000 if encoding == "ascii" else np.zeros(45000, np.float32).tobytes()
     path = tmp_path / f"claims_too_much_{encoding}.pcd"
     path.write_bytes(header + body)

@@ -49,7 +49,7 @@ def unit_graph() -> dict[str, set[str]]:
         if source in ("lf3pm", "lf3pm.__main__"):
             continue
         for target in imports(path):
-            while target not in modules and "." in target:   # `from pkg import name`: the module holding it
+            while target not in modules and "." in target:  # `from pkg import name`: the module holding it
                 target = target.rpartition(".")[0]
             if target in ("lf3pm",) or unit(target) == unit(source):
                 continue

@@ -9,16 +9,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-
 from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
+
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.imu import simulate_imu
-from lf3pm.scan.moving_scan import simulate_moving_scan
-from lf3pm.trajectory.sampling import LinearMotion
 from lf3pm.replays.trajectory_metrics import ape_translation
+from lf3pm.scan.moving_scan import simulate_moving_scan
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import get_sensor
+from lf3pm.trajectory.sampling import LinearMotion
 
 pytest.importorskip("genz_lio", reason="genz-lio has wheels for Python 3.8-3.12 only")
 from lf3pm.replays import lio  # noqa: E402
@@ -44,8 +44,19 @@ def scans_along(index, motion, sensor, noise=0.0, seed=0):
     scans = []
     for k in range(int(math.floor((motion.t1 - motion.t0) / PERIOD + 1e-9))):
         end = motion.t0 + (k + 1) * PERIOD
-        s = simulate_moving_scan(index, LinearMotion(t, poses), end, PERIOD, sensor.scan_directions(k), sensor.min_range,
-                                 sensor.max_range, noise=noise, seed=seed, stream=k, threads=1)
+        s = simulate_moving_scan(
+            index,
+            LinearMotion(t, poses),
+            end,
+            PERIOD,
+            sensor.scan_directions(k),
+            sensor.min_range,
+            sensor.max_range,
+            noise=noise,
+            seed=seed,
+            stream=k,
+            threads=1,
+        )
         scans.append(Scan(end, s.points, end - (1.0 - s.timestamps) * PERIOD))
     return scans
 
@@ -207,12 +218,13 @@ def test_the_filter_is_told_the_imu_preset_noise(run):
     sigma = imu.preset.sigmas(200.0)
     model = imu_noise_model(imu)
     assert model["acc_cov"] == pytest.approx(NOISE_INFLATION * sigma["accel_white"] ** 2)
-    assert model["b_gyr_cov"] == pytest.approx(NOISE_INFLATION * (imu.preset.gyro_bias_random_walk ** 2) * 200.0)
+    assert model["b_gyr_cov"] == pytest.approx(NOISE_INFLATION * (imu.preset.gyro_bias_random_walk**2) * 200.0)
     silent = type(imu)(**{**imu.__dict__, "preset": ImuPreset("ideal", "", 0.0, 0.0, 0.0, 0.0, "")})
     assert imu_noise_model(silent) == {} and imu_noise_model(object()) == {}
 
 
 # --- The start of motion in the open: accelerating drives through the demo's town -----
+
 
 def town_drive(world, turn_rate: float, seconds: float = 8.0):
     """An omni drive out of the reduced gobi's town square from rest: the speed ramps
@@ -238,8 +250,9 @@ def town():
     return lf3pm.load_map(build_scene("gobi", seed=REDUCED.seed, **REDUCED.scene_params).points)
 
 
-@pytest.mark.parametrize("sensor, turn_rate, odometry", [("vlp16", 0.0, "genz"), ("vlp16", 0.0, "dlio"),
-                                                         ("mid70", 0.3, "genz")])
+@pytest.mark.parametrize(
+    "sensor, turn_rate, odometry", [("vlp16", 0.0, "genz"), ("vlp16", 0.0, "dlio"), ("mid70", 0.3, "genz")]
+)
 def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, turn_rate, odometry):
     """The replay's own path (rest, IMU, scans, the odometry with lf3pm's settings):
     within 2 cm, and no time shift of the truth fits the estimate better (a lagging
@@ -294,8 +307,8 @@ def test_a_lidar_clock_50ms_late_is_detected(town):
     """The same drive with every scan stamped 50 ms after it was taken (the IMU on time):
     the estimate is where the sensor was 50 ms before its stamp."""
     from lf3pm.replays.motion import RestFirst
-    from lf3pm.scan.scans import ScanStream
     from lf3pm.replays.trajectory_metrics import time_offset
+    from lf3pm.scan.scans import ScanStream
 
     motion = RestFirst(town_drive(town, 0.0), 2.0)
     sensor = get_sensor("vlp16")
@@ -309,6 +322,7 @@ def test_a_lidar_clock_50ms_late_is_detected(town):
 
 
 # --- DLIO (evalio) on the same streams ----------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def dlio_run(room):
@@ -357,8 +371,8 @@ def test_dlio_settings_and_odometry_names_are_checked(dlio_run):
         run_lio(scans[:3], imu, "vlp16", initial_pose=np.eye(4), odometry="dlio", voxel=0.5)
 
 
-
 # --- LIO-SAM (evalio) on the same streams -------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def liosam_run(room):

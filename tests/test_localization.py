@@ -7,17 +7,17 @@ import pickle
 
 import numpy as np
 import pytest
+from analytic_scenes import grid_plane, spinning_directions
 
 import lf3pm
-from analytic_scenes import grid_plane, spinning_directions
 from lf3pm.errors import Lf3pmError
+from lf3pm.pose import pose_matrix, se3_exp
 from lf3pm.replays.localization import Degeneracy, WheelOdometry, deskew, planar_exp, planar_log, planar_matrix
-from lf3pm.validation.mde import RegistrationTarget
 from lf3pm.replays.motion import Motion
 from lf3pm.replays.replay import replay
-from lf3pm.pose import pose_matrix, se3_exp
 from lf3pm.scenes import build_scene
 from lf3pm.sensors import Sensor
+from lf3pm.validation.mde import RegistrationTarget
 
 
 @pytest.fixture(scope="module")
@@ -31,8 +31,7 @@ def boxes():
 
 def test_noise_free_localization_on_a_structured_scene_is_within_a_centimetre(boxes):
     world, motion, target = boxes
-    result = replay(world, motion, "vlp16", "localization", target=target, noise=0.0, scale_error=0.0,
-                    yaw_noise=0.0)
+    result = replay(world, motion, "vlp16", "localization", target=target, noise=0.0, scale_error=0.0, yaw_noise=0.0)
     assert result.scans == 21 and not result.skipped and not result.degenerate.any()
     # Measured 3.2 mm rmse (5.9 mm max): surfel hits and estimated map normals, not noise.
     assert result.ape["rmse"] < 0.01 and result.ape["max"] < 0.02
@@ -44,7 +43,7 @@ def test_same_seed_same_result_and_the_result_pickles(boxes):
     world, motion, target = boxes
     a = replay(world, motion, "vlp16", "localization", seed=4, target=target)
     b = replay(world, motion, "vlp16", "localization", seed=4, target=target)
-    np.testing.assert_array_equal(a.estimate, b.estimate)        # one registration thread: bit for bit
+    np.testing.assert_array_equal(a.estimate, b.estimate)  # one registration thread: bit for bit
     c = pickle.loads(pickle.dumps(a))
     np.testing.assert_array_equal(c.estimate, a.estimate)
     assert c.to_dict() == a.to_dict() and c.ape["rmse"] < 0.01
@@ -60,13 +59,25 @@ def corridor():
     """Two 80 m walls 4 m apart and a floor, no end within the 20 m range of a
     16-beam, 0.5-degree test sensor: nothing fixes the position along x."""
     s = 0.1
-    pts = np.vstack([grid_plane((-40, -2, 0), (1, 0, 0), (0, 0, 1), CORRIDOR_LENGTH, 3.0, s),
-                     grid_plane((-40, 2, 0), (1, 0, 0), (0, 0, 1), CORRIDOR_LENGTH, 3.0, s),
-                     grid_plane((-40, -2 + s, 0), (1, 0, 0), (0, 1, 0), CORRIDOR_LENGTH, CORRIDOR_WIDTH - 2 * s, s)])
+    pts = np.vstack(
+        [
+            grid_plane((-40, -2, 0), (1, 0, 0), (0, 0, 1), CORRIDOR_LENGTH, 3.0, s),
+            grid_plane((-40, 2, 0), (1, 0, 0), (0, 0, 1), CORRIDOR_LENGTH, 3.0, s),
+            grid_plane((-40, -2 + s, 0), (1, 0, 0), (0, 1, 0), CORRIDOR_LENGTH, CORRIDOR_WIDTH - 2 * s, s),
+        ]
+    )
     world = lf3pm.load_map(np.ascontiguousarray(pts))
-    sensor = Sensor(name="ring16", description="16 beams, 720 columns", source="test",
-                    directions=spinning_directions(np.arange(-15, 16, 2), 720), min_range=0.3, max_range=20.0,
-                    range_noise_sigma=0.015, horizontal_fov=2 * math.pi, approximate=False)
+    sensor = Sensor(
+        name="ring16",
+        description="16 beams, 720 columns",
+        source="test",
+        directions=spinning_directions(np.arange(-15, 16, 2), 720),
+        min_range=0.3,
+        max_range=20.0,
+        range_noise_sigma=0.015,
+        horizontal_fov=2 * math.pi,
+        approximate=False,
+    )
     t = np.linspace(0.0, 3.0, 301)
     motion = Motion.from_arrays(t, -1.5 + t, 0.2 * np.sin(t), 0.1 * np.sin(t), map=world)
     return world, sensor, motion
@@ -77,7 +88,7 @@ def test_corridor_axis_is_degenerate_and_follows_the_prior(corridor):
     (the prior) while registration holds it across the corridor and vertically."""
     world, sensor, motion = corridor
     result = replay(world, motion, sensor, "localization", scale_error=0.1, yaw_noise=0.0)
-    assert np.all(result.degenerate_directions == 1)        # the axis, in every scan
+    assert np.all(result.degenerate_directions == 1)  # the axis, in every scan
     error = result.estimate[:, :3, 3] - result.truth[:, :3, 3]
     travelled = np.r_[0.0, np.cumsum(np.diff(result.truth[:, 0, 3]))]
     np.testing.assert_allclose(error[:, 0], 0.1 * travelled, atol=0.01)
@@ -91,8 +102,9 @@ def test_remapping_keeps_the_prior_only_along_degenerate_directions():
     """A Hessian with no information along x: the remapped correction drops its x
     part and keeps the others; in the scaled space rotations count L metres."""
     H = np.diag([4.0, 4.0, 4.0, 0.0, 9.0, 9.0]) * 1e4
-    found = Degeneracy(std=np.zeros(6), vectors=np.eye(6), scale=2.0,
-                       degenerate=np.array([False, False, False, True, False, False]))
+    found = Degeneracy(
+        std=np.zeros(6), vectors=np.eye(6), scale=2.0, degenerate=np.array([False, False, False, True, False, False])
+    )
     correction = np.array([0.01, -0.02, 0.03, 0.5, -0.1, 0.2])
     np.testing.assert_allclose(found.remap(correction), [0.01, -0.02, 0.03, 0.0, -0.1, 0.2])
     from lf3pm.replays.localization import degeneracy
@@ -129,7 +141,7 @@ def test_wheel_odometry_increments():
     c, s = math.cos(0.5), math.sin(0.5)
     assert step[:2] == pytest.approx(1.1 * np.array([c + s, -s + c])) and step[2] == pytest.approx(0.2)
     noisy = [WheelOdometry(0.0, 0.01).increments(truth, 0.25, seed=k)[0, 2] - 0.2 for k in range(400)]
-    assert np.std(noisy) == pytest.approx(0.01 * 0.5, rel=0.15)     # density * sqrt(period)
+    assert np.std(noisy) == pytest.approx(0.01 * 0.5, rel=0.15)  # density * sqrt(period)
     with pytest.raises(Lf3pmError, match="yaw noise"):
         WheelOdometry(yaw_noise=-1.0)
 

@@ -5,9 +5,9 @@ import pytest
 
 import lf3pm
 from lf3pm.errors import Lf3pmError, PoseError
-from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.pose import se3_exp, se3_log
 from lf3pm.scenes import build_scene
+from lf3pm.validation import RegistrationTarget, mde
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -27,8 +27,7 @@ def houses():
 
 def test_noise_free_scan_from_the_true_pose_has_near_zero_mde(houses):
     scene, world, target = houses
-    res = mde(world, scene.reference_pose, "vlp16", trials=3, sigma_t=0.0, sigma_r_deg=0.0,
-              noise=0.0, target=target)
+    res = mde(world, scene.reference_pose, "vlp16", trials=3, sigma_t=0.0, sigma_r_deg=0.0, noise=0.0, target=target)
     # A sub-millimetre floor remains: small_gicp fits its own normals (10 neighbours).
     assert res.mde < 1e-5 and res.trials == 3 and len(res.errors) == 3
 

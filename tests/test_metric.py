@@ -2,12 +2,11 @@
 
 import numpy as np
 import pytest
-
-from lf3pm import _core
 from reference_metric import reference_metric
 
-KEYS = ("sigma1", "xi", "q_min", "q_n", "q_max", "zhang", "condition_number", "cov_trace",
-        "step_norm", "residual_norm")
+from lf3pm import _core
+
+KEYS = ("sigma1", "xi", "q_min", "q_n", "q_max", "zhang", "condition_number", "cov_trace", "step_norm", "residual_norm")
 
 
 def weights(w1):
@@ -17,8 +16,9 @@ def weights(w1):
 
 
 def fast_metric(A, b, w1=0.5):
-    return _core.metric_from_gram(_core.gram(np.ascontiguousarray(A), np.ascontiguousarray(b)),
-                                  len(b), weights(w1)).as_dict()
+    return _core.metric_from_gram(
+        _core.gram(np.ascontiguousarray(A), np.ascontiguousarray(b)), len(b), weights(w1)
+    ).as_dict()
 
 
 def lidar_like(rng, m, n, lever=20.0):

@@ -3,16 +3,16 @@ exact on a planner's cubic, C2, above the true ground within a stated bound."""
 
 import numpy as np
 import pytest
+from analytic_scenes import grid_plane
 from scipy.interpolate import CubicSpline
 
 import lf3pm
-from analytic_scenes import grid_plane
+from lf3pm.config import DEFAULT_HEIGHT
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.ground import smooth_ground
 from lf3pm.replays.motion import Motion, quintic_hermite
-from lf3pm.trajectory.trajectory import Trajectory, read_csv
-from lf3pm.config import DEFAULT_HEIGHT
 from lf3pm.terrain import body_blocked
+from lf3pm.trajectory.trajectory import Trajectory, read_csv
 
 
 @pytest.fixture(scope="module")
@@ -45,8 +45,11 @@ def test_motion_reproduces_the_planner_cubic(floor, spline, tmp_path):
     # CSV's 9 significant digits (1e-8 m, so 1e-6 m/s and 1e-4 m/s^2 over 10 ms);
     # near a knot it departs by about jerk jump * h^3.
     far = np.min(np.abs(t[:, None] - spline.x[None, :]), axis=1) > 0.021
-    for order, get, tol_far, tol_near in ((0, motion.position, 1e-7, 1e-5), (1, motion.velocity, 1e-5, 2e-3),
-                                          (2, motion.acceleration, 2e-3, 0.3)):
+    for order, get, tol_far, tol_near in (
+        (0, motion.position, 1e-7, 1e-5),
+        (1, motion.velocity, 1e-5, 2e-3),
+        (2, motion.acceleration, 2e-3, 0.3),
+    ):
         exact = spline(t, order)
         got = get(t)
         assert np.max(np.abs(got[far, :2] - exact[far, :2])) < tol_far
@@ -97,10 +100,12 @@ def test_motion_is_c2_and_its_derivatives_agree(floor, spline):
         assert np.max(np.abs(get(ts + 1e-9) - get(ts - 1e-9))) < 1e-6
     # Central differences of the position and velocity give the velocity and acceleration.
     t, h = np.linspace(0.1, 4.9, 97), 1e-5
-    np.testing.assert_allclose((motion.position(t + h) - motion.position(t - h)) / (2 * h), motion.velocity(t),
-                               atol=1e-6)
-    np.testing.assert_allclose((motion.velocity(t + h) - motion.velocity(t - h)) / (2 * h),
-                               motion.acceleration(t), atol=1e-4)
+    np.testing.assert_allclose(
+        (motion.position(t + h) - motion.position(t - h)) / (2 * h), motion.velocity(t), atol=1e-6
+    )
+    np.testing.assert_allclose(
+        (motion.velocity(t + h) - motion.velocity(t - h)) / (2 * h), motion.acceleration(t), atol=1e-4
+    )
     # At rest outside the span.
     np.testing.assert_allclose(motion.position([-1.0]), motion.position([0.0]))
     assert np.all(motion.velocity([-1.0, 6.0]) == 0) and np.all(motion.yaw_rate([6.0]) == 0)
@@ -122,8 +127,14 @@ def rough():
     base = terrain(4.5, 0.9)
     u = np.arange(0, 1.0001, 0.05)
     top = np.array([(4 + a, 0.4 + b, base + 1.5) for a in u for b in u])
-    sides = np.array([(x, y, base + h) for h in np.arange(0, 1.5001, 0.05) for a in u
-                      for x, y in ((4 + a, 0.4), (4 + a, 1.4), (4, 0.4 + a), (5, 0.4 + a))])
+    sides = np.array(
+        [
+            (x, y, base + h)
+            for h in np.arange(0, 1.5001, 0.05)
+            for a in u
+            for x, y in ((4 + a, 0.4), (4 + a, 1.4), (4, 0.4 + a), (5, 0.4 + a))
+        ]
+    )
     return lf3pm.load_map(np.ascontiguousarray(np.vstack([ground, top, sides])))
 
 
@@ -166,16 +177,19 @@ def test_trajectory_leaving_the_map_is_refused(floor):
         Motion.from_arrays(t, [0.0, 1.0, 2.0], [0.0] * 3, [0.0] * 3, map=floor, height=-1.0)
 
 
-@pytest.mark.parametrize("text, match", [
-    ("", "empty file"),
-    ("t,x,y,yaw,vx,vy\n0,0,0,0,0,0\n1,1,0,0,0,0\n", "lacks the column"),
-    ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,1,0,0,0,0\n", r":3: 6 fields"),
-    ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,one,0,0,0,0,0\n", r":3: a field is not a number"),
-    ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,nan,0,0,0,0,0\n", r":3: x is not finite"),
-    ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,inf,0,0,0,0,0\n", r":3: x is not finite"),
-    ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n", "1 sample"),
-    ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,1,0,0,0,0,0\n1,2,0,0,0,0,0\n", r":4: time 1 does not follow 1"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("", "empty file"),
+        ("t,x,y,yaw,vx,vy\n0,0,0,0,0,0\n1,1,0,0,0,0\n", "lacks the column"),
+        ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,1,0,0,0,0\n", r":3: 6 fields"),
+        ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,one,0,0,0,0,0\n", r":3: a field is not a number"),
+        ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,nan,0,0,0,0,0\n", r":3: x is not finite"),
+        ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,inf,0,0,0,0,0\n", r":3: x is not finite"),
+        ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n", "1 sample"),
+        ("t,x,y,yaw,vx,vy,omega\n0,0,0,0,0,0,0\n1,1,0,0,0,0,0\n1,2,0,0,0,0,0\n", r":4: time 1 does not follow 1"),
+    ],
+)
 def test_bad_csv(tmp_path, text, match):
     path = tmp_path / "bad.csv"
     path.write_text(text)

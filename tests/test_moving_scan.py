@@ -2,19 +2,18 @@
 its own firing time, checked against straight-line motion past a known plane and
 against KISS-ICP's own deskewing."""
 
-
 import numpy as np
 import pytest
+from analytic_scenes import grid_plane
 from kiss_icp.preprocess import Preprocessor
 
-from analytic_scenes import grid_plane
 from lf3pm import _core
 from lf3pm.config import scan_params
 from lf3pm.errors import Lf3pmError
-from lf3pm.scan.moving_scan import firing_fractions, simulate_moving_scan
-from lf3pm.trajectory.sampling import LinearMotion
 from lf3pm.pose import pose_matrices, pose_matrix
+from lf3pm.scan.moving_scan import firing_fractions, simulate_moving_scan
 from lf3pm.sensors import get_sensor
+from lf3pm.trajectory.sampling import LinearMotion
 
 PERIOD = 0.1
 WALL_X = 10.0
@@ -23,8 +22,9 @@ WALL_X = 10.0
 @pytest.fixture(scope="module")
 def wall():
     """The plane x = 10, 40 m wide and 20 m high, sampled every 10 cm."""
-    return _core.MapIndex(np.ascontiguousarray(grid_plane((WALL_X, -20.0, -10.0), (0, 1, 0), (0, 0, 1),
-                                                          40.0, 20.0, 0.1)))
+    return _core.MapIndex(
+        np.ascontiguousarray(grid_plane((WALL_X, -20.0, -10.0), (0, 1, 0), (0, 0, 1), 40.0, 20.0, 0.1))
+    )
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +37,18 @@ def scan_along(index, sensor, start, end, noise=0.0, seed=3, stream=2):
     at t = 1 - PERIOD to ``end`` at t = 1 at constant velocity."""
     t = np.array([1.0 - PERIOD, 1.0])
     motion = LinearMotion(t, np.array([start, end], dtype=float))
-    return simulate_moving_scan(index, motion, 1.0, PERIOD, sensor.directions,
-                                sensor.min_range, sensor.max_range, noise=noise, seed=seed, stream=stream)
+    return simulate_moving_scan(
+        index,
+        motion,
+        1.0,
+        PERIOD,
+        sensor.directions,
+        sensor.min_range,
+        sensor.max_range,
+        noise=noise,
+        seed=seed,
+        stream=stream,
+    )
 
 
 def test_firing_fractions():
@@ -55,10 +65,14 @@ def test_pose_matrices_match_pose_matrix():
 def test_at_rest_the_moving_scan_is_the_static_scan(wall, mid70):
     pose = [0.0, 1.0, 0.5, 0.2]
     moving = scan_along(wall, mid70, pose, pose, noise=0.02)
-    static = _core.simulate_scan(wall, pose_matrix(pose), mid70.directions,
-                                 scan_params(mid70.min_range, mid70.max_range, noise=0.02, seed=3, stream=2))
+    static = _core.simulate_scan(
+        wall,
+        pose_matrix(pose),
+        mid70.directions,
+        scan_params(mid70.min_range, mid70.max_range, noise=0.02, seed=3, stream=2),
+    )
     assert len(moving.ray) > 1000
-    np.testing.assert_array_equal(moving.ray, static["ray"])            # same rays, same noise
+    np.testing.assert_array_equal(moving.ray, static["ray"])  # same rays, same noise
     np.testing.assert_array_equal(moving.points, static["sensor_points"])
     np.testing.assert_array_equal(moving.world_points, static["world_points"])
     np.testing.assert_allclose(moving.reference_points, static["sensor_points"], atol=1e-12)
@@ -110,7 +124,7 @@ def test_kiss_icp_deskewing_recovers_the_reference_frame(wall, mid70, start):
     one scan period, moves every point to where it lies in the reference frame
     (to its rescaling of the timestamps by their spread: f_min of one period)."""
     scan = scan_along(wall, mid70, start, [0.0, 0.0, 0.0, 0.0], noise=0.02)
-    delta = np.linalg.inv(pose_matrix(start))   # scan-to-scan motion, previous -> current
+    delta = np.linalg.inv(pose_matrix(start))  # scan-to-scan motion, previous -> current
     deskewed = Preprocessor(1000.0, 0.0, True, 1).preprocess(scan.points, scan.timestamps, delta)
     error = np.linalg.norm(deskewed - scan.reference_points, axis=1)
     bound = scan.timestamps.min() * (0.5 + abs(start[3]) * np.linalg.norm(scan.points, axis=1)) + 1e-9
@@ -122,8 +136,8 @@ def test_kiss_icp_deskewing_recovers_the_reference_frame(wall, mid70, start):
 
 def test_bad_period(wall, mid70):
     with pytest.raises(Lf3pmError, match="period"):
-        simulate_moving_scan(wall, LinearMotion([0.0, 1.0], [[0, 0, 0, 0]] * 2), 1.0, 0.0, mid70.directions,
-                             0.1, 100.0)
+        simulate_moving_scan(wall, LinearMotion([0.0, 1.0], [[0, 0, 0, 0]] * 2), 1.0, 0.0, mid70.directions, 0.1, 100.0)
     with pytest.raises(ValueError, match="one pose per ray"):
-        _core.simulate_moving_scan(wall, np.broadcast_to(np.eye(4), (3, 4, 4)).copy(), mid70.directions[:2],
-                                   scan_params(0.1, 100.0))
+        _core.simulate_moving_scan(
+            wall, np.broadcast_to(np.eye(4), (3, 4, 4)).copy(), mid70.directions[:2], scan_params(0.1, 100.0)
+        )

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from analytic_scenes import box_room
 
 import lf3pm
 from lf3pm.io import write_points
 from lf3pm.map import load_map_points
 from lf3pm.solm.build import stray_points_warning
-from analytic_scenes import box_room
 
 #: A 10 x 8 x 3 m room and four points about 400 m away, as a map read with a few
 #: strays (the BALM hall's reach 400 m).
@@ -25,8 +25,14 @@ STRAYS = np.array([[400.0, 3.0, 1.0], [398.0, -2.0, 0.5], [-20.0, 395.0, 2.0], [
 
 
 def run_cli(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=False, capture_output=True,
-                          text=True, timeout=300, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", *map(str, args)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
 
 
 def test_a_build_on_a_map_with_stray_points_says_which_bounds_skip_its_empty_grid(tmp_path):
@@ -39,7 +45,7 @@ def test_a_build_on_a_map_with_stray_points_says_which_bounds_skip_its_empty_gri
     assert line.startswith(f"101 of the SOLM grid's {grid.nx * grid.ny:,} x-y cells hold a map point")
     assert "holds all but 4 of the 107,206 points" in line
     suggested = [float(v) for v in line.split("--bounds ")[1].split(" (")[0].split()]
-    assert suggested == [-5.0, -4.0, 6.0, 5.0]   # the room's cells on the grid from x0 = -20, y0 = -4
+    assert suggested == [-5.0, -4.0, 6.0, 5.0]  # the room's cells on the grid from x0 = -20, y0 = -4
     bounded = lf3pm.make_grid(world, "r2", 1.0, bounds=suggested)
     assert bounded.nx * bounded.ny == 11 * 9 and stray_points_warning(world.points, bounded) is None
 

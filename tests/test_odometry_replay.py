@@ -8,8 +8,8 @@ import pytest
 import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.odometry import replay_odometry
-from lf3pm.trajectory.sampling import interpolate_poses, sample_trajectory
 from lf3pm.scenes import build_scene
+from lf3pm.trajectory.sampling import interpolate_poses, sample_trajectory
 
 
 def test_interpolation_and_sampling():
@@ -19,17 +19,19 @@ def test_interpolation_and_sampling():
     assert mid[:3] == pytest.approx([1, 0, 1]) and mid[3] == pytest.approx(math.pi)  # across +-pi
     times, sampled = sample_trajectory([0.0, 2.0, 4.0], [0, 2, 2], [0, 0, 2], [0, 0, 0], every=0.5, z=1.5)
     assert len(times) == 9 and sampled[-1] == pytest.approx([2, 2, 1.5, 0])
-    times, sampled = sample_trajectory([0.0, 1.0, 4.0], [0, 2, 2], [0, 0, 2], [0, 0, 0], every=1.0,
-                                       by="distance")
+    times, sampled = sample_trajectory([0.0, 1.0, 4.0], [0, 2, 2], [0, 0, 2], [0, 0, 0], every=1.0, by="distance")
     assert times == pytest.approx([0.0, 0.5, 1.0, 2.5, 4.0])
     assert sampled[3, :2] == pytest.approx([2, 1])
 
 
-@pytest.mark.parametrize("t, poses, match", [
-    ([0.0], [[0, 0, 1, 0]], "at least 2"),
-    ([0.0, 1.0, 0.5], [[0, 0, 1, 0]] * 3, "increase"),
-    ([0.0, 1.0], [[0, 0, 1, 0], [math.nan, 0, 1, 0]], "non-finite"),
-])
+@pytest.mark.parametrize(
+    "t, poses, match",
+    [
+        ([0.0], [[0, 0, 1, 0]], "at least 2"),
+        ([0.0, 1.0, 0.5], [[0, 0, 1, 0]] * 3, "increase"),
+        ([0.0, 1.0], [[0, 0, 1, 0], [math.nan, 0, 1, 0]], "non-finite"),
+    ],
+)
 def test_bad_trajectories(boxes, t, poses, match):
     world, _ = boxes
     with pytest.raises(Lf3pmError, match=match):
@@ -64,7 +66,7 @@ def test_straight_drive_in_a_structured_scene_stays_within_a_few_cm(boxes):
     t, poses = drive(z)
     result = replay_odometry(world, t, poses, "mid70", voxel_size=0.25, motion_distortion=False)
     assert result.scans == 21 and not result.skipped and result.hits.min() > 5000
-    np.testing.assert_allclose(result.estimate[0], result.truth[0])       # anchored at the truth
+    np.testing.assert_allclose(result.estimate[0], result.truth[0])  # anchored at the truth
     # Measured 1.5 cm when every scan repeated the pattern's first 0.1 s, 9 cm now that
     # scans continue the non-repetitive pattern (less overlap between consecutive scans;
     # RPE per frame 9.8 cm, most of it in the first frames).
@@ -78,7 +80,7 @@ def test_motion_distortion_with_deskewing_stays_close_to_no_distortion(boxes):
     still = replay_odometry(world, t, poses, "mid70", voxel_size=0.25, motion_distortion=False)
     moving = replay_odometry(world, t, poses, "mid70", voxel_size=0.25)
     assert moving.params["motion_distortion"] is True and moving.params["kiss_icp"]["deskew"] is True
-    np.testing.assert_allclose(moving.truth, still.truth)     # compared with the same true poses
+    np.testing.assert_allclose(moving.truth, still.truth)  # compared with the same true poses
     # Measured 8.6 cm with distortion and deskewing, 9.0 cm without distortion.
     assert moving.ape["rmse"] < 0.15 and moving.ape["rmse"] < 2 * still.ape["rmse"]
 

@@ -3,14 +3,13 @@ robot's limits on 100 Hz samples, for omni, diff and car robots."""
 
 import numpy as np
 import pytest
+from kinematics import assert_kinematics_hold, body_speeds
+from queries import random_queries
 
 from lf3pm.errors import Lf3pmError
 from lf3pm.planner import Planner
-from lf3pm.trajectory import Robot
 from lf3pm.solm.reader import Solm
-
-from kinematics import assert_kinematics_hold, body_speeds
-from queries import random_queries
+from lf3pm.trajectory import Robot
 
 START, GOAL = (-2.5, -2.7, 0.0), (6.2, 2.2, 1.57)
 
@@ -53,7 +52,7 @@ def test_a_car_turns_round_at_both_ends(planner):
     summary = plan.summary()
     assert summary["path_length_m"] == pytest.approx(plan.path.length)
     assert summary["duration_s"] == pytest.approx(plan.trajectory.duration) and summary["iterations"] > 0
-    fine = plan.trajectory.sample(1000.0)   # the summary samples at 100 Hz: the same length within 0.1 %
+    fine = plan.trajectory.sample(1000.0)  # the summary samples at 100 Hz: the same length within 0.1 %
     length = np.hypot(np.diff(fine["x"]), np.diff(fine["y"])).sum()
     assert summary["trajectory_length_m"] == pytest.approx(length, rel=1e-3)
     assert summary["trajectory_length_m"] >= np.hypot(goal[0] - start[0], goal[1] - start[1])
@@ -76,9 +75,11 @@ def test_a_plan_inside_r_safe_says_so(planner):
         return replace(plan, optimization=replace(plan.optimization, violations=violations))
 
     assert with_clearance(-0.03).warnings() == [
-        "the trajectory comes 0.03 m inside r_safe (0.05 m): the body passes 0.02 m from the map"]
+        "the trajectory comes 0.03 m inside r_safe (0.05 m): the body passes 0.02 m from the map"
+    ]
     assert with_clearance(-0.08).summary()["warnings"] == [
-        "the trajectory comes 0.08 m inside r_safe (0.05 m): it touches the map"]
+        "the trajectory comes 0.08 m inside r_safe (0.05 m): it touches the map"
+    ]
 
 
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])

@@ -22,14 +22,31 @@ def boxes_solm(tmp_path_factory):
 
 
 def run_plan(*args):
-    return subprocess.run([sys.executable, "-m", "lf3pm.cli", "plan", *map(str, args)],
-                          capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "lf3pm.cli", "plan", *map(str, args)], capture_output=True, text=True)
 
 
 def test_plan_writes_a_100_hz_trajectory_from_start_to_goal_and_a_png(boxes_solm, tmp_path):
     csv, png = tmp_path / "traj.csv", tmp_path / "plan.png"
-    done = run_plan("--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57,
-                    "--r-safe", 0.05, "--weight", 3, "-o", csv, "--png", png)
+    done = run_plan(
+        "--solm",
+        boxes_solm,
+        "--start",
+        -2.5,
+        -2.7,
+        0,
+        "--goal",
+        6.2,
+        2.2,
+        1.57,
+        "--r-safe",
+        0.05,
+        "--weight",
+        3,
+        "-o",
+        csv,
+        "--png",
+        png,
+    )
     assert done.returncode == 0, done.stderr
     header = csv.read_text().splitlines()[0]
     assert header == "t,x,y,yaw,vx,vy,omega"
@@ -43,8 +60,24 @@ def test_plan_writes_a_100_hz_trajectory_from_start_to_goal_and_a_png(boxes_solm
 
 def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
     csv = tmp_path / "traj.csv"
-    done = run_plan("--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57,
-                    "--r-safe", 0.05, "--vmax-norm", 0.7, "-o", csv)
+    done = run_plan(
+        "--solm",
+        boxes_solm,
+        "--start",
+        -2.5,
+        -2.7,
+        0,
+        "--goal",
+        6.2,
+        2.2,
+        1.57,
+        "--r-safe",
+        0.05,
+        "--vmax-norm",
+        0.7,
+        "-o",
+        csv,
+    )
     assert done.returncode == 0, done.stderr
     data = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert np.max(np.hypot(data[:, 4], data[:, 5])) <= 1.02 * 0.7
@@ -52,20 +85,39 @@ def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
 
 def test_the_composite_channel_plans_from_the_command_line(boxes_solm, tmp_path):
     csv = tmp_path / "traj.csv"
-    done = run_plan("--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57,
-                    "--r-safe", 0.05, "--metric", "q_n_q_min", "-o", csv)
+    done = run_plan(
+        "--solm",
+        boxes_solm,
+        "--start",
+        -2.5,
+        -2.7,
+        0,
+        "--goal",
+        6.2,
+        2.2,
+        1.57,
+        "--r-safe",
+        0.05,
+        "--metric",
+        "q_n_q_min",
+        "-o",
+        csv,
+    )
     assert done.returncode == 0, done.stderr
     data = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert np.allclose(data[-1, 1:3], (6.2, 2.2), atol=1e-6)
 
 
-@pytest.mark.parametrize("args, needle", [
-    (("--start", 50, 50, 0, "--goal", 6.2, 2.2, 0), "outside"),
-    (("--start", -4.0, -4.0, 0, "--goal", 6.2, 2.2, 0), "obstacle"),
-    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "tank"), "--robot must be"),
-    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--metric", "q_best"), "metric"),
-    (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "diff", "--vmax-norm", 1), "omni robots only"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("--start", 50, 50, 0, "--goal", 6.2, 2.2, 0), "outside"),
+        (("--start", -4.0, -4.0, 0, "--goal", 6.2, 2.2, 0), "obstacle"),
+        (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "tank"), "--robot must be"),
+        (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--metric", "q_best"), "metric"),
+        (("--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 0, "--robot", "diff", "--vmax-norm", 1), "omni robots only"),
+    ],
+)
 def test_bad_requests_get_one_line_and_exit_2(boxes_solm, tmp_path, args, needle):
     csv = tmp_path / "traj.csv"
     done = run_plan("--solm", boxes_solm, *args, "-o", csv)
@@ -75,6 +127,5 @@ def test_bad_requests_get_one_line_and_exit_2(boxes_solm, tmp_path, args, needle
 
 
 def test_a_missing_solm_is_refused(tmp_path):
-    done = run_plan("--solm", tmp_path / "none.zarr", "--start", 0, 0, 0, "--goal", 1, 1, 0,
-                    "-o", tmp_path / "t.csv")
+    done = run_plan("--solm", tmp_path / "none.zarr", "--start", 0, 0, 0, "--goal", 1, 1, 0, "-o", tmp_path / "t.csv")
     assert done.returncode == 2 and "no such SOLM" in done.stderr

@@ -15,13 +15,12 @@ ask 0.95 of it, the margin of L-BFGS's relative stop (1e-4 over 3 iterations).
 
 import numpy as np
 import pytest
+from kinematics import kinematic_checks
+from queries import random_queries
 
 from lf3pm.errors import Lf3pmError
 from lf3pm.trajectory import Robot
 from lf3pm.trajectory.trajectory_optimizer import LIMIT_CHECK_RATE, stretch_factor
-
-from kinematics import kinematic_checks
-from queries import random_queries
 
 #: A plan is "at a limit" when its largest ratio reaches this (module docstring).
 AT_A_LIMIT = 0.95
@@ -123,8 +122,12 @@ def test_plans_are_not_stopped_early(study_boxes_planner, kind):
     robot = Robot(kind, min_turn_radius=0.5 if kind == "car" else 0.0, r_safe=0.2)
     queries = list(random_queries(planner, seed=11, count=4))
     if kind == "diff":
-        queries.append(((6.621254902466517, 2.3716837840915845, 3.115957245068116),
-                        (-3.128745097533483, 2.6216837840915845, 3.115957245068116)))
+        queries.append(
+            (
+                (6.621254902466517, 2.3716837840915845, 3.115957245068116),
+                (-3.128745097533483, 2.6216837840915845, 3.115957245068116),
+            )
+        )
     calls = []
 
     def recorded(*args, **kwargs):

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.planner import Planner
-from lf3pm.trajectory import Robot
 from lf3pm.grid_field import GridField
+from lf3pm.planner import Planner
 from lf3pm.planner.shortcut import shortcut_path
 from lf3pm.solm.grid import SolmGrid
+from lf3pm.trajectory import Robot
 
 BINS, RES, NX, NY = 36, 0.5, 80, 24
 
@@ -46,8 +46,7 @@ def planner():
 
 
 def test_omni_travels_facing_the_structure_behind_it(planner):
-    plan = planner.plan((2.0, 6.0, 0.0), (36.0, 6.0, 0.0), robot=Robot("omni", r_safe=0.05), metric="q_n",
-                        weight=1.0)
+    plan = planner.plan((2.0, 6.0, 0.0), (36.0, 6.0, 0.0), robot=Robot("omni", r_safe=0.05), metric="q_n", weight=1.0)
     s = plan.trajectory.sample(100.0)
     assert np.ptp(s["x"]) > 30
     # The front end turns round and back; the trajectory keeps that plan.
@@ -158,8 +157,14 @@ def test_trajectory_keeps_the_front_ends_cost_on_random_se2_queries(orientation_
         i, j = rng.choice(len(xs), 2, replace=False)
         if math.hypot(xs[i] - xs[j], ys[i] - ys[j]) * g.res < 8:
             continue
-        start, goal = ((g.x0 + (xs[k] + 0.5) * g.res, g.y0 + (ys[k] + 0.5) * g.res,
-                        2 * math.pi / bins * np.argmin(layer.filled[:, ys[k], xs[k]])) for k in (i, j))
+        start, goal = (
+            (
+                g.x0 + (xs[k] + 0.5) * g.res,
+                g.y0 + (ys[k] + 0.5) * g.res,
+                2 * math.pi / bins * np.argmin(layer.filled[:, ys[k], xs[k]]),
+            )
+            for k in (i, j)
+        )
         try:
             plan = planner.plan(start, goal, robot=Robot("omni"), metric="q_n", weight=weight)
         except Lf3pmError:  # a cell behind the building, cut off from the open ground

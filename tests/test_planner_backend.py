@@ -4,13 +4,12 @@ import math
 
 import numpy as np
 import pytest
+from kinematics import assert_kinematics_hold
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid_field import GridField
 from lf3pm.trajectory import Robot, Trajectory, make_problem, optimize_trajectory
-
-from kinematics import assert_kinematics_hold
 
 RES, X0, Y0 = 0.25, -5.0, -10.0
 NX, NY = 140, 80
@@ -56,6 +55,7 @@ def _coefficient_value(c, t, order):
 
 # --- MINCO ---------------------------------------------------------------------------
 
+
 def test_minco_continuity_and_boundary_conditions():
     rng = np.random.default_rng(1)
     n = 6
@@ -67,8 +67,9 @@ def test_minco_continuity_and_boundary_conditions():
     assert coef.shape == (n, 4, 3) and energy > 0
     for i in range(n - 1):
         for order in range(3):  # position, velocity and acceleration continuous (C^2)
-            np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], order),
-                                       _coefficient_value(coef[i + 1], 0.0, order), atol=1e-9)
+            np.testing.assert_allclose(
+                _coefficient_value(coef[i], durations[i], order), _coefficient_value(coef[i + 1], 0.0, order), atol=1e-9
+            )
         np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], 0), q[i], atol=1e-9)
     np.testing.assert_allclose(_coefficient_value(coef[0], 0.0, 0), head[:, 0], atol=1e-12)
     np.testing.assert_allclose(_coefficient_value(coef[0], 0.0, 1), head[:, 1], atol=1e-12)
@@ -95,12 +96,17 @@ def test_minco_with_acceleration_conditions(head_acc, tail_acc):
     free = n - 1 - head_acc - tail_acc
     q = np.column_stack([np.linspace(2, 8, free), rng.normal(size=free), rng.normal(size=free)])
     durations = rng.uniform(0.3, 2.5, n)
-    coef, _ = _core.minco_s2(np.ascontiguousarray(head[:, :3 if head_acc else 2]),
-                             np.ascontiguousarray(tail[:, :3 if tail_acc else 2]), q, durations)
+    coef, _ = _core.minco_s2(
+        np.ascontiguousarray(head[:, : 3 if head_acc else 2]),
+        np.ascontiguousarray(tail[:, : 3 if tail_acc else 2]),
+        q,
+        durations,
+    )
     for i in range(n - 1):
         for order in range(3):
-            np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], order),
-                                       _coefficient_value(coef[i + 1], 0.0, order), atol=1e-9)
+            np.testing.assert_allclose(
+                _coefficient_value(coef[i], durations[i], order), _coefficient_value(coef[i + 1], 0.0, order), atol=1e-9
+            )
     junctions = [i for i in range(n - 1) if not (head_acc and i == 0) and not (tail_acc and i == n - 2)]
     for k, i in enumerate(junctions):
         np.testing.assert_allclose(_coefficient_value(coef[i], durations[i], 0), q[k], atol=1e-9)
@@ -132,6 +138,7 @@ def test_trajectory_evaluate_is_continuous_and_keeps_boundaries(tmp_path):
 
 
 # --- L-BFGS ----------------------------------------------------------------------------
+
 
 def test_lbfgs_rosenbrock():
     def rosen(x):
@@ -165,7 +172,9 @@ def test_lbfgs_convex_quadratic_converges_to_what_float_precision_allows():
     # f = x'Ax/2 - b'x in float64 is exact to within n eps (|x|'|A||x|/2 + |b|'|x|) (Higham, dot
     # products); no x whose excess (x - x*)'A(x - x*)/2 is smaller can be told from x* by f.
     x_star = np.linalg.solve(a, b)
-    rounding = 30 * np.finfo(float).eps * (0.5 * np.abs(x_star) @ np.abs(a) @ np.abs(x_star) + np.abs(b) @ np.abs(x_star))
+    rounding = (
+        30 * np.finfo(float).eps * (0.5 * np.abs(x_star) @ np.abs(a) @ np.abs(x_star) + np.abs(b) @ np.abs(x_star))
+    )
     e = r["x"] - x_star
     assert 0.5 * e @ a @ e <= rounding
     assert np.linalg.norm(e) <= np.sqrt(2 * rounding / np.linalg.eigvalsh(a)[0])
@@ -191,18 +200,51 @@ def test_lbfgs_line_search_that_sees_f_change_is_still_a_failure():
 
 # --- The objective's gradient ----------------------------------------------------------
 
-@pytest.mark.parametrize("kind, vmax_norm, turn_price", [("omni", None, 0.0), ("omni", 0.4, 0.0), ("omni", None, 2.5),
-                                                        ("diff", None, 0.0), ("car", None, 0.0)])
+
+@pytest.mark.parametrize(
+    "kind, vmax_norm, turn_price",
+    [("omni", None, 0.0), ("omni", 0.4, 0.0), ("omni", None, 2.5), ("diff", None, 0.0), ("car", None, 0.0)],
+)
 def test_objective_gradient_matches_finite_differences(kind, vmax_norm, turn_price):
     rng = np.random.default_rng(3)
-    robot = Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, min_turn_radius=30.0 if kind == "car" else 0.0,
-                  r_safe=1.0, vmax_norm=vmax_norm, amax_lon=0.05, amax_lat=0.02, alpha_max=0.002)
-    problem = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
-                           rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0,
-                           turn_price=turn_price)
+    robot = Robot(
+        kind,
+        vmax_lon=0.6,
+        vmax_lat=0.3,
+        wmax=0.05,
+        min_turn_radius=30.0 if kind == "car" else 0.0,
+        r_safe=1.0,
+        vmax_norm=vmax_norm,
+        amax_lon=0.05,
+        amax_lat=0.02,
+        alpha_max=0.002,
+    )
+    problem = make_problem(
+        _bend(),
+        _smooth_se2_cost(),
+        _esdf_with_disc(10.0, 2.0, 1.0),
+        robot,
+        w_q=1.3,
+        rho_T=0.7,
+        w_energy=0.05,
+        penalty=50.0,
+        samples=6,
+        piece_length=3.0,
+        turn_price=turn_price,
+    )
     if turn_price:  # the turns' price is in the q term
-        free = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0), robot, w_q=1.3,
-                            rho_T=0.7, w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
+        free = make_problem(
+            _bend(),
+            _smooth_se2_cost(),
+            _esdf_with_disc(10.0, 2.0, 1.0),
+            robot,
+            w_q=1.3,
+            rho_T=0.7,
+            w_energy=0.05,
+            penalty=50.0,
+            samples=6,
+            piece_length=3.0,
+        )
         assert problem.details(problem.initial)["q"] > 1.01 * free.details(problem.initial)["q"]
     x = problem.initial + rng.normal(size=problem.dimension) * 0.1
     taus = slice(3 * (problem.pieces - 1), 4 * problem.pieces - 1)
@@ -212,21 +254,45 @@ def test_objective_gradient_matches_finite_differences(kind, vmax_norm, turn_pri
         # (a diff robot's heading too: it turns on the spot to it).
         end = 4 if kind == "diff" else 3
         assert problem.dimension == 3 * (problem.pieces - 3) + problem.pieces + 2 * end
-        x[-2 * end:] += ([2.0, 2.0, -1.0, 0.3] if kind == "diff" else [2.0, 2.0, -1.0]) * 2  # faster, shorter straight ends: over the speed limit there
+        x[-2 * end :] += (
+            [2.0, 2.0, -1.0, 0.3] if kind == "diff" else [2.0, 2.0, -1.0]
+        ) * 2  # faster, shorter straight ends: over the speed limit there
     terms = problem.details(x)
     active = ["q", "velocity", "omega", "acceleration", "esdf", "time", "energy"]
     active += ["turn"] if kind == "car" else []
     assert all(terms[name] != 0 for name in active), terms
     if vmax_norm is not None:  # the |v| limit adds to the velocity penalty
-        box = make_problem(_bend(), _smooth_se2_cost(), _esdf_with_disc(10.0, 2.0, 1.0),
-                           Robot(kind, vmax_lon=0.6, vmax_lat=0.3, wmax=0.05, r_safe=1.0, amax_lon=0.05,
-                                 amax_lat=0.02, alpha_max=0.002, vmax_norm=math.inf), w_q=1.3, rho_T=0.7,
-                           w_energy=0.05, penalty=50.0, samples=6, piece_length=3.0)
+        box = make_problem(
+            _bend(),
+            _smooth_se2_cost(),
+            _esdf_with_disc(10.0, 2.0, 1.0),
+            Robot(
+                kind,
+                vmax_lon=0.6,
+                vmax_lat=0.3,
+                wmax=0.05,
+                r_safe=1.0,
+                amax_lon=0.05,
+                amax_lat=0.02,
+                alpha_max=0.002,
+                vmax_norm=math.inf,
+            ),
+            w_q=1.3,
+            rho_T=0.7,
+            w_energy=0.05,
+            penalty=50.0,
+            samples=6,
+            piece_length=3.0,
+        )
         assert terms["velocity"] > 1.01 * box.details(x)["velocity"]
     _, grad = problem.evaluate(x)
     step = 1e-6
-    fd = np.array([(problem.evaluate(x + step * e)[0] - problem.evaluate(x - step * e)[0]) / (2 * step)
-                   for e in np.eye(problem.dimension)])
+    fd = np.array(
+        [
+            (problem.evaluate(x + step * e)[0] - problem.evaluate(x - step * e)[0]) / (2 * step)
+            for e in np.eye(problem.dimension)
+        ]
+    )
     assert np.linalg.norm(fd - grad) / np.linalg.norm(grad) <= 1e-5
 
 
@@ -250,14 +316,13 @@ def test_grid_field_interpolation_and_gradient():
 
 # --- Optimised trajectories ------------------------------------------------------------
 
+
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])
 def test_optimised_trajectory_is_feasible(kind):
-    robot = Robot(kind, vmax_lon=1.0, vmax_lat=0.5, wmax=0.8, min_turn_radius=2.0 if kind == "car" else 0.0,
-                  r_safe=0.5)
+    robot = Robot(kind, vmax_lon=1.0, vmax_lat=0.5, wmax=0.8, min_turn_radius=2.0 if kind == "car" else 0.0, r_safe=0.5)
     # An obstacle 0.6 m beside the path's middle: closer than r_safe + its radius.
     esdf = _esdf_with_disc(10.0, 0.6 + 2.0 + 0.0, 1.5)
-    result = optimize_trajectory(_bend(), _smooth_se2_cost(), esdf, robot, w_q=0.5, rho_T=2.0,
-                                 piece_length=1.5)
+    result = optimize_trajectory(_bend(), _smooth_se2_cost(), esdf, robot, w_q=0.5, rho_T=2.0, piece_length=1.5)
     s = assert_kinematics_hold(result.trajectory, robot)
     assert np.min(esdf.sample(s["x"], s["y"])[0]) >= robot.r_safe
     assert result.violations["min_clearance"] >= 0
@@ -342,6 +407,7 @@ def test_trajectory_moves_to_the_low_cost_side():
 
 
 # --- Bad input -------------------------------------------------------------------------
+
 
 def test_bad_input_raises_lf3pm_error():
     cost = _smooth_se2_cost()

@@ -28,15 +28,18 @@ def end_of(start, segments):
     return sample_segments(start, segments, 0.05)[-1]
 
 
-@pytest.mark.parametrize("goal,length", [
-    ((3.0, 0.0, 0.0), 3.0),                                   # straight ahead
-    ((0.0, 0.0, 0.0), 0.0),                                   # already there
-    ((R, R, math.pi / 2), math.pi / 2 * R),                   # quarter turn left
-    ((R, -R, -math.pi / 2), math.pi / 2 * R),                 # quarter turn right
-    ((0.0, 2 * R, math.pi), math.pi * R),                     # U-turn
-    ((-1.5, 2 * R, math.pi), math.pi * R + 1.5),              # U-turn, then straight back
-    ((-1e-3, 0.0, 0.0), 2 * math.pi * R + 1e-3),              # just behind: a full circle
-])
+@pytest.mark.parametrize(
+    "goal,length",
+    [
+        ((3.0, 0.0, 0.0), 3.0),  # straight ahead
+        ((0.0, 0.0, 0.0), 0.0),  # already there
+        ((R, R, math.pi / 2), math.pi / 2 * R),  # quarter turn left
+        ((R, -R, -math.pi / 2), math.pi / 2 * R),  # quarter turn right
+        ((0.0, 2 * R, math.pi), math.pi * R),  # U-turn
+        ((-1.5, 2 * R, math.pi), math.pi * R + 1.5),  # U-turn, then straight back
+        ((-1e-3, 0.0, 0.0), 2 * math.pi * R + 1e-3),  # just behind: a full circle
+    ],
+)
 def test_dubins_lengths_of_known_cases(goal, length):
     d = dubins_path((0.0, 0.0, 0.0), goal, R)
     assert d["length"] == pytest.approx(length, abs=1e-9)
@@ -55,9 +58,13 @@ def word_residual(word, start, goal, radius):
             if k == 0:
                 x, y = x + length * math.cos(th), y + length * math.sin(th)
             else:
-                x, y = x + (math.sin(th + k * length) - math.sin(th)) / k, y + (math.cos(th) - math.cos(th + k * length)) / k
+                x, y = (
+                    x + (math.sin(th + k * length) - math.sin(th)) / k,
+                    y + (math.cos(th) - math.cos(th + k * length)) / k,
+                )
                 th += k * length
         return np.array([x - goal[0], y - goal[1], math.sin(th - goal[2]), 1 - math.cos(th - goal[2])])
+
     return end
 
 
@@ -144,7 +151,7 @@ def box_maze(seed, nx=45, ny=35, boxes=9):
     for _ in range(boxes):
         w, h = rng.integers(2, 7, 2)
         x, y = rng.integers(1, nx - w), rng.integers(1, ny - h)
-        mask[y:y + h, x:x + w] = True
+        mask[y : y + h, x : x + w] = True
     cost = np.abs(np.sin(np.arange(nx) * 0.3)[None, :] + np.cos(np.arange(ny) * 0.2)[:, None]) + 0.2
     return Esdf.from_mask(mask, 0.0, 0.0, RES), cost
 
@@ -179,6 +186,7 @@ def queries(count=8):
 
 def trapezoid_cost(poses, esdf, cost, weight):
     from lf3pm.grid_field import GridField
+
     c = GridField(cost, esdf.x0, esdf.y0, esdf.res).sample(poses[:, 0], poses[:, 1])[0]
     ds = np.linalg.norm(np.diff(poses[:, :2], axis=0), axis=1)
     return float(np.sum(ds * (1 + weight * 0.5 * (c[1:] + c[:-1]))))
@@ -229,8 +237,9 @@ def test_heuristic_never_exceeds_found_costs_to_go(case):
         found = []
         for kw in (dict(), dict(heuristic=False), dict(yaw_bins=144, step=0.15, sample_step=0.03)):
             try:
-                found.append(search_car_path(cost, esdf, pose, goal, radius=R, weight=1.0, clearance=CLEARANCE,
-                                             **kw).cost)
+                found.append(
+                    search_car_path(cost, esdf, pose, goal, radius=R, weight=1.0, clearance=CLEARANCE, **kw).cost
+                )
             except Lf3pmError:
                 pass
         if found:
@@ -278,18 +287,21 @@ def walled():
     return Esdf.from_mask(mask, 0.0, 0.0, RES)
 
 
-@pytest.mark.parametrize("kwargs,needle", [
-    (dict(radius=0.0), "turning radius must be a positive number"),
-    (dict(radius=float("nan")), "turning radius must be a positive number"),
-    (dict(radius=-1.0), "turning radius must be a positive number"),
-    (dict(radius=R, start=(2.0, 2.0, 0.0)), "start (2.00, 2.00, 0.00) is inside an obstacle"),
-    (dict(radius=R, goal=(9.0, 1.0, 0.0)), "goal (9.00, 1.00, 0.00) lies outside the grid"),
-    (dict(radius=R, start=(0.3, 1.0, 0.0)), "closer than r_safe 0.1 m"),
-    (dict(radius=R, yaw_bins=2), "yaw_bins must be an integer >= 4"),
-    (dict(radius=R, start=(1.0, 1.0, float("inf"))), "start must be three finite numbers"),
-    # Heading straight into the wall 0.4 m ahead, with nowhere to turn: no forward path.
-    (dict(radius=2.0, start=(1.0, 3.0, math.pi)), "no forward path of turning radius 2 m"),
-])
+@pytest.mark.parametrize(
+    "kwargs,needle",
+    [
+        (dict(radius=0.0), "turning radius must be a positive number"),
+        (dict(radius=float("nan")), "turning radius must be a positive number"),
+        (dict(radius=-1.0), "turning radius must be a positive number"),
+        (dict(radius=R, start=(2.0, 2.0, 0.0)), "start (2.00, 2.00, 0.00) is inside an obstacle"),
+        (dict(radius=R, goal=(9.0, 1.0, 0.0)), "goal (9.00, 1.00, 0.00) lies outside the grid"),
+        (dict(radius=R, start=(0.3, 1.0, 0.0)), "closer than r_safe 0.1 m"),
+        (dict(radius=R, yaw_bins=2), "yaw_bins must be an integer >= 4"),
+        (dict(radius=R, start=(1.0, 1.0, float("inf"))), "start must be three finite numbers"),
+        # Heading straight into the wall 0.4 m ahead, with nowhere to turn: no forward path.
+        (dict(radius=2.0, start=(1.0, 3.0, math.pi)), "no forward path of turning radius 2 m"),
+    ],
+)
 def test_errors_are_one_line(walled, kwargs, needle):
     args = dict(start=(1.0, 1.0, 0.0), goal=(3.0, 3.0, 0.0), clearance=CLEARANCE) | kwargs
     with pytest.raises(Lf3pmError) as err:

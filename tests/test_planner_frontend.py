@@ -88,8 +88,10 @@ def check_path(path, trav, cost, g, weight, turn_length):
 
 def scipy_cost(cost, trav, g, s, t, weight, turn_length, turn_while_moving):
     """Least cost from cell s to cell t (x, y, k) by scipy's Dijkstra on the explicit graph."""
-    dist = dijkstra(explicit_graph(cost, trav, g.res, weight, turn_length, turn_while_moving),
-                    indices=np.ravel_multi_index((s[2], s[1], s[0]), cost.shape))
+    dist = dijkstra(
+        explicit_graph(cost, trav, g.res, weight, turn_length, turn_while_moving),
+        indices=np.ravel_multi_index((s[2], s[1], s[0]), cost.shape),
+    )
     return dist[np.ravel_multi_index((t[2], t[1], t[0]), cost.shape)]
 
 
@@ -208,8 +210,9 @@ def test_some_random_mazes_are_solved():
     solved = 0
     for seed in range(6):
         cost, trav, s, t = random_maze(seed, 1)
-        d = dijkstra(explicit_graph(cost, trav, 0.5, 1.0, 0.0, True),
-                     indices=np.ravel_multi_index((0, s[1], s[0]), cost.shape))
+        d = dijkstra(
+            explicit_graph(cost, trav, 0.5, 1.0, 0.0, True), indices=np.ravel_multi_index((0, s[1], s[0]), cost.shape)
+        )
         solved += np.isfinite(d[np.ravel_multi_index((0, t[1], t[0]), cost.shape)])
     assert solved >= 4
 
@@ -275,8 +278,9 @@ def test_composite_cost_is_the_worse_of_its_parts_each_relative_to_its_median():
     layer = cost_from_solm(solm, "q_n_q_min")
     usable = np.isfinite(q_n) & np.isfinite(q_min) & ~degenerate
     # float64 reference: each part over its own median of usable-for-it cells, the larger taken
-    worse = np.maximum(q_n / np.median(q_n[np.isfinite(q_n) & ~degenerate]),
-                       q_min / np.median(q_min[np.isfinite(q_min) & ~degenerate]))
+    worse = np.maximum(
+        q_n / np.median(q_n[np.isfinite(q_n) & ~degenerate]), q_min / np.median(q_min[np.isfinite(q_min) & ~degenerate])
+    )
     expected = np.minimum(worse / np.median(worse[usable]), layer.cap)
     np.testing.assert_allclose(layer.cost[usable], expected[usable], rtol=1e-12)
     assert layer.cost[0, 0, 0] == layer.cost[0, 1, 1] == layer.cost[2, 3, 3] == layer.cap
@@ -298,15 +302,18 @@ def blocked_map():
     return Esdf.from_mask(mask, 0.0, 0.0, 1.0, unknown=unknown), np.ones((10, 12))
 
 
-@pytest.mark.parametrize("start,goal,needle", [
-    ((-0.5, 3.5, 0.0), (3.5, 3.5, 0.0), "start .* lies outside the grid"),
-    ((3.5, 3.5, 0.0), (3.5, 10.5, 0.0), "goal .* lies outside the grid"),
-    ((2.5, 2.5, 0.0), (3.5, 4.5, 0.0), "start .* is inside an obstacle"),
-    ((3.5, 4.5, 0.0), (2.5, 7.5, 0.0), "goal .* is on unknown ground"),
-    ((3.5, 2.5, 0.0), (3.5, 5.5, 0.0), "start .* closer than r_safe 1.2 m"),
-    ((1.5, 4.5, 0.0), (9.5, 4.5, 0.0), "goal .* is unreachable from start"),
-    ((float("nan"), 4.5, 0.0), (9.5, 4.5, 0.0), "start must be three finite numbers"),
-])
+@pytest.mark.parametrize(
+    "start,goal,needle",
+    [
+        ((-0.5, 3.5, 0.0), (3.5, 3.5, 0.0), "start .* lies outside the grid"),
+        ((3.5, 3.5, 0.0), (3.5, 10.5, 0.0), "goal .* lies outside the grid"),
+        ((2.5, 2.5, 0.0), (3.5, 4.5, 0.0), "start .* is inside an obstacle"),
+        ((3.5, 4.5, 0.0), (2.5, 7.5, 0.0), "goal .* is on unknown ground"),
+        ((3.5, 2.5, 0.0), (3.5, 5.5, 0.0), "start .* closer than r_safe 1.2 m"),
+        ((1.5, 4.5, 0.0), (9.5, 4.5, 0.0), "goal .* is unreachable from start"),
+        ((float("nan"), 4.5, 0.0), (9.5, 4.5, 0.0), "start must be three finite numbers"),
+    ],
+)
 def test_user_errors_are_one_line(blocked_map, start, goal, needle):
     esdf, cost = blocked_map
     with pytest.raises(Lf3pmError, match=needle) as err:
@@ -340,7 +347,8 @@ def test_plans_on_a_built_solm(tmp_path):
     assert layer.cost.shape == (4, 7, 7) and esdf.values.shape == (7, 7)
     free = np.argwhere(esdf.traversable())
     (sy, sx), (gy, gx) = free[0], free[-1]
-    path = search_path(layer, esdf, g, (g.x0 + sx + 0.5, g.y0 + sy + 0.5, 0.0),
-                       (g.x0 + gx + 0.5, g.y0 + gy + 0.5, math.pi))
+    path = search_path(
+        layer, esdf, g, (g.x0 + sx + 0.5, g.y0 + sy + 0.5, 0.0), (g.x0 + gx + 0.5, g.y0 + gy + 0.5, math.pi)
+    )
     assert path.cells[-1, 2] == 2 and np.isfinite(path.cost)
     assert esdf.traversable()[path.cells[:, 1], path.cells[:, 0]].all()

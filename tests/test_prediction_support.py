@@ -7,27 +7,40 @@ import sys
 
 import numpy as np
 import pytest
-
-import lf3pm
-from lf3pm.calibration import (LOCALIZATION_PACKAGED, PACKAGED, fit_calibration, fit_localization_error,
-                               packaged_calibration, predict_localization_error, predict_mde, support,
-                               withheld_reason)
-from lf3pm.io import write_points
 from analytic_scenes import box_room, grid_plane
 from shared_data import shared_file
 
+import lf3pm
+from lf3pm.calibration import (
+    LOCALIZATION_PACKAGED,
+    PACKAGED,
+    fit_calibration,
+    fit_localization_error,
+    packaged_calibration,
+    predict_localization_error,
+    predict_mde,
+    support,
+    withheld_reason,
+)
+from lf3pm.io import write_points
+
 #: calibration_applies' keywords for a query made as the shipped localization fit was.
-FIT_CONDITIONS = {"sensor": "mid70", "dof": 6, "association": "knn", "scan_voxel": 0.0, "noise_is_default": True,
-                  "w1": 0.5}
+FIT_CONDITIONS = {
+    "sensor": "mid70",
+    "dof": 6,
+    "association": "knn",
+    "scan_voxel": 0.0,
+    "noise_is_default": True,
+    "w1": 0.5,
+}
 
 
 def test_the_localization_fit_stores_its_support_and_predicts_only_inside_it():
     rng = np.random.default_rng(2)
     q = np.exp(rng.uniform(-5, 0, 120))
     ape = 0.1 * q * np.exp(rng.normal(scale=0.3, size=120))
-    fit = fit_localization_error(np.repeat(["a", "b", "c"], 40), q, ape, provenance={"sensors": ["mid70"],
-                                                                                    "w1": 0.5})
-    assert support(fit) == (q.min(), q.max())   # the samples' own values, not a log round trip
+    fit = fit_localization_error(np.repeat(["a", "b", "c"], 40), q, ape, provenance={"sensors": ["mid70"], "w1": 0.5})
+    assert support(fit) == (q.min(), q.max())  # the samples' own values, not a log round trip
     assert predict_localization_error(fit, q.min()) is not None
     assert predict_localization_error(fit, q.max()) is not None
     for outside in (q.min() * 0.99, q.max() * 1.01, 0.0, np.inf, np.nan):
@@ -54,7 +67,8 @@ def test_the_shipped_fits_say_why_they_predict_nothing():
     inside = float(np.sqrt(lo * hi))
     assert withheld_reason(error_fit, inside, **FIT_CONDITIONS) is None
     assert withheld_reason(error_fit, inside, **{**FIT_CONDITIONS, "sensor": "os1-64"}) == (
-        "not fitted for this query: sensor os1-64, fitted for mid70, vlp16 only")
+        "not fitted for this query: sensor os1-64, fitted for mid70, vlp16 only"
+    )
     assert "range noise set" in withheld_reason(error_fit, inside, **{**FIT_CONDITIONS, "noise_is_default": False})
     assert "scan_voxel 0.2" in withheld_reason(error_fit, inside, **{**FIT_CONDITIONS, "scan_voxel": 0.2})
     assert withheld_reason(error_fit, np.inf, **FIT_CONDITIONS) == "q_n is infinite: the pose is degenerate"
@@ -65,8 +79,9 @@ def test_the_shipped_fits_say_why_they_predict_nothing():
 def box_far_ahead(half: float, distance: float) -> np.ndarray:
     """A cube of edge 2 * ``half`` m ``distance`` m ahead of a Mid-70 at the origin (facing
     +x), and a wall behind it that it does not see: few hits, a large q_n."""
-    return np.vstack([box_room((half,) * 3, 0.05) + (distance, 0.0, 0.0),
-                      grid_plane((-3, -2, -1), (0, 1, 0), (0, 0, 1), 4, 2, 0.1)])
+    return np.vstack(
+        [box_room((half,) * 3, 0.05) + (distance, 0.0, 0.0), grid_plane((-3, -2, -1), (0, 1, 0), (0, 0, 1), 4, 2, 0.1)]
+    )
 
 
 def test_evaluate_withholds_the_localization_error_beyond_the_fits_q_n():
@@ -81,8 +96,7 @@ def test_evaluate_withholds_the_localization_error_beyond_the_fits_q_n():
 def test_evaluate_cli_prints_null_and_the_reason(tmp_path):
     path = tmp_path / "far_box.pcd"
     write_points(path, box_far_ahead(0.5, 30.0))
-    args = [sys.executable, "-m", "lf3pm.cli", "evaluate", str(path), "--pose", "0", "0", "0", "0",
-            "--sensor", "mid70"]
+    args = [sys.executable, "-m", "lf3pm.cli", "evaluate", str(path), "--pose", "0", "0", "0", "0", "--sensor", "mid70"]
     done = subprocess.run([*args, "--json"], check=False, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     out = json.loads(done.stdout)
@@ -90,8 +104,10 @@ def test_evaluate_cli_prints_null_and_the_reason(tmp_path):
     assert out["predicted_localization_error_withheld"].startswith(f"q_n {out['q_n']:.3g} is outside the range")
     assert out["predicted_mde"] is None and "sensor mid70" in out["predicted_mde_withheld"]
     table = subprocess.run(args, check=False, capture_output=True, text=True, timeout=300)
-    assert ("predicted localization error withheld: " + out["predicted_localization_error_withheld"]
-            in table.stdout.splitlines())
+    assert (
+        "predicted localization error withheld: " + out["predicted_localization_error_withheld"]
+        in table.stdout.splitlines()
+    )
 
 
 def test_a_sparse_real_scan_gets_no_prediction_far_outside_the_fit():

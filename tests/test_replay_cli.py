@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.trajectory.trajectory import Trajectory
 from lf3pm.scenes import build_scene
+from lf3pm.trajectory.trajectory import Trajectory
 
 runner = CliRunner()
 
@@ -22,10 +22,10 @@ def files(tmp_path_factory):
     """The boxes scene as a map file and a 2 s trajectory across it (CSV)."""
     folder = tmp_path_factory.mktemp("replay")
     np.save(folder / "boxes.npy", build_scene("boxes").points)
-    spline = CubicSpline([0.0, 1.0, 2.0], [[-2.0, 0.0, 0.0], [-1.2, 0.3, 0.3], [-0.4, 0.4, 0.0]],
-                         bc_type="clamped")
-    Trajectory(coefficients=np.transpose(spline.c[::-1], (1, 0, 2)).copy(),
-               durations=np.diff(spline.x)).to_csv(folder / "traj.csv")
+    spline = CubicSpline([0.0, 1.0, 2.0], [[-2.0, 0.0, 0.0], [-1.2, 0.3, 0.3], [-0.4, 0.4, 0.0]], bc_type="clamped")
+    Trajectory(coefficients=np.transpose(spline.c[::-1], (1, 0, 2)).copy(), durations=np.diff(spline.x)).to_csv(
+        folder / "traj.csv"
+    )
     return folder
 
 
@@ -35,8 +35,7 @@ def replay(*args):
 
 def test_json_with_two_seeds_and_a_png(files, tmp_path):
     png = tmp_path / "replay.png"
-    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--seeds", 2, "--seed", 3, "--json",
-                  "--png", png)
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--seeds", 2, "--seed", 3, "--json", "--png", png)
     assert done.exit_code == 0, done.output
     out = json.loads(done.stdout.strip().splitlines()[-1])
     assert out["method"] == "localization" and out["seeds"] == [3, 4] and len(out["runs"]) == 2
@@ -47,15 +46,17 @@ def test_json_with_two_seeds_and_a_png(files, tmp_path):
     # A script gets what the CLI gets: lf3pm.replay_seeds on the same input, the same figures.
     series = lf3pm.replay_seeds(str(files / "boxes.npy"), str(files / "traj.csv"), seeds=2, seed=3)
     assert [r.seed for r in series.results] == [3, 4]
-    timing = "scans_per_second"   # wall time: differs from run to run
+    timing = "scans_per_second"  # wall time: differs from run to run
     assert {k: v for k, v in series.median.items() if k != timing} == pytest.approx(
-        {k: v for k, v in out["median"].items() if k != timing})
+        {k: v for k, v in out["median"].items() if k != timing}
+    )
     assert [r.ape["rmse"] for r in series.results] == pytest.approx([r["ape"]["rmse"] for r in out["runs"]])
 
 
 def test_table_for_odometry(files):
-    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "odometry", "--sensor", "mid70",
-                  "--rate", 5)
+    done = replay(
+        files / "traj.csv", "--map", files / "boxes.npy", "--method", "odometry", "--sensor", "mid70", "--rate", 5
+    )
     assert done.exit_code == 0, done.output
     assert "replay: odometry, mid70, 11 scans at 5 Hz" in done.stdout and "APE" in done.stdout
 
@@ -69,9 +70,16 @@ BAD_CSV = {
 }
 
 
-@pytest.mark.parametrize("kind, match", [("malformed", "not a number"), ("missing", "lacks the column"),
-                                         ("nonfinite", "y is not finite"), ("decreasing", "increase strictly"),
-                                         ("outside", "leaves the map")])
+@pytest.mark.parametrize(
+    "kind, match",
+    [
+        ("malformed", "not a number"),
+        ("missing", "lacks the column"),
+        ("nonfinite", "y is not finite"),
+        ("decreasing", "increase strictly"),
+        ("outside", "leaves the map"),
+    ],
+)
 def test_bad_trajectories(files, tmp_path, kind, match):
     csv = tmp_path / f"{kind}.csv"
     csv.write_text(BAD_CSV[kind])
@@ -79,17 +87,20 @@ def test_bad_trajectories(files, tmp_path, kind, match):
     assert done.exit_code == 2 and match in done.stderr and len(done.stderr.strip().splitlines()) == 1
 
 
-@pytest.mark.parametrize("args, match", [
-    (["--method", "slam"], "--method must be 'localization', 'lio' or 'odometry'"),
-    (["--sensor", "hdl-64"], "unknown sensor"),
-    (["--rate", "0"], "--rate"),
-    (["--rate", "nan"], "--rate"),
-    (["--seeds", "0"], "--seeds"),
-    (["--height", "-1"], "--height"),
-    (["--method", "lio", "--odometry", "fastlio"], "--odometry must be 'auto', 'genz', 'dlio' or 'liosam'"),
-    (["--method", "lio", "--odometry", "liosam", "--sensor", "mid70"], "liosam needs a spinning sensor"),
-    (["--odometry", "dlio"], "--odometry applies to --method lio, not localization"),
-])
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["--method", "slam"], "--method must be 'localization', 'lio' or 'odometry'"),
+        (["--sensor", "hdl-64"], "unknown sensor"),
+        (["--rate", "0"], "--rate"),
+        (["--rate", "nan"], "--rate"),
+        (["--seeds", "0"], "--seeds"),
+        (["--height", "-1"], "--height"),
+        (["--method", "lio", "--odometry", "fastlio"], "--odometry must be 'auto', 'genz', 'dlio' or 'liosam'"),
+        (["--method", "lio", "--odometry", "liosam", "--sensor", "mid70"], "liosam needs a spinning sensor"),
+        (["--odometry", "dlio"], "--odometry applies to --method lio, not localization"),
+    ],
+)
 def test_bad_options(files, args, match):
     done = replay(files / "traj.csv", "--map", files / "boxes.npy", *args)
     assert done.exit_code == 2 and match in done.stderr and len(done.stderr.strip().splitlines()) == 1
@@ -116,8 +127,18 @@ def test_lio_with_an_evalio_odometry_in_json(files, odometry, name):
     rest, noise-free, through DLIO or LIO-SAM; the JSON names the odometry and its
     package's version."""
     pytest.importorskip("evalio", reason="evalio (DLIO, LIO-SAM) is not installed: pip install 'lf3pm[lio]'")
-    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio", "--odometry", odometry,
-                  "--noise", 0, "--json")
+    done = replay(
+        files / "traj.csv",
+        "--map",
+        files / "boxes.npy",
+        "--method",
+        "lio",
+        "--odometry",
+        odometry,
+        "--noise",
+        0,
+        "--json",
+    )
     assert done.exit_code == 0, done.output
     out = json.loads(done.stdout.strip().splitlines()[-1])
     run = out["runs"][0]

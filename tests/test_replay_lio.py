@@ -14,9 +14,9 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
-from lf3pm.replays.motion import Motion
-from lf3pm.replays.lio import choose_odometry
 from lf3pm.errors import Lf3pmError
+from lf3pm.replays.lio import choose_odometry
+from lf3pm.replays.motion import Motion
 from lf3pm.replays.replay import LIO_REST, replay, replay_rest
 from lf3pm.scenes import build_scene
 
@@ -92,7 +92,7 @@ def fake_lio(monkeypatch):
     calls.clear()
     # Simulating a scan takes SIMULATE_S on the stand-in clock, which the stream and the
     # replay read.
-    replay_module = sys.modules["lf3pm.replays.replay"]   # the package's `replay` is the function
+    replay_module = sys.modules["lf3pm.replays.replay"]  # the package's `replay` is the function
     scans_module = sys.modules["lf3pm.scan.scans"]
     for module in (scans_module, replay_module):
         monkeypatch.setattr(module, "time", Clock)
@@ -104,6 +104,7 @@ def _taking(simulate):
     def timed(*args, **kwargs):
         Clock.now += SIMULATE_S
         return simulate(*args, **kwargs)
+
     return timed
 
 
@@ -142,8 +143,9 @@ def test_cli_bag_and_lio(fake_lio, boxes, tmp_path):
     rows = np.column_stack([t, -2 + 0.8 * t, 0 * t, 0 * t, np.full_like(t, 0.8), 0 * t, 0 * t])
     np.savetxt(csv, rows, delimiter=",", header="t,x,y,yaw,vx,vy,omega", comments="")
     bag = tmp_path / "out.bag"
-    done = CliRunner().invoke(app, ["replay", str(csv), "--map", str(tmp_path / "boxes.npy"), "--method", "lio",
-                                    "--bag", str(bag), "--json"])
+    done = CliRunner().invoke(
+        app, ["replay", str(csv), "--map", str(tmp_path / "boxes.npy"), "--method", "lio", "--bag", str(bag), "--json"]
+    )
     assert done.exit_code == 0, done.output
     out = json.loads(done.stdout.strip().splitlines()[-1])
     assert out["runs"][0]["method"] == "lio" and out["bag"]["topics"]["/points"] == 11
@@ -153,8 +155,9 @@ def test_cli_bag_and_lio(fake_lio, boxes, tmp_path):
 
 
 @pytest.mark.parametrize("per_scan, steady", [(0.001, True), (0.01, False)])
-def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(fake_lio, boxes, monkeypatch,
-                                                                             tmp_path, per_scan, steady):
+def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(
+    fake_lio, boxes, monkeypatch, tmp_path, per_scan, steady
+):
     """The estimate moving per_scan m every 0.1 s scan of the 2 s rest: drift 20 per_scan
     at the rest's end, speed 10 per_scan m/s (0.01 m/s: steady; 0.1 m/s: above
     REST_SPEED_LIMIT), and the CLI warns about the second only."""
@@ -183,4 +186,3 @@ def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(fak
     text = " ".join(done.output.split())
     assert f"seed 0 {1000 * per_scan * scans:.0f} mm" in text
     assert ("entered the trajectory with a velocity error" in text) is not steady
-

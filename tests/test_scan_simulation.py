@@ -3,13 +3,19 @@ see-through, ranges and noise as specified."""
 
 import numpy as np
 import pytest
+from analytic_scenes import (
+    box_room,
+    grid_plane,
+    random_directions,
+    ray_box_distance,
+    rigid_transform,
+    spinning_directions,
+)
 from scipy.spatial import cKDTree
 
 from lf3pm import _core
-from lf3pm.metric import eval_params
 from lf3pm.config import scan_params
-from analytic_scenes import (box_room, grid_plane, random_directions, ray_box_distance,
-                             rigid_transform, spinning_directions)
+from lf3pm.metric import eval_params
 
 HALF = (4.0, 3.0, 1.5)
 
@@ -56,10 +62,18 @@ def test_hits_on_a_wall_lie_on_its_plane_and_counts_match_geometry():
     with np.errstate(divide="ignore", invalid="ignore"):
         t = 5.0 / dirs[:, 0]
         hit_point = dirs * t[:, None]
-    inside = (dirs[:, 0] > 0) & (np.abs(hit_point[:, 1]) < 10.0 - 0.01) & \
-             (hit_point[:, 2] > -2.0 + 0.01) & (hit_point[:, 2] < 3.0 - 0.01)
-    rim = (dirs[:, 0] > 0) & (np.abs(hit_point[:, 1]) < 10.0 + 0.1) & \
-          (hit_point[:, 2] > -2.0 - 0.1) & (hit_point[:, 2] < 3.0 + 0.1)
+    inside = (
+        (dirs[:, 0] > 0)
+        & (np.abs(hit_point[:, 1]) < 10.0 - 0.01)
+        & (hit_point[:, 2] > -2.0 + 0.01)
+        & (hit_point[:, 2] < 3.0 - 0.01)
+    )
+    rim = (
+        (dirs[:, 0] > 0)
+        & (np.abs(hit_point[:, 1]) < 10.0 + 0.1)
+        & (hit_point[:, 2] > -2.0 - 0.1)
+        & (hit_point[:, 2] < 3.0 + 0.1)
+    )
     hit_rays = np.zeros(len(dirs), bool)
     hit_rays[scan["ray"]] = True
     assert np.all(hit_rays[inside])
@@ -120,8 +134,11 @@ def test_knn_matches_brute_force():
     ref_d = np.where(ref_d <= 2.0, ref_d, np.inf)
     np.testing.assert_allclose(dist, ref_d, rtol=1e-12)
     found = idx >= 0
-    np.testing.assert_allclose(np.linalg.norm(index.points[idx[found]] - np.repeat(queries, 5, 0).reshape(-1, 5, 3)[found], axis=1),
-                               dist[found], rtol=1e-12)
+    np.testing.assert_allclose(
+        np.linalg.norm(index.points[idx[found]] - np.repeat(queries, 5, 0).reshape(-1, 5, 3)[found], axis=1),
+        dist[found],
+        rtol=1e-12,
+    )
 
 
 def test_rigid_motion_of_map_and_pose_leaves_the_metric_unchanged():
@@ -134,8 +151,9 @@ def test_rigid_motion_of_map_and_pose_leaves_the_metric_unchanged():
     for _ in range(3):
         T = rigid_transform(rng)
         moved = (pts @ T[:3, :3].T) + T[:3, 3]
-        got = _core.evaluate(_core.MapIndex(np.ascontiguousarray(moved)), np.ascontiguousarray(T @ pose),
-                             dirs, params).metric
+        got = _core.evaluate(
+            _core.MapIndex(np.ascontiguousarray(moved)), np.ascontiguousarray(T @ pose), dirs, params
+        ).metric
         assert got.m == pytest.approx(base.m, rel=2e-3)
         for key in ("sigma1", "q_min", "q_n", "q_max"):
             assert getattr(got, key) == pytest.approx(getattr(base, key), rel=2e-3), key
@@ -150,10 +168,10 @@ def test_the_python_wrapper_returns_the_core_scan():
     world = lf3pm.load_map(build_scene("boxes").points)
     vlp16 = lf3pm.get_sensor("vlp16")
     pose = pose_matrix((0.0, 0.0, 0.5, 0.3))
-    scan = simulate_scan(world, pose, vlp16.directions, vlp16.min_range, vlp16.max_range, noise=0.01, seed=4,
-                         stream=2)
-    raw = _core.simulate_scan(world.index, pose, vlp16.directions,
-                              scan_params(vlp16.min_range, vlp16.max_range, noise=0.01, seed=4, stream=2))
+    scan = simulate_scan(world, pose, vlp16.directions, vlp16.min_range, vlp16.max_range, noise=0.01, seed=4, stream=2)
+    raw = _core.simulate_scan(
+        world.index, pose, vlp16.directions, scan_params(vlp16.min_range, vlp16.max_range, noise=0.01, seed=4, stream=2)
+    )
     assert len(scan) == len(raw["ray"]) > 10000
     for name in ("sensor_points", "world_points", "surfel", "ray"):
         np.testing.assert_array_equal(getattr(scan, name), raw[name])

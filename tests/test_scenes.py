@@ -14,10 +14,9 @@ import pytest
 import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.io import load_points
-from lf3pm.validation import RegistrationTarget, mde
-from lf3pm.scenes import (SCENES, Scene, Zone, build_scene, describe_scenes, scene_defaults, scene_names,
-                          scene_zones)
+from lf3pm.scenes import SCENES, Scene, Zone, build_scene, describe_scenes, scene_defaults, scene_names, scene_zones
 from lf3pm.scenes.scene import FREE_BAND_HIGH, FREE_BAND_LOW
+from lf3pm.validation import RegistrationTarget, mde
 
 NAMES = ["houses", "house_meadow", "meadow", "wall", "gobi", "boxes", "tunnel", "orientation", "corridor", "field"]
 #: Scenes with planning-study zones, and whether their zones are clear of structure
@@ -25,13 +24,24 @@ NAMES = ["houses", "house_meadow", "meadow", "wall", "gobi", "boxes", "tunnel", 
 ZONED = {"houses": True, "boxes": False, "tunnel": True, "orientation": True, "corridor": True, "field": True}
 #: (fewest, most) points of the default scene: the most is the budget, the fewest
 #: catches a sampler that lost its density.
-POINT_BOUNDS = {"houses": (0.8e6, 2e6), "house_meadow": (1.0e6, 2e6), "meadow": (1.0e6, 2e6),
-                "wall": (1.0e6, 2e6), "gobi": (2.0e6, 4e6), "boxes": (0.08e6, 2e6),
-                "tunnel": (0.4e6, 2e6), "orientation": (0.4e6, 2e6), "corridor": (0.3e6, 2e6),
-                "field": (0.6e6, 2e6)}
+POINT_BOUNDS = {
+    "houses": (0.8e6, 2e6),
+    "house_meadow": (1.0e6, 2e6),
+    "meadow": (1.0e6, 2e6),
+    "wall": (1.0e6, 2e6),
+    "gobi": (2.0e6, 4e6),
+    "boxes": (0.08e6, 2e6),
+    "tunnel": (0.4e6, 2e6),
+    "orientation": (0.4e6, 2e6),
+    "corridor": (0.3e6, 2e6),
+    "field": (0.6e6, 2e6),
+}
 #: Smaller variants for the different-seed check (same code paths, less time).
-SMALL = {"house_meadow": {"extent": 15.0}, "meadow": {"extent": 8.0},
-         "gobi": {"length": 150.0, "width": 90.0, "west": 40.0, "warehouse_distance": 80.0}}
+SMALL = {
+    "house_meadow": {"extent": 15.0},
+    "meadow": {"extent": 8.0},
+    "gobi": {"length": 150.0, "width": 90.0, "west": 40.0, "warehouse_distance": 80.0},
+}
 
 
 @pytest.fixture(scope="module")
@@ -49,12 +59,14 @@ def indexed(built):
         if name not in cache:
             cache[name] = lf3pm.load_map(built[name].points)
         return cache[name]
+
     return get
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", *map(str, args)], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_registry_names_and_descriptions():
@@ -74,17 +86,20 @@ def test_unknown_scene_is_one_line_listing_the_known_names():
     assert build_scene("House-Meadow", extent=15.0).name == "house_meadow"
 
 
-@pytest.mark.parametrize("kwargs,needle", [
-    ({"seed": -1}, "seed"),
-    ({"seed": 1.5}, "seed"),
-    ({"windows": 3}, "no parameter 'windows'"),
-    ({"boxes": -2}, "integer"),
-    ({"boxes": 2.5}, "integer"),
-    ({"spacing": float("nan")}, "finite"),
-    ({"ceiling": "yes"}, "true or false"),
-    ({"boxes": 400}, "cannot place"),
-    ({"free_radius": 5.0}, "free_radius"),
-])
+@pytest.mark.parametrize(
+    "kwargs,needle",
+    [
+        ({"seed": -1}, "seed"),
+        ({"seed": 1.5}, "seed"),
+        ({"windows": 3}, "no parameter 'windows'"),
+        ({"boxes": -2}, "integer"),
+        ({"boxes": 2.5}, "integer"),
+        ({"spacing": float("nan")}, "finite"),
+        ({"ceiling": "yes"}, "true or false"),
+        ({"boxes": 400}, "cannot place"),
+        ({"free_radius": 5.0}, "free_radius"),
+    ],
+)
 def test_bad_parameters_are_one_line_errors(kwargs, needle):
     with pytest.raises(Lf3pmError) as err:
         build_scene("boxes", **kwargs)
@@ -186,8 +201,10 @@ def test_wall_is_degenerate_or_far_worse_than_houses(built, indexed):
 def test_meadow_residuals_scatter_far_more_than_on_houses(built, indexed):
     """Point-to-plane residuals at the true pose (no range noise): millimetres on walls
     and bare ground, scattered by the vegetation's small randomly oriented surfaces."""
-    maps = {"houses": (indexed("houses"), built["houses"].reference_pose),
-            "meadow": (indexed("meadow"), built["meadow"].reference_pose)}
+    maps = {
+        "houses": (indexed("houses"), built["houses"].reference_pose),
+        "meadow": (indexed("meadow"), built["meadow"].reference_pose),
+    }
     bare = build_scene("meadow", tufts_per_m2=0.0, weeds_per_m2=0.0, bushes_per_100m2=0.0)
     maps["bare"] = (lf3pm.load_map(bare.points), bare.reference_pose)
     over_1cm, p90 = {}, {}
@@ -221,11 +238,16 @@ def test_zones_lie_on_bare_ground(built, name):
         ys = np.arange(zone.ymin, zone.ymax + 1e-9, 0.5)
         lattice = np.array([(x, y) for x in xs for y in ys])
         _, dist = lf3pm.load_map(ground).index.nearest(
-            np.ascontiguousarray(np.c_[lattice, np.zeros(len(lattice))]), 1, 0.2)
+            np.ascontiguousarray(np.c_[lattice, np.zeros(len(lattice))]), 1, 0.2
+        )
         assert np.all(np.isfinite(dist))
         if ZONED[name]:
-            near = ((above[:, 0] > zone.xmin - 0.6) & (above[:, 0] < zone.xmax + 0.6)
-                    & (above[:, 1] > zone.ymin - 0.6) & (above[:, 1] < zone.ymax + 0.6))
+            near = (
+                (above[:, 0] > zone.xmin - 0.6)
+                & (above[:, 0] < zone.xmax + 0.6)
+                & (above[:, 1] > zone.ymin - 0.6)
+                & (above[:, 1] < zone.ymax + 0.6)
+            )
             assert not near.any(), f"{name}: structure in or next to {zone}"
         assert zone.contains((zone.xmin + zone.xmax) / 2, zone.ymin) and not zone.contains(zone.xmax + 0.1, zone.ymin)
 
@@ -250,7 +272,7 @@ def test_tunnel_is_empty_inside_and_its_lane_is_clear_down_the_middle(built):
     assert not lane.any()  # 2.4 m free between the pillar rows
     # The lane has structure: pillars and crates (nothing of them within 1.2 m of the lane's
     # centre line) and features in its walls.
-    off_wall = (np.abs(pts[:, 1] - p["detour_offset"]) < p["detour_width"] / 2 - 0.05)
+    off_wall = np.abs(pts[:, 1] - p["detour_offset"]) < p["detour_width"] / 2 - 0.05
     assert np.count_nonzero(off_wall & (pts[:, 2] > 0.1) & (np.abs(pts[:, 0]) < p["length"] / 2)) > 20_000
     # Beyond the portals nothing stands higher than the ground within range of the
     # tunnel's axis, but the tunnel's own free ends.
@@ -273,8 +295,7 @@ def test_tunnel_is_degenerate_along_its_axis_and_the_lane_is_not(built, indexed)
     assert tunnel.degenerate or tunnel.q_n > 8 * lane.q_n
     target = RegistrationTarget(world, threads=2)
     slide = mde(world, (0.0, 0.0, 1.0, 0.0), "vlp16", trials=6, sigma_t=0.3, target=target, threads=2)
-    hold = mde(world, (0.0, p["detour_offset"], 1.0, 0.0), "vlp16", trials=6, sigma_t=0.3,
-               target=target, threads=2)
+    hold = mde(world, (0.0, p["detour_offset"], 1.0, 0.0), "vlp16", trials=6, sigma_t=0.3, target=target, threads=2)
     assert max(slide.translation_errors) > 0.25 and max(hold.translation_errors) < 0.01
 
 
@@ -309,7 +330,7 @@ def test_corridor_is_degenerate_along_its_axis_and_the_rooms_are_not(built, inde
     free edges keep it from degenerating); nothing stands in the corridor."""
     world, p = indexed("corridor"), built["corridor"].params
     room_y = p["width"] / 2 + 0.2 + p["room_depth"] / 2
-    room_x = p["length"] / p["rooms"] / 2   # the centre of the room east of x = 0
+    room_x = p["length"] / p["rooms"] / 2  # the centre of the room east of x = 0
     corridor = lf3pm.evaluate(world, (0.0, 0.0, 1.0, 0.0), "vlp16", noise=0.0, observations=True)
     _, vectors = np.linalg.eigh(corridor.observations["A"].T @ corridor.observations["A"])
     assert abs(vectors[0, 0]) > 0.99
@@ -334,8 +355,9 @@ def test_field_localizes_past_the_row_only_facing_back_towards_it(built, indexed
     assert np.all(np.abs(ahead.observations["points"][:, 2]) < 0.02)
     assert ahead.degenerate or ahead.q_n > 10 * back.q_n
     assert not back.degenerate
-    at_start = lf3pm.evaluate(world, ((start.xmin + start.xmax) / 2, 0.0, 1.0, 0.0), "mid70", noise=0.0,
-                              observations=True)
+    at_start = lf3pm.evaluate(
+        world, ((start.xmin + start.xmax) / 2, 0.0, 1.0, 0.0), "mid70", noise=0.0, observations=True
+    )
     assert not at_start.degenerate and np.count_nonzero(at_start.observations["points"][:, 2] > 0.3) > 100
 
 
@@ -357,12 +379,15 @@ def test_cli_list_names_every_scene():
         assert name in result.stdout
 
 
-@pytest.mark.parametrize("args,needle", [
-    (("scene", "forest", "-o", "{tmp}/x.pcd"), "unknown scene"),
-    (("scene", "boxes"), "missing -o"),
-    (("scene", "-o", "{tmp}/x.pcd"), "missing scene name"),
-    (("scene", "boxes", "-o", "{tmp}/x.xyz"), "unknown suffix"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("scene", "forest", "-o", "{tmp}/x.pcd"), "unknown scene"),
+        (("scene", "boxes"), "missing -o"),
+        (("scene", "-o", "{tmp}/x.pcd"), "missing scene name"),
+        (("scene", "boxes", "-o", "{tmp}/x.xyz"), "unknown suffix"),
+    ],
+)
 def test_cli_bad_input_is_one_line_exit_2(tmp_path, args, needle):
     result = run_cli(*[a.format(tmp=tmp_path) for a in args])
     assert result.returncode == 2

@@ -15,21 +15,56 @@ from lf3pm.sensors import Sensor, get_sensor, list_sensors, load_sensor_yaml
 PATTERN_DIR = Path(__file__).resolve().parents[1] / "python" / "lf3pm" / "sensors" / "patterns"
 
 EXPECTED_RAYS = {
-    "vlp16": 16 * 1800,      # 28,800
-    "hdl32": 32 * 2170,      # 69,440
-    "os1-64": 64 * 1024,     # 65,536
-    "mid40": 10_000,         # 100,000 pts/s x 0.1 s
+    "vlp16": 16 * 1800,  # 28,800
+    "hdl32": 32 * 2170,  # 69,440
+    "os1-64": 64 * 1024,  # 65,536
+    "mid40": 10_000,  # 100,000 pts/s x 0.1 s
     "mid70": 10_000,
-    "mid360": 20_000,        # 200,000 pts/s x 0.1 s
-    "avia": 24_000,          # 240,000 pts/s x 0.1 s
+    "mid360": 20_000,  # 200,000 pts/s x 0.1 s
+    "avia": 24_000,  # 240,000 pts/s x 0.1 s
 }
 
 SPINNING = {
     # name: (elevations in degrees as on the datasheet, azimuth count, datasheet rounding)
     "vlp16": ([-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13, 15], 1800, 1e-9),
-    "hdl32": ([-30.67, -29.33, -28.00, -26.67, -25.33, -24.00, -22.67, -21.33, -20.00, -18.67,
-               -17.33, -16.00, -14.67, -13.33, -12.00, -10.67, -9.33, -8.00, -6.67, -5.33,
-               -4.00, -2.67, -1.33, 0.00, 1.33, 2.67, 4.00, 5.33, 6.67, 8.00, 9.33, 10.67], 2170, 0.006),
+    "hdl32": (
+        [
+            -30.67,
+            -29.33,
+            -28.00,
+            -26.67,
+            -25.33,
+            -24.00,
+            -22.67,
+            -21.33,
+            -20.00,
+            -18.67,
+            -17.33,
+            -16.00,
+            -14.67,
+            -13.33,
+            -12.00,
+            -10.67,
+            -9.33,
+            -8.00,
+            -6.67,
+            -5.33,
+            -4.00,
+            -2.67,
+            -1.33,
+            0.00,
+            1.33,
+            2.67,
+            4.00,
+            5.33,
+            6.67,
+            8.00,
+            9.33,
+            10.67,
+        ],
+        2170,
+        0.006,
+    ),
     "os1-64": (list(np.linspace(-22.5, 22.5, 64)), 1024, 1e-9),
 }
 
@@ -227,12 +262,25 @@ def test_integration_time_rejected_for_spinning():
 # ---------------------------------------------------------------- names
 
 
-@pytest.mark.parametrize("alias,name", [
-    ("vlp16", "vlp16"), ("VLP-16", "vlp16"), ("vlp_16", "vlp16"), ("Velodyne VLP-16", "vlp16"),
-    ("HDL-32E", "hdl32"), ("hdl32", "hdl32"), ("os1-64", "os1-64"), ("OS1_64", "os1-64"),
-    ("ouster", "os1-64"), ("Mid-70", "mid70"), ("MID40", "mid40"), ("mid-360", "mid360"),
-    ("Livox Avia", "avia"), ("  avia ", "avia"),
-])
+@pytest.mark.parametrize(
+    "alias,name",
+    [
+        ("vlp16", "vlp16"),
+        ("VLP-16", "vlp16"),
+        ("vlp_16", "vlp16"),
+        ("Velodyne VLP-16", "vlp16"),
+        ("HDL-32E", "hdl32"),
+        ("hdl32", "hdl32"),
+        ("os1-64", "os1-64"),
+        ("OS1_64", "os1-64"),
+        ("ouster", "os1-64"),
+        ("Mid-70", "mid70"),
+        ("MID40", "mid40"),
+        ("mid-360", "mid360"),
+        ("Livox Avia", "avia"),
+        ("  avia ", "avia"),
+    ],
+)
 def test_aliases(alias, name):
     assert get_sensor(alias).name == name
 
@@ -257,9 +305,17 @@ def test_lazy_top_level_import():
 
 
 def _make(**over):
-    fields = dict(name="t", description="d", directions=np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
-                  min_range=0.1, max_range=10.0, range_noise_sigma=0.01, horizontal_fov=1.0,
-                  approximate=False, source="test")
+    fields = dict(
+        name="t",
+        description="d",
+        directions=np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
+        min_range=0.1,
+        max_range=10.0,
+        range_noise_sigma=0.01,
+        horizontal_fov=1.0,
+        approximate=False,
+        source="test",
+    )
     fields.update(over)
     return Sensor(**fields)
 
@@ -271,14 +327,27 @@ def test_sensor_valid_and_frozen():
         s.name = "x"
 
 
-@pytest.mark.parametrize("over", [
-    dict(min_range=0.0), dict(min_range=-1.0), dict(max_range=0.1), dict(max_range=0.05),
-    dict(min_range=float("nan")), dict(max_range=float("inf")), dict(range_noise_sigma=-0.01),
-    dict(directions=np.array([[1.0, 1.0, 0.0]])), dict(directions=np.array([[np.nan, 0.0, 0.0]])),
-    dict(directions=np.zeros((0, 3))), dict(directions=np.array([1.0, 0.0, 0.0])),
-    dict(directions=np.ones((2, 2))), dict(horizontal_fov=0.0), dict(horizontal_fov=7.0),
-    dict(name=""), dict(min_range="1"),
-])
+@pytest.mark.parametrize(
+    "over",
+    [
+        dict(min_range=0.0),
+        dict(min_range=-1.0),
+        dict(max_range=0.1),
+        dict(max_range=0.05),
+        dict(min_range=float("nan")),
+        dict(max_range=float("inf")),
+        dict(range_noise_sigma=-0.01),
+        dict(directions=np.array([[1.0, 1.0, 0.0]])),
+        dict(directions=np.array([[np.nan, 0.0, 0.0]])),
+        dict(directions=np.zeros((0, 3))),
+        dict(directions=np.array([1.0, 0.0, 0.0])),
+        dict(directions=np.ones((2, 2))),
+        dict(horizontal_fov=0.0),
+        dict(horizontal_fov=7.0),
+        dict(name=""),
+        dict(min_range="1"),
+    ],
+)
 def test_sensor_validation(over):
     with pytest.raises(SensorError):
         _make(**over)
@@ -319,8 +388,11 @@ def test_yaml_spinning_round_trip(tmp_path):
 
 
 def test_yaml_spinning_partial_fov(tmp_path):
-    path = write(tmp_path, "name: front\nmin_range: 0.2\nmax_range: 30\nelevations_deg: [0.0, 10]\n"
-                           "azimuth_count: 91\nhorizontal_fov_deg: 90\n")
+    path = write(
+        tmp_path,
+        "name: front\nmin_range: 0.2\nmax_range: 30\nelevations_deg: [0.0, 10]\n"
+        "azimuth_count: 91\nhorizontal_fov_deg: 90\n",
+    )
     s = load_sensor_yaml(path)
     assert s.num_rays == 182 and s.range_noise_sigma == 0.0
     assert s.horizontal_fov == pytest.approx(math.pi / 2)
@@ -335,8 +407,11 @@ def test_yaml_pattern_round_trip(tmp_path):
     pattern = np.stack([rng.uniform(-0.5, 0.5, 1000), rng.uniform(-0.3, 0.3, 1000)], axis=1).astype(np.float32)
     (tmp_path / "pats").mkdir()
     np.save(tmp_path / "pats" / "p.npy", pattern)
-    path = write(tmp_path, "name: custom-livox\nmin_range: 0.1\nmax_range: 50\nrange_noise_sigma: 0.02\n"
-                           "pattern_file: pats/p.npy\npoint_rate: 5000\nintegration_time: 0.1\n")
+    path = write(
+        tmp_path,
+        "name: custom-livox\nmin_range: 0.1\nmax_range: 50\nrange_noise_sigma: 0.02\n"
+        "pattern_file: pats/p.npy\npoint_rate: 5000\nintegration_time: 0.1\n",
+    )
     s = load_sensor_yaml(path)
     assert s.num_rays == 500 and s.name == "custom-livox"
     az, el = pattern[:500, 0].astype(np.float64), pattern[:500, 1].astype(np.float64)
@@ -348,10 +423,13 @@ def test_yaml_pattern_round_trip(tmp_path):
     assert longer.num_rays == 1500
     np.testing.assert_array_equal(longer.directions[1000:], longer.directions[:500])
     # the bundled Mid-70 pattern through YAML gives the preset's rays
-    write(tmp_path, f"name: m\nmin_range: 0.05\nmax_range: 130\npattern_file: {PATTERN_DIR / 'mid70.npy'}\n"
-                    "point_rate: 100000\nintegration_time: 0.1\n", "m70.yaml")
-    np.testing.assert_array_equal(load_sensor_yaml(tmp_path / "m70.yaml").directions,
-                                  get_sensor("mid70").directions)
+    write(
+        tmp_path,
+        f"name: m\nmin_range: 0.05\nmax_range: 130\npattern_file: {PATTERN_DIR / 'mid70.npy'}\n"
+        "point_rate: 100000\nintegration_time: 0.1\n",
+        "m70.yaml",
+    )
+    np.testing.assert_array_equal(load_sensor_yaml(tmp_path / "m70.yaml").directions, get_sensor("mid70").directions)
 
 
 def test_yaml_spinning_rejects_integration_time(tmp_path):
@@ -366,8 +444,10 @@ BAD_YAML = {
     "missing_min_range": (SPIN_YAML.replace("min_range: 0.5\n", ""), "min_range"),
     "missing_max_range": (SPIN_YAML.replace("max_range: 100.0\n", ""), "max_range"),
     "missing_azimuth_count": (SPIN_YAML.replace("azimuth_count: 1800\n", ""), "azimuth_count"),
-    "missing_elevations": (SPIN_YAML.replace("elevations_deg: [-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, "
-                                             "7, 9, 11, 13, 15]\n", ""), "elevations_deg"),
+    "missing_elevations": (
+        SPIN_YAML.replace("elevations_deg: [-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13, 15]\n", ""),
+        "elevations_deg",
+    ),
     "no_form": ("name: a\nmin_range: 1\nmax_range: 2\n", "elevations_deg"),
     "both_forms": (SPIN_YAML + "pattern_file: x.npy\n", "pattern_file"),
     "name_not_string": (SPIN_YAML.replace("name: my-16-beam", "name: [1, 2]"), "name"),
@@ -375,40 +455,62 @@ BAD_YAML = {
     "min_range_bool": (SPIN_YAML.replace("min_range: 0.5", "min_range: true"), "min_range"),
     "min_range_negative": (SPIN_YAML.replace("min_range: 0.5", "min_range: -0.5"), "min_range"),
     "max_below_min": (SPIN_YAML.replace("max_range: 100.0", "max_range: 0.4"), "max_range"),
-    "sigma_negative": (SPIN_YAML.replace("range_noise_sigma: 0.015", "range_noise_sigma: -1"),
-                       "range_noise_sigma"),
-    "sigma_string": (SPIN_YAML.replace("range_noise_sigma: 0.015", "range_noise_sigma: small"),
-                     "range_noise_sigma"),
-    "elevations_not_list": (SPIN_YAML.replace("elevations_deg: [-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, "
-                                              "7, 9, 11, 13, 15]", "elevations_deg: 5"), "elevations_deg"),
+    "sigma_negative": (SPIN_YAML.replace("range_noise_sigma: 0.015", "range_noise_sigma: -1"), "range_noise_sigma"),
+    "sigma_string": (SPIN_YAML.replace("range_noise_sigma: 0.015", "range_noise_sigma: small"), "range_noise_sigma"),
+    "elevations_not_list": (
+        SPIN_YAML.replace(
+            "elevations_deg: [-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13, 15]", "elevations_deg: 5"
+        ),
+        "elevations_deg",
+    ),
     "elevations_item": (SPIN_YAML.replace("[-15, -13,", "[-15, x,"), "elevations_deg"),
-    "elevations_empty": (SPIN_YAML.replace("[-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13, 15]",
-                                           "[]"), "elevations_deg"),
+    "elevations_empty": (
+        SPIN_YAML.replace("[-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13, 15]", "[]"),
+        "elevations_deg",
+    ),
     "elevation_out_of_range": (SPIN_YAML.replace("[-15, -13,", "[-95, -13,"), "elevations_deg"),
     "azimuth_count_float": (SPIN_YAML.replace("azimuth_count: 1800", "azimuth_count: 1800.5"), "azimuth_count"),
     "azimuth_count_zero": (SPIN_YAML.replace("azimuth_count: 1800", "azimuth_count: 0"), "azimuth_count"),
     "fov_too_big": (SPIN_YAML + "horizontal_fov_deg: 400\n", "horizontal_fov_deg"),
     "fov_string": (SPIN_YAML + "horizontal_fov_deg: wide\n", "horizontal_fov_deg"),
-    "description_not_string": (SPIN_YAML.replace("description: a VLP-16 look-alike", "description: 3"),
-                               "description"),
-    "pattern_missing_file": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: nowhere.npy\n"
-                             "point_rate: 1000\nintegration_time: 0.1\n", "pattern_file"),
-    "pattern_missing_rate": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\n"
-                             "integration_time: 0.1\n", "point_rate"),
-    "pattern_missing_time": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\n"
-                             "point_rate: 1000\n", "integration_time"),
-    "pattern_rate_string": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\n"
-                            "point_rate: fast\nintegration_time: 0.1\n", "point_rate"),
-    "pattern_time_zero": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\n"
-                          "point_rate: 1000\nintegration_time: 0\n", "integration_time"),
-    "pattern_file_not_string": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: 12\n"
-                                "point_rate: 1000\nintegration_time: 0.1\n", "pattern_file"),
-    "pattern_wrong_shape": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: bad_shape.npy\n"
-                            "point_rate: 1000\nintegration_time: 0.1\n", "pattern_file"),
-    "pattern_not_npy": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: junk.npy\n"
-                        "point_rate: 1000\nintegration_time: 0.1\n", "pattern_file"),
-    "pattern_nan": ("name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: nan.npy\n"
-                    "point_rate: 1000\nintegration_time: 0.1\n", "pattern_file"),
+    "description_not_string": (SPIN_YAML.replace("description: a VLP-16 look-alike", "description: 3"), "description"),
+    "pattern_missing_file": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: nowhere.npy\npoint_rate: 1000\nintegration_time: 0.1\n",
+        "pattern_file",
+    ),
+    "pattern_missing_rate": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\nintegration_time: 0.1\n",
+        "point_rate",
+    ),
+    "pattern_missing_time": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\npoint_rate: 1000\n",
+        "integration_time",
+    ),
+    "pattern_rate_string": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\npoint_rate: fast\nintegration_time: 0.1\n",
+        "point_rate",
+    ),
+    "pattern_time_zero": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: ok.npy\npoint_rate: 1000\nintegration_time: 0\n",
+        "integration_time",
+    ),
+    "pattern_file_not_string": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: 12\npoint_rate: 1000\nintegration_time: 0.1\n",
+        "pattern_file",
+    ),
+    "pattern_wrong_shape": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: bad_shape.npy\n"
+        "point_rate: 1000\nintegration_time: 0.1\n",
+        "pattern_file",
+    ),
+    "pattern_not_npy": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: junk.npy\npoint_rate: 1000\nintegration_time: 0.1\n",
+        "pattern_file",
+    ),
+    "pattern_nan": (
+        "name: a\nmin_range: 0.1\nmax_range: 10\npattern_file: nan.npy\npoint_rate: 1000\nintegration_time: 0.1\n",
+        "pattern_file",
+    ),
 }
 
 

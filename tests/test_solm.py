@@ -10,16 +10,16 @@ import pytest
 
 import lf3pm
 from lf3pm import _core
-from lf3pm.metric import eval_params
 from lf3pm.errors import Lf3pmError
 from lf3pm.io import write_points
+from lf3pm.metric import eval_params
+from lf3pm.planner.esdf import Esdf
 from lf3pm.pose import pose_matrix
+from lf3pm.scenes import build_scene
 from lf3pm.solm import Solm, build_solm, make_grid
+from lf3pm.solm.occupancy import grid_occupancy, occupancy_factor
 from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.terrain import column_minimum, occupied_cells
-from lf3pm.solm.occupancy import grid_occupancy, occupancy_factor
-from lf3pm.planner.esdf import Esdf
-from lf3pm.scenes import build_scene
 
 BOUNDS = (-3.5, -3.5, 3.5, 3.5)
 
@@ -57,9 +57,12 @@ def test_a_cell_equals_evaluate_at_its_centre(boxes, built):
     k, iy, ix = np.argwhere(np.isfinite(q))[5]
     cell = np.ravel_multi_index((k, iy, ix), q.shape)
     pose = pose_matrix((x[k, iy, ix], y[k, iy, ix], ground[iy, ix] + 1.0, yaw[k, iy, ix]))
-    ref = _core.evaluate(world.index, pose, sensor.directions,
-                         eval_params(sensor.min_range, sensor.max_range, noise=sensor.range_noise_sigma, seed=0,
-                                     stream=int(cell)))
+    ref = _core.evaluate(
+        world.index,
+        pose,
+        sensor.directions,
+        eval_params(sensor.min_range, sensor.max_range, noise=sensor.range_noise_sigma, seed=0, stream=int(cell)),
+    )
     assert q[k, iy, ix] == pytest.approx(ref.metric.q_n, rel=1e-6)  # stored as float32
 
 
@@ -93,9 +96,11 @@ def test_query_interpolates_and_its_gradient_matches_finite_differences(built):
         if not np.isfinite(value):
             continue
         h = 1e-6
-        num = [(solm.query(x + h, y, yaw)[0] - solm.query(x - h, y, yaw)[0]) / (2 * h),
-               (solm.query(x, y + h, yaw)[0] - solm.query(x, y - h, yaw)[0]) / (2 * h),
-               (solm.query(x, y, yaw + h)[0] - solm.query(x, y, yaw - h)[0]) / (2 * h)]
+        num = [
+            (solm.query(x + h, y, yaw)[0] - solm.query(x - h, y, yaw)[0]) / (2 * h),
+            (solm.query(x, y + h, yaw)[0] - solm.query(x, y - h, yaw)[0]) / (2 * h),
+            (solm.query(x, y, yaw + h)[0] - solm.query(x, y, yaw - h)[0]) / (2 * h),
+        ]
         np.testing.assert_allclose(grad, num, rtol=1e-4, atol=1e-9)
     # At a cell centre the query returns the cell; yaw is periodic.
     xs, ys, yaws = solm.grid()
@@ -121,8 +126,10 @@ def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path)
     # r2 queries: bilinear, gradient (d/dx, d/dy) against central differences.
     value, grad = solm.query(0.37, -0.21)
     h = 1e-6
-    num = [(solm.query(0.37 + h, -0.21)[0] - solm.query(0.37 - h, -0.21)[0]) / (2 * h),
-           (solm.query(0.37, -0.21 + h)[0] - solm.query(0.37, -0.21 - h)[0]) / (2 * h)]
+    num = [
+        (solm.query(0.37 + h, -0.21)[0] - solm.query(0.37 - h, -0.21)[0]) / (2 * h),
+        (solm.query(0.37, -0.21 + h)[0] - solm.query(0.37, -0.21 - h)[0]) / (2 * h),
+    ]
     assert np.isfinite(value) and grad.shape == (2,)
     np.testing.assert_allclose(grad, num, rtol=1e-4)
 
@@ -138,8 +145,12 @@ def test_occupied_cells_equal_a_cell_by_cell_reference(res):
     occupied = occupied_cells(points, 0.0, 0.0, res, bottom, top)
     reference = np.zeros_like(occupied)
     for j, i in np.ndindex(*occupied.shape):
-        inside = ((points[:, 0] >= i * res) & (points[:, 0] < (i + 1) * res)
-                  & (points[:, 1] >= j * res) & (points[:, 1] < (j + 1) * res))
+        inside = (
+            (points[:, 0] >= i * res)
+            & (points[:, 0] < (i + 1) * res)
+            & (points[:, 1] >= j * res)
+            & (points[:, 1] < (j + 1) * res)
+        )
         reference[j, i] = np.any(inside & (points[:, 2] >= bottom[j, i]) & (points[:, 2] <= top[j, i]))
     np.testing.assert_array_equal(occupied, reference)
     assert occupied.any() and not occupied[0, 0]
@@ -186,11 +197,14 @@ def test_the_planner_keeps_the_body_off_thin_poles_between_cell_centres(tmp_path
     assert np.mean(clearance >= 0) > 0.3  # and it leaves room to move
 
 
-@pytest.mark.parametrize("kwargs,needle", [
-    ({"bounds": (100, 100, 110, 110)}, "outside"),
-    ({"res": 0.0}, "solm.res must be greater than 0"),
-    ({"space": "se3"}, "solm.space must be"),
-])
+@pytest.mark.parametrize(
+    "kwargs,needle",
+    [
+        ({"bounds": (100, 100, 110, 110)}, "outside"),
+        ({"res": 0.0}, "solm.res must be greater than 0"),
+        ({"space": "se3"}, "solm.space must be"),
+    ],
+)
 def test_bad_grids_are_refused(boxes, kwargs, needle):
     _, world, _ = boxes
     args = {"space": "r2", "res": 1.0, **kwargs}
@@ -206,11 +220,17 @@ def test_cli_unwritable_output_and_unknown_sensor_leave_no_store(boxes, tmp_path
     # or full disk, even for root (which permissions do not stop).
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("")
-    for extra, needle in ((["-o", str(blocker / "s.zarr")], "cannot write"),
-                          (["-o", str(tmp_path / "s.zarr"), "--sensor", "nosuch"], "unknown sensor"),
-                          (["-o", str(tmp_path / "s.zarr"), "--res", "0"], "--res must be greater than 0")):
-        out = subprocess.run([sys.executable, "-m", "lf3pm.cli", "solm", "build", str(map_path),
-                              "--res", "2", *extra], capture_output=True, text=True, timeout=300)
+    for extra, needle in (
+        (["-o", str(blocker / "s.zarr")], "cannot write"),
+        (["-o", str(tmp_path / "s.zarr"), "--sensor", "nosuch"], "unknown sensor"),
+        (["-o", str(tmp_path / "s.zarr"), "--res", "0"], "--res must be greater than 0"),
+    ):
+        out = subprocess.run(
+            [sys.executable, "-m", "lf3pm.cli", "solm", "build", str(map_path), "--res", "2", *extra],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         assert out.returncode == 2 and needle in out.stderr and "Traceback" not in out.stderr, out.stderr
     assert not (tmp_path / "s.zarr").exists() and blocker.is_file()
 
@@ -251,8 +271,9 @@ def test_ray_weight_equals_casting_each_ray_that_many_times(boxes):
     pose = pose_matrix((0.5, -0.5, 1.0, 0.3))[None]
     dirs = np.ascontiguousarray(sensor.directions[::7])
     args = (world.index, pose, np.zeros(1, np.uint64))
-    tripled = _core.evaluate_many(*args, np.ascontiguousarray(np.repeat(dirs, 3, axis=0)),
-                                  eval_params(sensor.min_range, sensor.max_range))
+    tripled = _core.evaluate_many(
+        *args, np.ascontiguousarray(np.repeat(dirs, 3, axis=0)), eval_params(sensor.min_range, sensor.max_range)
+    )
     weighted = _core.evaluate_many(*args, dirs, eval_params(sensor.min_range, sensor.max_range, ray_weight=3.0))
     for name in ("q_min", "q_n", "q_max", "sigma1", "m"):
         assert weighted[name][0] == pytest.approx(tripled[name][0], rel=1e-9)

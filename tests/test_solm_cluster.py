@@ -110,8 +110,15 @@ def test_the_cli_builds_a_map_above_crop_above_tile_by_tile(tmp_path):
 def test_ray_engine_equals_the_local_engine_bitwise(town, whole, cluster, tmp_path):
     world, sensor, grid = town
     calls = []
-    build_solm(world, sensor, grid, tmp_path / "r.zarr", tile=8, engine="ray",
-               progress=lambda cells, total: calls.append((cells, total)))
+    build_solm(
+        world,
+        sensor,
+        grid,
+        tmp_path / "r.zarr",
+        tile=8,
+        engine="ray",
+        progress=lambda cells, total: calls.append((cells, total)),
+    )
     assert_same_store(whole, tmp_path / "r.zarr")
     assert sum(c for c, _ in calls) == calls[0][1] == grid.nx * grid.ny
 
@@ -133,7 +140,7 @@ def test_a_killed_worker_is_retried_and_changes_nothing(town, whole, cluster, tm
     world, sensor, grid = town
     original, marker = cluster_module.solm_tile, str(tmp_path / "killed")
 
-    def dies_once(*args):   # nested: Ray ships it by value to the workers
+    def dies_once(*args):  # nested: Ray ships it by value to the workers
         import os
 
         if args[6:8] == (0, 0) and not os.path.exists(marker):
@@ -149,17 +156,21 @@ def test_a_killed_worker_is_retried_and_changes_nothing(town, whole, cluster, tm
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], capture_output=True, text=True,
-                          timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", *map(str, args)], capture_output=True, text=True, timeout=120
+    )
 
 
-@pytest.mark.parametrize("address, message", [("127.0.0.1:1", "no Ray head answers at 127.0.0.1:1"),
-                                              ("nonsense", "--address must be HOST:PORT")])
+@pytest.mark.parametrize(
+    "address, message",
+    [("127.0.0.1:1", "no Ray head answers at 127.0.0.1:1"), ("nonsense", "--address must be HOST:PORT")],
+)
 def test_an_unreachable_cluster_is_one_line(tmp_path, address, message):
     path = tmp_path / "boxes.npy"
     np.save(path, lf3pm.build_scene("boxes").points)
-    done = run_cli("solm", "build", path, "-o", tmp_path / "s.zarr", "--res", "2", "--engine", "ray",
-                   "--address", address)
+    done = run_cli(
+        "solm", "build", path, "-o", tmp_path / "s.zarr", "--res", "2", "--engine", "ray", "--address", address
+    )
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr
     assert not (tmp_path / "s.zarr").exists()

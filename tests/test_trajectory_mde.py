@@ -10,9 +10,9 @@ import pytest
 
 import lf3pm
 from lf3pm.errors import Lf3pmError
+from lf3pm.scenes import build_scene
 from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.validation.trajectory_mde import mde_along, pose_seed
-from lf3pm.scenes import build_scene
 
 
 @pytest.fixture(scope="module")
@@ -31,8 +31,7 @@ def test_equals_per_pose_mde_calls(boxes):
     poses = path(scene.reference_pose[2], n=3)
     along = mde_along(world, poses, "vlp16", trials=2, seed=11, target=target)
     assert not along.refused and along.evaluated == 3
-    single = [mde(world, p, "vlp16", trials=2, seed=pose_seed(11, i), target=target).mde
-              for i, p in enumerate(poses)]
+    single = [mde(world, p, "vlp16", trials=2, seed=pose_seed(11, i), target=target).mde for i, p in enumerate(poses)]
     # small_gicp's parallel reductions reorder sums: equal to rounding, not bitwise.
     assert along.mde == pytest.approx(single, rel=1e-9)
     assert along.s == pytest.approx(sum(single), rel=1e-9)
@@ -52,13 +51,30 @@ def test_seeds_do_not_depend_on_order(boxes):
 def test_matches_the_cli(boxes, tmp_path):
     scene, world, target = boxes
     pcd = tmp_path / "boxes.pcd"
-    subprocess.run([sys.executable, "-m", "lf3pm.cli", "scene", "boxes", "-o", str(pcd)], check=True,
-                   capture_output=True)
+    subprocess.run(
+        [sys.executable, "-m", "lf3pm.cli", "scene", "boxes", "-o", str(pcd)], check=True, capture_output=True
+    )
     poses = path(scene.reference_pose[2], n=2)
     along = mde_along(lf3pm.load_map(pcd), poses, trials=2, seed=0)
-    out = subprocess.run([sys.executable, "-m", "lf3pm.cli", "mde", str(pcd), "--pose",
-                          *map(str, poses[1]), "--trials", "2", "--seed", str(along.seeds[1]), "--json"],
-                         check=True, capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "lf3pm.cli",
+            "mde",
+            str(pcd),
+            "--pose",
+            *map(str, poses[1]),
+            "--trials",
+            "2",
+            "--seed",
+            str(along.seeds[1]),
+            "--json",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     assert json.loads(out)["mde"] == pytest.approx(along.mde[1], rel=1e-6)
 
 
@@ -66,15 +82,15 @@ def test_refused_poses_are_reported(boxes):
     scene, world, target = boxes
     poses = path(scene.reference_pose[2], n=3)
     lower, upper = world.bounds
-    poses[1] = [upper[0] + 5.0, 0.0, 1.0, 0.0]                 # outside the map
+    poses[1] = [upper[0] + 5.0, 0.0, 1.0, 0.0]  # outside the map
     inside = world.points[len(world.points) // 2]
-    poses = np.vstack([poses, [*inside, 0.0]])                  # inside an obstacle
+    poses = np.vstack([poses, [*inside, 0.0]])  # inside an obstacle
     result = mde_along(world, poses, trials=2, target=target)
     assert [i for i, _ in result.refused] == [1, 3]
     assert "outside" in result.refused[0][1] and "obstacle" in result.refused[1][1]
     assert math.isnan(result.mde[1]) and math.isnan(result.mde[3]) and result.evaluated == 2
     assert result.s == pytest.approx(result.mde[0] + result.mde[2])
-    assert json.dumps(result.to_dict())                         # NaN -> null, JSON-ready
+    assert json.dumps(result.to_dict())  # NaN -> null, JSON-ready
 
 
 def test_bad_input(boxes):

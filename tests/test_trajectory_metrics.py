@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from lf3pm.errors import Lf3pmError
-from lf3pm.replays.trajectory_metrics import ape_translation, error_stats, rpe
 from lf3pm.pose import pose_matrix
+from lf3pm.replays.trajectory_metrics import ape_translation, error_stats, rpe
 
 
 def straight(n=11, step=1.0):
@@ -31,7 +31,7 @@ def test_identity_has_zero_errors():
 def test_constant_offset():
     ref = arc()
     est = ref.copy()
-    est[:, :3, 3] += [0.3, 0.4, 0.0]                 # 0.5 m everywhere
+    est[:, :3, 3] += [0.3, 0.4, 0.0]  # 0.5 m everywhere
     ape = ape_translation(ref, est)
     assert ape["rmse"] == pytest.approx(0.5) and ape["median"] == pytest.approx(0.5)
     assert ape["std"] == pytest.approx(0.0, abs=1e-12) and ape["errors"] == pytest.approx([0.5] * 11)
@@ -79,8 +79,7 @@ def test_alignment_recovers_a_known_transform():
     rng = np.random.default_rng(3)
     points = rng.normal(size=(50, 3)) * [10, 5, 1]
     T = pose_matrix((1.0, -2.0, 0.5, 0.7))
-    T[:3, :3] = T[:3, :3] @ np.array([[1, 0, 0], [0, math.cos(0.2), -math.sin(0.2)],
-                                       [0, math.sin(0.2), math.cos(0.2)]])
+    T[:3, :3] = T[:3, :3] @ np.array([[1, 0, 0], [0, math.cos(0.2), -math.sin(0.2)], [0, math.sin(0.2), math.cos(0.2)]])
     moved = points @ T[:3, :3].T + T[:3, 3]
     ref = np.stack([pose_matrix((*p, 0.0)) for p in moved])
     est = np.stack([pose_matrix((*p, 0.0)) for p in points])

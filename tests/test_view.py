@@ -18,8 +18,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.io import write_points
 from lf3pm.scenes import build_scene
 from lf3pm.solm import Solm, build_solm, make_grid
-from lf3pm.view import check_port, free_port, load_view_inputs, serve
-from lf3pm.view import layers
+from lf3pm.view import check_port, free_port, layers, load_view_inputs, serve
 
 BOUNDS = (-3.5, -3.5, 3.5, 3.5)
 
@@ -81,12 +80,15 @@ def test_the_solm_layer_is_the_channel_min_over_yaw_or_one_bin(site):
 
 def test_replay_tracks_read_both_replay_formats_and_refuse_one_without_positions():
     truth = np.c_[np.arange(5.0), np.zeros(5), np.ones(5)]
-    run = {"truth_xyz": truth.tolist(), "estimate_xyz": (truth + 0.1).tolist(), "errors": [0.0, .1, .2, .3, .4]}
+    run = {"truth_xyz": truth.tolist(), "estimate_xyz": (truth + 0.1).tolist(), "errors": [0.0, 0.1, 0.2, 0.3, 0.4]}
     tracks = layers.replay_tracks({"runs": [run]})
     assert tracks["truth"].shape == tracks["estimate"].shape == tracks["colors"].shape == (4, 2, 3)
     assert tracks["hi"] == pytest.approx(0.4)
-    study = {"truth_xyz_every_second": run["truth_xyz"], "estimate_xyz_every_second": run["estimate_xyz"],
-             "errors_every_second": run["errors"]}
+    study = {
+        "truth_xyz_every_second": run["truth_xyz"],
+        "estimate_xyz_every_second": run["estimate_xyz"],
+        "errors_every_second": run["errors"],
+    }
     np.testing.assert_array_equal(layers.replay_tracks(study)["estimate"], tracks["estimate"])
     assert tracks["rest"] == {}  # a LIO replay's rest comes along (the viewer warns when unsteady)
     rest = {"seconds": 2.0, "drift_m": 0.9, "speed_mps": 3.4, "steady": False}
@@ -101,9 +103,25 @@ def test_replay_tracks_read_both_replay_formats_and_refuse_one_without_positions
 
 def test_what_lf3pm_replay_json_writes_is_shown(site, tmp_path):
     d, _ = site
-    run = subprocess.run([sys.executable, "-m", "lf3pm", "replay", str(d / "plan.csv"), "--map", str(d / "map.npy"),
-                          "--sensor", "vlp16", "--method", "localization", "--json"],
-                         capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "lf3pm",
+            "replay",
+            str(d / "plan.csv"),
+            "--map",
+            str(d / "map.npy"),
+            "--sensor",
+            "vlp16",
+            "--method",
+            "localization",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr
     (tmp_path / "replay.json").write_text(run.stdout)
     tracks = load_view_inputs(d / "map.npy", replay_paths=[tmp_path / "replay.json"]).replays["replay replay"]
@@ -150,10 +168,10 @@ def test_the_cli_refuses_bad_input_in_one_line_with_status_2(site, tmp_path):
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()
-        for args in ([str(tmp_path / "missing.npy")],
-                     [str(d / "map.npy"), "--port", str(taken.getsockname()[1])]):
-            run = subprocess.run([sys.executable, "-m", "lf3pm", "view", *args], capture_output=True, text=True,
-                                 timeout=120)
+        for args in ([str(tmp_path / "missing.npy")], [str(d / "map.npy"), "--port", str(taken.getsockname()[1])]):
+            run = subprocess.run(
+                [sys.executable, "-m", "lf3pm", "view", *args], capture_output=True, text=True, timeout=120
+            )
             assert run.returncode == 2, run.stderr
             assert len(run.stderr.strip().splitlines()) == 1 and "Traceback" not in run.stderr
 
@@ -190,9 +208,11 @@ def test_plans_between_clicked_poses_with_and_without_guidance(app):
         assert summary["predicted_error_m"] is None or summary["predicted_error_m"] > 0
 
 
-@pytest.mark.skipif(__import__("browser").chromium() is None,
-                    reason="no Chromium for the browser test (Debian: apt-get install chromium; `make test` "
-                           "installs it when run as root)")
+@pytest.mark.skipif(
+    __import__("browser").chromium() is None,
+    reason="no Chromium for the browser test (Debian: apt-get install chromium; `make test` "
+    "installs it when run as root)",
+)
 def test_the_page_shows_the_scene_in_a_real_browser(app, tmp_path):
     """Headless Chromium (software WebGL) loads the page; its screenshot is not blank
     and shows the SOLM's colours (viridis)."""
@@ -202,14 +222,18 @@ def test_the_page_shows_the_scene_in_a_real_browser(app, tmp_path):
     palette = (colormaps["viridis"](np.linspace(0, 1, 32))[:, :3] * 255).astype(int)
 
     def solm_share(image):
-        pixels = image[::4, : image.shape[1] * 2 // 3:4].reshape(-1, 3).astype(int)  # left of the panel
+        pixels = image[::4, : image.shape[1] * 2 // 3 : 4].reshape(-1, 3).astype(int)  # left of the panel
         near = np.min(np.abs(pixels[:, None, :] - palette[None]).sum(axis=2), axis=1) < 24
         saturated = pixels.max(axis=1) - pixels.min(axis=1) > 40  # not grey or white
         return float(np.mean(near & saturated))
 
     app.map_ceiling.value = 2.0  # under the boxes room's ceiling, as a user would cut it
-    image = screenshot(f"http://127.0.0.1:{app.server.get_port()}/", tmp_path / "page.png", seconds=60,
-                       ready=lambda img: solm_share(img) > 0.01)
+    image = screenshot(
+        f"http://127.0.0.1:{app.server.get_port()}/",
+        tmp_path / "page.png",
+        seconds=60,
+        ready=lambda img: solm_share(img) > 0.01,
+    )
     assert image.std() > 10, "blank page"
     assert solm_share(image) > 0.01, "the SOLM's colours are not on the page"
 

@@ -32,14 +32,15 @@ bool cpu_runs(const std::string& arch) {
   if (arch == "x86-64-v3") return __builtin_cpu_supports("x86-64-v3");
   if (arch == "x86-64-v4") return __builtin_cpu_supports("x86-64-v4");
 #else  // compilers without the level names: the features each level adds
-  const bool v2 = __builtin_cpu_supports("popcnt") && __builtin_cpu_supports("sse4.2") &&
-                  __builtin_cpu_supports("ssse3");
-  const bool v3 = v2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-                  __builtin_cpu_supports("bmi2");
+  const bool v2 =
+      __builtin_cpu_supports("popcnt") && __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("ssse3");
+  const bool v3 =
+      v2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
   if (arch == "x86-64-v2") return v2;
   if (arch == "x86-64-v3") return v3;
-  if (arch == "x86-64-v4") return v3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-                                  __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
+  if (arch == "x86-64-v4")
+    return v3 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+           __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
 #endif
 #endif
   (void)arch;

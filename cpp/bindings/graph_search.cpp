@@ -1,11 +1,12 @@
 // nanobind bindings of the front end's grid search (cpp/lf3pm/planner/graph_search.hpp).
+#include "lf3pm/planner/graph_search.hpp"
+
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
 #include <vector>
 
 #include "bindings/numpy.hpp"
-#include "lf3pm/planner/graph_search.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -23,8 +24,8 @@ void bind_graph_search(nb::module_& m) {
   using Mask = nb::ndarray<const std::uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
   m.def(
       "grid_search",
-      [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t start,
-         std::uint32_t goal, const lf3pm::SearchParams& params) {
+      [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t start, std::uint32_t goal,
+         const lf3pm::SearchParams& params) {
         const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(layers);
         if (cost.shape(0) != n || traversable.shape(0) != n)
           throw std::invalid_argument("cost and traversable need nx * ny * layers values");
@@ -47,7 +48,8 @@ void bind_graph_search(nb::module_& m) {
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "start"_a, "goal"_a,
       "params"_a = lf3pm::SearchParams(),
       "A* (heuristic=True) or Dijkstra over nx x ny x layers states (flat float64 cost, uint8 traversable, "
-      "index (y * nx + x) * layers + k: yaw innermost; layers > 1 are periodic yaw bins). Returns a dict: found, cost, path "
+      "index (y * nx + x) * layers + k: yaw innermost; layers > 1 are periodic yaw bins). Returns a dict: found, cost, "
+      "path "
       "(uint32 state indices), expanded, pushed, heap_peak, relaxed_expanded (cells the SE(2) heuristic's backward "
       "pass closed).");
   m.def(

@@ -1,4 +1,6 @@
 // nanobind bindings of the car front end (cpp/lf3pm/planner/hybrid_search.hpp, dubins.hpp).
+#include "lf3pm/planner/hybrid_search.hpp"
+
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
@@ -9,7 +11,6 @@
 #include "bindings/numpy.hpp"
 #include "lf3pm/planner/dubins.hpp"
 #include "lf3pm/planner/grid_field.hpp"
-#include "lf3pm/planner/hybrid_search.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -26,7 +27,8 @@ lf3pm::Pose2 pose(nb::handle h) {
 
 using lf3pm::bindings::to_numpy;
 
-std::vector<lf3pm::PathSegment> segments_from(nb::ndarray<const double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu> a) {
+std::vector<lf3pm::PathSegment> segments_from(
+    nb::ndarray<const double, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu> a) {
   std::vector<lf3pm::PathSegment> s(a.shape(0));
   for (std::size_t i = 0; i < s.size(); ++i) s[i] = {a(i, 0), a(i, 1)};
   return s;
@@ -44,7 +46,8 @@ void bind_hybrid_search(nb::module_& m) {
       .def_rw("yaw_bins", &HybridParams::yaw_bins, "Closed set: yaw bins per x-y cell.")
       .def_rw("step", &HybridParams::step, "Primitive length (m); 0: sqrt 2 res.")
       .def_rw("sample_step", &HybridParams::sample_step, "Collision and cost sample spacing (m); 0: res / 4.")
-      .def_rw("analytic_every", &HybridParams::analytic_every, "Try a Dubins path to the goal every this many expansions.")
+      .def_rw("analytic_every", &HybridParams::analytic_every,
+              "Try a Dubins path to the goal every this many expansions.")
       .def_rw("max_expansions", &HybridParams::max_expansions)
       .def_rw("heuristic", &HybridParams::heuristic, "False: h = 0 (uniform-cost search).")
       .def_rw("heuristic_weight", &HybridParams::heuristic_weight, "epsilon >= 1 of f = g + epsilon h.");
@@ -119,5 +122,6 @@ void bind_hybrid_search(nb::module_& m) {
         auto h = lf3pm::hybrid_heuristic(esdf, cells, cost, q, pose(goal), p);
         return to_numpy(std::move(h));
       },
-      "esdf"_a, "cells"_a.none(), "cost"_a.none(), "poses"_a, "goal"_a, "params"_a, "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
+      "esdf"_a, "cells"_a.none(), "cost"_a.none(), "poses"_a, "goal"_a, "params"_a,
+      "hybrid_search's heuristic at each pose (N x 3), for tests (+inf: pruned).");
 }

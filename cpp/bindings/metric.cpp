@@ -1,5 +1,7 @@
 // nanobind bindings of the metric stage (cpp/lf3pm/metric/): its parameters, the metric
 // and the evaluations of one pose, many poses and yaw sectors.
+#include "lf3pm/metric/metric.hpp"
+
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
@@ -10,7 +12,6 @@
 
 #include "bindings/numpy.hpp"
 #include "lf3pm/metric/evaluator.hpp"
-#include "lf3pm/metric/metric.hpp"
 #include "lf3pm/metric/yaw_sectors.hpp"
 
 namespace nb = nanobind;
@@ -110,103 +111,108 @@ void bind_metric(nb::module_& m) {
       .def_ro("rays", &PoseEvaluation::rays, "Sensor rays cast.")
       .def_ro("hits", &PoseEvaluation::hits, "Rays with a return (after scan downsampling).");
 
-  m.def("evaluate",
-        [](const MapIndex& map, PoseIn pose, PointsIn dirs, const EvalParams& params) {
-          const Pose ps = pose_from_matrix(pose.data());
+  m.def(
+      "evaluate",
+      [](const MapIndex& map, PoseIn pose, PointsIn dirs, const EvalParams& params) {
+        const Pose ps = pose_from_matrix(pose.data());
+        nb::gil_scoped_release release;
+        return evaluate_pose(map, ps, dirs.data(), dirs.shape(0), params);
+      },
+      "map"_a, "pose"_a, "directions"_a, "params"_a,
+      "Scan, associate and compute the metric at one 4x4 sensor-to-world pose.");
+
+  m.def(
+      "evaluate_with_observations",
+      [](const MapIndex& map, PoseIn pose, PointsIn dirs, const EvalParams& params) {
+        const Pose ps = pose_from_matrix(pose.data());
+        PoseObservations o;
+        PoseEvaluation evaluation;
+        {
           nb::gil_scoped_release release;
-          return evaluate_pose(map, ps, dirs.data(), dirs.shape(0), params);
-        },
-        "map"_a, "pose"_a, "directions"_a, "params"_a,
-        "Scan, associate and compute the metric at one 4x4 sensor-to-world pose.");
+          evaluation = evaluate_pose(map, ps, dirs.data(), dirs.shape(0), params, &o);
+        }
+        const std::size_t rows = static_cast<std::size_t>(o.observations.b.size());
+        const std::size_t dof = static_cast<std::size_t>(params.dof);
+        std::vector<double> a(rows * dof);
+        for (std::size_t r = 0; r < rows; ++r)
+          for (std::size_t c = 0; c < dof; ++c) a[r * dof + c] = o.observations.a(r, c);
+        nb::dict out;
+        out["A"] = to_numpy(std::move(a), {rows, dof});
+        out["b"] = to_numpy(std::vector<double>(o.observations.b.data(), o.observations.b.data() + rows), {rows});
+        out["points"] = points_to_numpy(o.scan.world_points);
+        out["sensor_points"] = points_to_numpy(o.scan.sensor_points);
+        out["row_hit"] = to_numpy(std::move(o.observations.hit), {rows});
+        return nb::make_tuple(evaluation, out);
+      },
+      "map"_a, "pose"_a, "directions"_a, "params"_a,
+      "evaluate() and the explicit observations of the same scan: (PoseEvaluation, dict of A (m x dof), "
+      "b (m), points and sensor_points of the scan's hits, row_hit (row -> hit)).");
 
-  m.def("evaluate_with_observations",
-        [](const MapIndex& map, PoseIn pose, PointsIn dirs, const EvalParams& params) {
-          const Pose ps = pose_from_matrix(pose.data());
-          PoseObservations o;
-          PoseEvaluation evaluation;
-          {
-            nb::gil_scoped_release release;
-            evaluation = evaluate_pose(map, ps, dirs.data(), dirs.shape(0), params, &o);
-          }
-          const std::size_t rows = static_cast<std::size_t>(o.observations.b.size());
-          const std::size_t dof = static_cast<std::size_t>(params.dof);
-          std::vector<double> a(rows * dof);
-          for (std::size_t r = 0; r < rows; ++r)
-            for (std::size_t c = 0; c < dof; ++c) a[r * dof + c] = o.observations.a(r, c);
-          nb::dict out;
-          out["A"] = to_numpy(std::move(a), {rows, dof});
-          out["b"] = to_numpy(std::vector<double>(o.observations.b.data(), o.observations.b.data() + rows), {rows});
-          out["points"] = points_to_numpy(o.scan.world_points);
-          out["sensor_points"] = points_to_numpy(o.scan.sensor_points);
-          out["row_hit"] = to_numpy(std::move(o.observations.hit), {rows});
-          return nb::make_tuple(evaluation, out);
-        },
-        "map"_a, "pose"_a, "directions"_a, "params"_a,
-        "evaluate() and the explicit observations of the same scan: (PoseEvaluation, dict of A (m x dof), "
-        "b (m), points and sensor_points of the scan's hits, row_hit (row -> hit)).");
+  m.def(
+      "evaluate_many",
+      [](const MapIndex& map, PosesIn poses, StreamsIn streams, PointsIn dirs, const EvalParams& params) {
+        const std::vector<Pose> ps = poses_from(poses);
+        const std::vector<std::uint64_t> st = streams_from(streams, ps.size());
+        std::vector<PoseEvaluation> res;
+        {
+          nb::gil_scoped_release release;
+          res = evaluate_poses(map, ps, st, dirs.data(), dirs.shape(0), params);
+        }
+        std::vector<Metric> metrics(res.size());
+        std::vector<double> hits(res.size());
+        for (std::size_t i = 0; i < res.size(); ++i) metrics[i] = res[i].metric, hits[i] = double(res[i].hits);
+        nb::dict out = metric_columns(metrics, {res.size()});
+        out["hits"] = to_numpy(std::move(hits));
+        return out;
+      },
+      "map"_a, "poses"_a, "streams"_a, "directions"_a, "params"_a,
+      "evaluate() at many 4x4 poses in parallel (params.scan.threads); pose i uses noise stream "
+      "streams[i]. Returns a dict of per-pose float64 columns: every Metric value and hits.");
 
-  m.def("evaluate_many",
-        [](const MapIndex& map, PosesIn poses, StreamsIn streams, PointsIn dirs, const EvalParams& params) {
-          const std::vector<Pose> ps = poses_from(poses);
-          const std::vector<std::uint64_t> st = streams_from(streams, ps.size());
-          std::vector<PoseEvaluation> res;
-          {
-            nb::gil_scoped_release release;
-            res = evaluate_poses(map, ps, st, dirs.data(), dirs.shape(0), params);
-          }
-          std::vector<Metric> metrics(res.size());
-          std::vector<double> hits(res.size());
-          for (std::size_t i = 0; i < res.size(); ++i) metrics[i] = res[i].metric, hits[i] = double(res[i].hits);
-          nb::dict out = metric_columns(metrics, {res.size()});
-          out["hits"] = to_numpy(std::move(hits));
-          return out;
-        },
-        "map"_a, "poses"_a, "streams"_a, "directions"_a, "params"_a,
-        "evaluate() at many 4x4 poses in parallel (params.scan.threads); pose i uses noise stream "
-        "streams[i]. Returns a dict of per-pose float64 columns: every Metric value and hits.");
+  m.def(
+      "evaluate_yaw_sectors",
+      [](const MapIndex& map, PointsIn positions, StreamsIn streams, PointsIn sector_rays, int bins, int half_width,
+         const EvalParams& params) {
+        const std::size_t np = positions.shape(0);
+        const std::vector<std::uint64_t> st = streams_from(streams, np);
+        std::vector<Eigen::Vector3d> pos(np);
+        for (std::size_t i = 0; i < np; ++i) pos[i] = Eigen::Vector3d(positions.data() + 3 * i);
+        std::vector<Metric> res;
+        {
+          nb::gil_scoped_release release;
+          res = evaluate_yaw_sectors(map, pos, st, sector_rays.data(), sector_rays.shape(0), bins, half_width, params);
+        }
+        return metric_columns(res, {np, static_cast<std::size_t>(bins)});
+      },
+      "map"_a, "positions"_a, "streams"_a, "sector_rays"_a, "bins"_a, "half_width"_a, "params"_a,
+      "SE(2) metric at every yaw bin from one scan per yaw sector (sums of sector Grams). "
+      "Returns per-position, per-bin float64 columns of every Metric value.");
 
-  m.def("evaluate_yaw_sectors",
-        [](const MapIndex& map, PointsIn positions, StreamsIn streams, PointsIn sector_rays, int bins,
-           int half_width, const EvalParams& params) {
-          const std::size_t np = positions.shape(0);
-          const std::vector<std::uint64_t> st = streams_from(streams, np);
-          std::vector<Eigen::Vector3d> pos(np);
-          for (std::size_t i = 0; i < np; ++i) pos[i] = Eigen::Vector3d(positions.data() + 3 * i);
-          std::vector<Metric> res;
-          {
-            nb::gil_scoped_release release;
-            res = evaluate_yaw_sectors(map, pos, st, sector_rays.data(), sector_rays.shape(0), bins, half_width,
-                                       params);
-          }
-          return metric_columns(res, {np, static_cast<std::size_t>(bins)});
-        },
-        "map"_a, "positions"_a, "streams"_a, "sector_rays"_a, "bins"_a, "half_width"_a, "params"_a,
-        "SE(2) metric at every yaw bin from one scan per yaw sector (sums of sector Grams). "
-        "Returns per-position, per-bin float64 columns of every Metric value.");
+  m.def(
+      "metric_from_gram",
+      [](MatIn gram, std::int64_t rows, const MetricWeights& weights) {
+        const std::size_t k = gram.shape(0);
+        if (gram.shape(1) != k) throw std::invalid_argument("the Gram must be square");
+        Eigen::MatrixXd g(k, k);
+        for (std::size_t i = 0; i < k; ++i)
+          for (std::size_t j = 0; j < k; ++j) g(i, j) = gram(i, j);
+        return metric_from_gram(g, rows, weights);
+      },
+      "gram"_a, "m"_a, "weights"_a = MetricWeights(), "Metric from the Gram [A b]^T [A b] of m rows (4x4 or 7x7).");
 
-  m.def("metric_from_gram",
-        [](MatIn gram, std::int64_t rows, const MetricWeights& weights) {
-          const std::size_t k = gram.shape(0);
-          if (gram.shape(1) != k) throw std::invalid_argument("the Gram must be square");
-          Eigen::MatrixXd g(k, k);
-          for (std::size_t i = 0; i < k; ++i)
-            for (std::size_t j = 0; j < k; ++j) g(i, j) = gram(i, j);
-          return metric_from_gram(g, rows, weights);
-        },
-        "gram"_a, "m"_a, "weights"_a = MetricWeights(),
-        "Metric from the Gram [A b]^T [A b] of m rows (4x4 or 7x7).");
-
-  m.def("gram",
-        [](MatIn a, nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu> b) {
-          const std::size_t rows = a.shape(0), n = a.shape(1);
-          if ((n != 3 && n != 6) || b.shape(0) != rows) throw std::invalid_argument("A must be m x 3 or m x 6, b of length m");
-          GramAccumulator acc(static_cast<int>(n));
-          for (std::size_t r = 0; r < rows; ++r) acc.add(a.data() + r * n, b(r));
-          const Eigen::MatrixXd g = acc.gram();
-          std::vector<double> flat(g.size());
-          for (std::size_t i = 0; i <= n; ++i)
-            for (std::size_t j = 0; j <= n; ++j) flat[i * (n + 1) + j] = g(i, j);
-          return to_numpy(std::move(flat), {n + 1, n + 1});
-        },
-        "A"_a, "b"_a, "Gram [A b]^T [A b] accumulated as the core does.");
+  m.def(
+      "gram",
+      [](MatIn a, nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu> b) {
+        const std::size_t rows = a.shape(0), n = a.shape(1);
+        if ((n != 3 && n != 6) || b.shape(0) != rows)
+          throw std::invalid_argument("A must be m x 3 or m x 6, b of length m");
+        GramAccumulator acc(static_cast<int>(n));
+        for (std::size_t r = 0; r < rows; ++r) acc.add(a.data() + r * n, b(r));
+        const Eigen::MatrixXd g = acc.gram();
+        std::vector<double> flat(g.size());
+        for (std::size_t i = 0; i <= n; ++i)
+          for (std::size_t j = 0; j <= n; ++j) flat[i * (n + 1) + j] = g(i, j);
+        return to_numpy(std::move(flat), {n + 1, n + 1});
+      },
+      "A"_a, "b"_a, "Gram [A b]^T [A b] accumulated as the core does.");
 }

@@ -46,36 +46,38 @@ void bind_scan(nb::module_& m) {
       .def_rw("scan_voxel", &ScanParams::scan_voxel, "Keep the first hit per voxel of this edge (m; 0 = off).")
       .def_rw("threads", &ScanParams::threads, "Worker threads (0 = all cores).");
 
-  m.def("simulate_scan",
-        [](const MapIndex& map, PoseIn pose, PointsIn dirs, const ScanParams& params) {
-          const Pose ps = pose_from_matrix(pose.data());
-          SimulatedScan scan;
-          {
-            nb::gil_scoped_release release;
-            scan = simulate_scan(map, ps, dirs.data(), dirs.shape(0), params);
-          }
-          return scan_dict(std::move(scan));
-        },
-        "map"_a, "pose"_a, "directions"_a, "params"_a,
-        "Simulated scan at a 4x4 sensor-to-world pose: dict of sensor_points, world_points, surfel, ray.");
+  m.def(
+      "simulate_scan",
+      [](const MapIndex& map, PoseIn pose, PointsIn dirs, const ScanParams& params) {
+        const Pose ps = pose_from_matrix(pose.data());
+        SimulatedScan scan;
+        {
+          nb::gil_scoped_release release;
+          scan = simulate_scan(map, ps, dirs.data(), dirs.shape(0), params);
+        }
+        return scan_dict(std::move(scan));
+      },
+      "map"_a, "pose"_a, "directions"_a, "params"_a,
+      "Simulated scan at a 4x4 sensor-to-world pose: dict of sensor_points, world_points, surfel, ray.");
 
-  m.def("simulate_moving_scan",
-        [](const MapIndex& map, PosesIn ray_poses, PointsIn dirs, const ScanParams& params) {
-          const std::size_t n = dirs.shape(0);
-          if (ray_poses.shape(0) != n)
-            throw std::invalid_argument("one pose per ray: got " + std::to_string(ray_poses.shape(0)) +
-                                        " poses for " + std::to_string(n) + " rays");
-          std::vector<Pose> poses(n);
-          for (std::size_t k = 0; k < n; ++k) poses[k] = pose_from_matrix(ray_poses.data() + 16 * k);
-          SimulatedScan scan;
-          {
-            nb::gil_scoped_release release;
-            scan = simulate_scan(map, poses.data(), dirs.data(), n, params);
-          }
-          return scan_dict(std::move(scan));
-        },
-        "map"_a, "ray_poses"_a, "directions"_a, "params"_a,
-        "Simulated scan of a moving sensor: ray k cast from the 4x4 sensor-to-world pose ray_poses[k] "
-        "(K x 4 x 4, one per direction). Dict as simulate_scan's; sensor_points in each ray's own frame, "
-        "noise per ray as simulate_scan's.");
+  m.def(
+      "simulate_moving_scan",
+      [](const MapIndex& map, PosesIn ray_poses, PointsIn dirs, const ScanParams& params) {
+        const std::size_t n = dirs.shape(0);
+        if (ray_poses.shape(0) != n)
+          throw std::invalid_argument("one pose per ray: got " + std::to_string(ray_poses.shape(0)) + " poses for " +
+                                      std::to_string(n) + " rays");
+        std::vector<Pose> poses(n);
+        for (std::size_t k = 0; k < n; ++k) poses[k] = pose_from_matrix(ray_poses.data() + 16 * k);
+        SimulatedScan scan;
+        {
+          nb::gil_scoped_release release;
+          scan = simulate_scan(map, poses.data(), dirs.data(), n, params);
+        }
+        return scan_dict(std::move(scan));
+      },
+      "map"_a, "ray_poses"_a, "directions"_a, "params"_a,
+      "Simulated scan of a moving sensor: ray k cast from the 4x4 sensor-to-world pose ray_poses[k] "
+      "(K x 4 x 4, one per direction). Dict as simulate_scan's; sensor_points in each ray's own frame, "
+      "noise per ray as simulate_scan's.");
 }

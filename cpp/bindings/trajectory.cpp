@@ -68,56 +68,58 @@ nb::dict terms_dict(const CostTerms& t) {
 void bind_trajectory(nb::module_& m) {
   nb::class_<GridField>(m, "GridField",
                         "Regular (x, y[, periodic yaw]) grid with bilinear/trilinear interpolation and gradient.")
-      .def("__init__",
-           [](GridField* self, nb::ndarray<const double, nb::c_contig, nb::device::cpu> values, double x0, double y0,
-              double res) {
-             if (values.ndim() != 2 && values.ndim() != 3)
-               throw std::invalid_argument("grid values must be (ny, nx) or (yaw_bins, ny, nx)");
-             const bool three = values.ndim() == 3;
-             const int layers = three ? int(values.shape(0)) : 1;
-             const int ny = int(values.shape(three ? 1 : 0)), nx = int(values.shape(three ? 2 : 1));
-             std::vector<double> v(values.data(), values.data() + values.size());
-             new (self) GridField(std::move(v), nx, ny, layers, x0, y0, res);
-           },
-           "values"_a, "x0"_a, "y0"_a, "res"_a)
+      .def(
+          "__init__",
+          [](GridField* self, nb::ndarray<const double, nb::c_contig, nb::device::cpu> values, double x0, double y0,
+             double res) {
+            if (values.ndim() != 2 && values.ndim() != 3)
+              throw std::invalid_argument("grid values must be (ny, nx) or (yaw_bins, ny, nx)");
+            const bool three = values.ndim() == 3;
+            const int layers = three ? int(values.shape(0)) : 1;
+            const int ny = int(values.shape(three ? 1 : 0)), nx = int(values.shape(three ? 2 : 1));
+            std::vector<double> v(values.data(), values.data() + values.size());
+            new (self) GridField(std::move(v), nx, ny, layers, x0, y0, res);
+          },
+          "values"_a, "x0"_a, "y0"_a, "res"_a)
       .def_prop_ro("layers", &GridField::layers)
-      .def("sample",
-           [](const GridField& f, Vec x, Vec y, Vec yaw) {
-             const std::size_t n = x.shape(0);
-             if (y.shape(0) != n || yaw.shape(0) != n) throw std::invalid_argument("x, y, yaw lengths differ");
-             Eigen::VectorXd value(n);
-             Eigen::Matrix<double, -1, 3, Eigen::RowMajor> grad(n, 3);
-             Eigen::Vector3d gr;
-             for (std::size_t i = 0; i < n; ++i) {
-               value(i) = f.sample(x(i), y(i), yaw(i), gr);
-               grad.row(i) = gr.transpose();
-             }
-             return nb::make_tuple(value, grad);
-           },
-           "x"_a, "y"_a, "yaw"_a, "Values (n,) and gradients (n, 3: d/dx, d/dy, d/dyaw) at the points.");
+      .def(
+          "sample",
+          [](const GridField& f, Vec x, Vec y, Vec yaw) {
+            const std::size_t n = x.shape(0);
+            if (y.shape(0) != n || yaw.shape(0) != n) throw std::invalid_argument("x, y, yaw lengths differ");
+            Eigen::VectorXd value(n);
+            Eigen::Matrix<double, -1, 3, Eigen::RowMajor> grad(n, 3);
+            Eigen::Vector3d gr;
+            for (std::size_t i = 0; i < n; ++i) {
+              value(i) = f.sample(x(i), y(i), yaw(i), gr);
+              grad.row(i) = gr.transpose();
+            }
+            return nb::make_tuple(value, grad);
+          },
+          "x"_a, "y"_a, "yaw"_a, "Values (n,) and gradients (n, 3: d/dx, d/dy, d/dyaw) at the points.");
 
-  m.def("minco_s2",
-        [](nb::ndarray<const double, nb::shape<3, -1>, nb::c_contig, nb::device::cpu> head,
-           nb::ndarray<const double, nb::shape<3, -1>, nb::c_contig, nb::device::cpu> tail, Mat3 waypoints,
-           Vec durations) {
-          // (3, 2): position and velocity; (3, 3): and the acceleration.
-          auto state = [](const auto& m) {
-            if (m.shape(1) != 2 && m.shape(1) != 3) throw std::invalid_argument("an end state is (3, 2) or (3, 3)");
-            MincoS2::State s = MincoS2::State::Zero();
-            for (int r = 0; r < 3; ++r)
-              for (std::size_t c = 0; c < m.shape(1); ++c) s(r, c) = m(r, c);
-            return s;
-          };
-          MincoS2 minco;
-          minco.set_conditions(state(head), state(tail), int(durations.shape(0)), head.shape(1) == 3,
-                               tail.shape(1) == 3);
-          minco.set_parameters(to_points(waypoints), to_vector(durations));
-          return nb::make_tuple(coefficients_array(minco.coefficients()), minco.energy());
-        },
-        "head"_a, "tail"_a, "waypoints"_a, "durations"_a,
-        "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity; "
-        "3 x 3: and acceleration, which frees the neighbouring junction's waypoint), the free intermediate "
-        "waypoints (K, 3) and durations (N,).");
+  m.def(
+      "minco_s2",
+      [](nb::ndarray<const double, nb::shape<3, -1>, nb::c_contig, nb::device::cpu> head,
+         nb::ndarray<const double, nb::shape<3, -1>, nb::c_contig, nb::device::cpu> tail, Mat3 waypoints,
+         Vec durations) {
+        // (3, 2): position and velocity; (3, 3): and the acceleration.
+        auto state = [](const auto& m) {
+          if (m.shape(1) != 2 && m.shape(1) != 3) throw std::invalid_argument("an end state is (3, 2) or (3, 3)");
+          MincoS2::State s = MincoS2::State::Zero();
+          for (int r = 0; r < 3; ++r)
+            for (std::size_t c = 0; c < m.shape(1); ++c) s(r, c) = m(r, c);
+          return s;
+        };
+        MincoS2 minco;
+        minco.set_conditions(state(head), state(tail), int(durations.shape(0)), head.shape(1) == 3, tail.shape(1) == 3);
+        minco.set_parameters(to_points(waypoints), to_vector(durations));
+        return nb::make_tuple(coefficients_array(minco.coefficients()), minco.energy());
+      },
+      "head"_a, "tail"_a, "waypoints"_a, "durations"_a,
+      "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity; "
+      "3 x 3: and acceleration, which frees the neighbouring junction's waypoint), the free intermediate "
+      "waypoints (K, 3) and durations (N,).");
 
   nb::class_<LbfgsParams>(m, "LbfgsParams", "L-BFGS parameters (the defaults; see lbfgs.hpp).")
       .def(nb::init<>())
@@ -129,27 +131,29 @@ void bind_trajectory(nb::module_& m) {
       .def_rw("max_linesearch", &LbfgsParams::max_linesearch);
   m.def("trajectory_lbfgs", &trajectory_lbfgs, "The L-BFGS parameters the trajectory optimiser uses by default.");
 
-  m.def("lbfgs_minimize",
-        [](const std::function<nb::tuple(const Eigen::VectorXd&)>& fun, Vec x0, const LbfgsParams& params) {
-          Eigen::VectorXd x = to_vector(x0);
-          const Objective f = [&fun](const Eigen::VectorXd& xv, Eigen::VectorXd& g) {
-            const nb::tuple r = fun(xv);
-            g = nb::cast<Eigen::VectorXd>(r[1]);
-            if (g.size() != xv.size()) throw std::invalid_argument("gradient has the wrong size");
-            return nb::cast<double>(r[0]);
-          };
-          const LbfgsResult r = lbfgs_minimize(f, x, params);
-          nb::dict out;
-          out["x"] = x;
-          out["f"] = r.f;
-          out["iterations"] = r.iterations;
-          out["evaluations"] = r.evaluations;
-          out["gradient_norm"] = r.gradient_norm;
-          out["status"] = std::string(to_string(r.status));
-          out["reason"] = r.reason;
-          return out;
-        },
-        "fun"_a, "x0"_a, "params"_a = LbfgsParams(), "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
+  m.def(
+      "lbfgs_minimize",
+      [](const std::function<nb::tuple(const Eigen::VectorXd&)>& fun, Vec x0, const LbfgsParams& params) {
+        Eigen::VectorXd x = to_vector(x0);
+        const Objective f = [&fun](const Eigen::VectorXd& xv, Eigen::VectorXd& g) {
+          const nb::tuple r = fun(xv);
+          g = nb::cast<Eigen::VectorXd>(r[1]);
+          if (g.size() != xv.size()) throw std::invalid_argument("gradient has the wrong size");
+          return nb::cast<double>(r[0]);
+        };
+        const LbfgsResult r = lbfgs_minimize(f, x, params);
+        nb::dict out;
+        out["x"] = x;
+        out["f"] = r.f;
+        out["iterations"] = r.iterations;
+        out["evaluations"] = r.evaluations;
+        out["gradient_norm"] = r.gradient_norm;
+        out["status"] = std::string(to_string(r.status));
+        out["reason"] = r.reason;
+        return out;
+      },
+      "fun"_a, "x0"_a, "params"_a = LbfgsParams(),
+      "Minimise fun(x) -> (f, gradient) with our L-BFGS (weak Wolfe line search).");
 
   nb::enum_<RobotKind>(m, "RobotKind")
       .value("omni", RobotKind::Omni)
@@ -179,64 +183,70 @@ void bind_trajectory(nb::module_& m) {
       .def_rw("w_time", &CostWeights::w_time);
 
   nb::class_<TrajectoryProblem>(m, "TrajectoryProblem",
-                                "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece), car: 2 x 3 straight-end parameters].")
-      .def("__init__",
-           [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const RobotLimits& robot,
-              const CostWeights& weights, double rho_t, double w_energy, Mat32 head, Mat32 tail, Mat3 waypoints,
-              Vec durations) {
-             TrajectoryCost tc(cost ? *cost : GridField(), esdf ? *esdf : GridField(), robot, weights);
-             new (self) TrajectoryProblem(std::move(tc), rho_t, w_energy, to_state(head), to_state(tail),
-                                          to_points(waypoints), to_vector(durations));
-           },
-           "cost"_a.none(), "esdf"_a.none(), "robot"_a, "weights"_a, "rho_T"_a, "w_energy"_a, "head"_a, "tail"_a,
-           "waypoints"_a, "durations"_a)
+                                "The LF-3PM trajectory objective over x = [waypoints (3 per), tau (1 per piece), car: "
+                                "2 x 3 straight-end parameters].")
+      .def(
+          "__init__",
+          [](TrajectoryProblem* self, const GridField* cost, const GridField* esdf, const RobotLimits& robot,
+             const CostWeights& weights, double rho_t, double w_energy, Mat32 head, Mat32 tail, Mat3 waypoints,
+             Vec durations) {
+            TrajectoryCost tc(cost ? *cost : GridField(), esdf ? *esdf : GridField(), robot, weights);
+            new (self) TrajectoryProblem(std::move(tc), rho_t, w_energy, to_state(head), to_state(tail),
+                                         to_points(waypoints), to_vector(durations));
+          },
+          "cost"_a.none(), "esdf"_a.none(), "robot"_a, "weights"_a, "rho_T"_a, "w_energy"_a, "head"_a, "tail"_a,
+          "waypoints"_a, "durations"_a)
       .def_prop_ro("dimension", &TrajectoryProblem::dimension)
       .def_prop_ro("pieces", &TrajectoryProblem::pieces, "MINCO pieces N (a car adds its two straight ends).")
       .def_prop_ro("initial", &TrajectoryProblem::initial)
-      .def("evaluate",
-           [](TrajectoryProblem& p, Vec x) {
-             Eigen::VectorXd g;
-             const Eigen::VectorXd xv = to_vector(x);
-             double f;
-             {
-               nb::gil_scoped_release release;
-               f = p.evaluate(xv, g);
-             }
-             return nb::make_tuple(f, g);
-           },
-           "x"_a, "(objective, gradient) at x.")
-      .def("details",
-           [](TrajectoryProblem& p, Vec x) {
-             Eigen::VectorXd g;
-             CostTerms t;
-             p.evaluate(to_vector(x), g, &t);
-             return terms_dict(t);
-           },
-           "x"_a, "The objective's terms at x.")
-      .def("trajectory",
-           [](TrajectoryProblem& p, Vec x) {
-             Eigen::MatrixX3d c;
-             Eigen::VectorXd T;
-             p.trajectory(to_vector(x), c, T);
-             return nb::make_tuple(coefficients_array(c), T);
-           },
-           "x"_a, "(coefficients (N, 4, 3), durations (N,)) at x.")
-      .def("optimize",
-           [](TrajectoryProblem& p, const LbfgsParams& lb) {
-             OptimizeOutcome o;
-             {
-               nb::gil_scoped_release release;
-               o = optimize(p, lb);
-             }
-             nb::dict out;
-             out["x"] = o.x;
-             out["iterations"] = o.iterations;
-             out["evaluations"] = o.evaluations;
-             out["status"] = o.status;
-             out["reason"] = o.reason;
-             out["terms"] = terms_dict(o.terms);
-             return out;
-           },
-           "params"_a = trajectory_lbfgs(),
-           "L-BFGS from the initial guess; dict of x, iterations, evaluations, status, reason, terms.");
+      .def(
+          "evaluate",
+          [](TrajectoryProblem& p, Vec x) {
+            Eigen::VectorXd g;
+            const Eigen::VectorXd xv = to_vector(x);
+            double f;
+            {
+              nb::gil_scoped_release release;
+              f = p.evaluate(xv, g);
+            }
+            return nb::make_tuple(f, g);
+          },
+          "x"_a, "(objective, gradient) at x.")
+      .def(
+          "details",
+          [](TrajectoryProblem& p, Vec x) {
+            Eigen::VectorXd g;
+            CostTerms t;
+            p.evaluate(to_vector(x), g, &t);
+            return terms_dict(t);
+          },
+          "x"_a, "The objective's terms at x.")
+      .def(
+          "trajectory",
+          [](TrajectoryProblem& p, Vec x) {
+            Eigen::MatrixX3d c;
+            Eigen::VectorXd T;
+            p.trajectory(to_vector(x), c, T);
+            return nb::make_tuple(coefficients_array(c), T);
+          },
+          "x"_a, "(coefficients (N, 4, 3), durations (N,)) at x.")
+      .def(
+          "optimize",
+          [](TrajectoryProblem& p, const LbfgsParams& lb) {
+            OptimizeOutcome o;
+            {
+              nb::gil_scoped_release release;
+              o = optimize(p, lb);
+            }
+            nb::dict out;
+            out["x"] = o.x;
+            out["iterations"] = o.iterations;
+            out["evaluations"] = o.evaluations;
+            out["status"] = o.status;
+            out["reason"] = o.reason;
+            out["terms"] = terms_dict(o.terms);
+            return out;
+          },
+          "params"_a = trajectory_lbfgs(),
+          "L-BFGS from the initial guess; dict of x, iterations, evaluations, status, reason, terms.");
 }

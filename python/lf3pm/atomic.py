@@ -51,8 +51,9 @@ def check_replaceable(path, error: type[Lf3pmError] = Lf3pmError) -> None:
     except OSError as err:
         raise error(f"{path}: cannot write the file ({err.strerror or err})") from err
     if not stat.S_ISREG(mode):
-        kind = ("a directory" if stat.S_ISDIR(mode) else "a symbolic link" if stat.S_ISLNK(mode)
-                else "not a regular file")
+        kind = (
+            "a directory" if stat.S_ISDIR(mode) else "a symbolic link" if stat.S_ISLNK(mode) else "not a regular file"
+        )
         raise error(f"{path} is {kind}: lf3pm replaces only regular files")
 
 

@@ -52,9 +52,15 @@ def fit_calibration(predictor: np.ndarray, mde: np.ndarray, *, name: str, proven
         sel = (x >= lo) & (x <= hi)
         q_lo, q_hi = np.quantile(residual[sel], INTERVAL_QUANTILES)
         bins.append({"log_x_max": float(hi), "log_lo": float(q_lo), "log_hi": float(q_hi)})
-    return {"predictor": name, "log_x": x.tolist(), "log_mde": fitted.tolist(), "interval_bins": bins,
-            "interval_quantiles": list(INTERVAL_QUANTILES), "samples": int(keep.sum()),
-            "provenance": provenance}
+    return {
+        "predictor": name,
+        "log_x": x.tolist(),
+        "log_mde": fitted.tolist(),
+        "interval_bins": bins,
+        "interval_quantiles": list(INTERVAL_QUANTILES),
+        "samples": int(keep.sum()),
+        "provenance": provenance,
+    }
 
 
 def support(calibration: dict) -> tuple[float, float]:
@@ -79,8 +85,7 @@ def predict_mde(calibration: dict, value: float) -> tuple[float, float, float] |
         return None
     lx = math.log(value)
     centre = float(np.interp(lx, calibration["log_x"], calibration["log_mde"]))
-    band = next((b for b in calibration["interval_bins"] if lx <= b["log_x_max"]),
-                calibration["interval_bins"][-1])
+    band = next((b for b in calibration["interval_bins"] if lx <= b["log_x_max"]), calibration["interval_bins"][-1])
     return math.exp(centre), math.exp(centre + band["log_lo"]), math.exp(centre + band["log_hi"])
 
 
@@ -94,13 +99,24 @@ def packaged_calibration(name: str = PACKAGED) -> dict | None:
     return json.loads(path.read_text()) if path.is_file() else None
 
 
-def calibration_applies(calibration: dict, *, sensor: str, dof: int, association: str,
-                        scan_voxel: float, noise_is_default: bool, w1: float) -> bool:
+def calibration_applies(
+    calibration: dict, *, sensor: str, dof: int, association: str, scan_voxel: float, noise_is_default: bool, w1: float
+) -> bool:
     """Whether a query was evaluated under the conditions the calibration was fitted
     in (its sensor or sensors, default noise, dof 6, k-NN association, no scan
     downsampling, its w1)."""
-    return _mismatch(calibration, sensor=sensor, dof=dof, association=association, scan_voxel=scan_voxel,
-                     noise_is_default=noise_is_default, w1=w1) is None
+    return (
+        _mismatch(
+            calibration,
+            sensor=sensor,
+            dof=dof,
+            association=association,
+            scan_voxel=scan_voxel,
+            noise_is_default=noise_is_default,
+            w1=w1,
+        )
+        is None
+    )
 
 
 def _mismatch(calibration: dict, *, sensor, dof, association, scan_voxel, noise_is_default, w1) -> str | None:
@@ -143,8 +159,10 @@ def unsupported_reason(calibration: dict, value: float) -> str | None:
         return f"{name} is infinite: the pose is degenerate"
     if not _supported(calibration, value):
         lo, hi = support(calibration)
-        return (f"{name} {value:.3g} is outside the range the fit was made on ({lo:.3g} to {hi:.3g}, "
-                f"{calibration['samples']} samples): not extrapolated")
+        return (
+            f"{name} {value:.3g} is outside the range the fit was made on ({lo:.3g} to {hi:.3g}, "
+            f"{calibration['samples']} samples): not extrapolated"
+        )
     return None
 
 
@@ -177,12 +195,21 @@ def fit_localization_error(maps, q_n, ape, *, provenance: dict) -> dict:
         centre = f["a"] + f["b"] * x[held]
         inside = (y[held] >= centre + f["log_lo"]) & (y[held] <= centre + f["log_hi"])
         rho = spearmanr(x[held], y[held]).statistic if np.ptp(x[held]) > 0 else math.nan
-        validation[name] = {"plans": int(held.sum()), "share_inside_interval": float(np.mean(inside)),
-                            "spearman_within_map": None if not math.isfinite(rho) else float(rho),
-                            "median_factor": float(math.exp(np.median(np.abs(y[held] - centre))))}
-    return {"predictor": "q_n", **fit(np.ones(len(x), bool)), "interval_quantiles": list(INTERVAL_QUANTILES),
-            "samples": int(len(x)), "q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
-            "validation": validation, "provenance": provenance}
+        validation[name] = {
+            "plans": int(held.sum()),
+            "share_inside_interval": float(np.mean(inside)),
+            "spearman_within_map": None if not math.isfinite(rho) else float(rho),
+            "median_factor": float(math.exp(np.median(np.abs(y[held] - centre)))),
+        }
+    return {
+        "predictor": "q_n",
+        **fit(np.ones(len(x), bool)),
+        "interval_quantiles": list(INTERVAL_QUANTILES),
+        "samples": int(len(x)),
+        "q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
+        "validation": validation,
+        "provenance": provenance,
+    }
 
 
 def predict_localization_error(calibration: dict, q_n: float) -> tuple[float, float, float] | None:
@@ -192,5 +219,4 @@ def predict_localization_error(calibration: dict, q_n: float) -> tuple[float, fl
     if not _supported(calibration, q_n):
         return None
     centre = calibration["a"] + calibration["b"] * math.log(q_n)
-    return (math.exp(centre), math.exp(centre + calibration["log_lo"]),
-            math.exp(centre + calibration["log_hi"]))
+    return (math.exp(centre), math.exp(centre + calibration["log_lo"]), math.exp(centre + calibration["log_hi"]))

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Literal, Optional, Tuple
+from typing import Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -96,37 +96,50 @@ class Section(BaseModel):
 class MapConfig(Section):
     """Map indexing and FAST-LIO association (C++ MapParams)."""
 
-    voxel: Optional[float] = Field(None, gt=0, description="Voxel-downsample the map first (m; none: off).")
-    cell_size: float = Field(_MAP.cell_size, ge=0, le=MAX_CELL_SIZE,
-                             description="k-NN grid voxel (m; 0: from the point spacing).")
+    voxel: float | None = Field(None, gt=0, description="Voxel-downsample the map first (m; none: off).")
+    cell_size: float = Field(
+        _MAP.cell_size, ge=0, le=MAX_CELL_SIZE, description="k-NN grid voxel (m; 0: from the point spacing)."
+    )
     knn: int = Field(_MAP.knn, ge=3, le=64, description="Neighbours per association plane (FAST-LIO NUM_MATCH_POINTS).")
-    plane_threshold: float = Field(_MAP.plane_threshold, gt=0,
-                                   description="Plane validity: every neighbour within this of the plane (m).")
-    max_neighbor_distance: float = Field(_MAP.max_neighbor_distance, gt=0,
-                                         description="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt 5).")
+    plane_threshold: float = Field(
+        _MAP.plane_threshold, gt=0, description="Plane validity: every neighbour within this of the plane (m)."
+    )
+    max_neighbor_distance: float = Field(
+        _MAP.max_neighbor_distance, gt=0, description="Farthest allowed k-th neighbour (m; FAST-LIO: sqrt 5)."
+    )
 
     def core(self, threads: int = 0) -> _core.MapParams:
         """The C++ struct."""
-        return core_struct(_core.MapParams(), cell_size=self.cell_size, knn=self.knn,
-                           plane_threshold=self.plane_threshold,
-                           max_neighbor_distance=self.max_neighbor_distance, threads=threads)
+        return core_struct(
+            _core.MapParams(),
+            cell_size=self.cell_size,
+            knn=self.knn,
+            plane_threshold=self.plane_threshold,
+            max_neighbor_distance=self.max_neighbor_distance,
+            threads=threads,
+        )
 
     def association_params(self) -> dict:
         """What a metric depends on, for result provenance."""
-        return {"knn": self.knn, "plane_threshold": self.plane_threshold,
-                "max_neighbor_distance": self.max_neighbor_distance}
+        return {
+            "knn": self.knn,
+            "plane_threshold": self.plane_threshold,
+            "max_neighbor_distance": self.max_neighbor_distance,
+        }
 
 
 class ScanConfig(Section):
     """Scan simulation (C++ ScanParams; the ranges come from the sensor)."""
 
-    noise: Optional[float] = Field(None, ge=0, le=10.0, description="Range noise sigma (m; none: the sensor's).")
+    noise: float | None = Field(None, ge=0, le=10.0, description="Range noise sigma (m; none: the sensor's).")
     seed: int = Field(_SCAN.seed, ge=0, le=MAX_SEED, description="Seed of the range noise.")
-    scan_voxel: float = Field(_SCAN.scan_voxel, ge=0, le=100.0,
-                              description="Scan downsampling voxel (m; FAST-LIO filter_size_surf; 0: off).")
+    scan_voxel: float = Field(
+        _SCAN.scan_voxel, ge=0, le=100.0, description="Scan downsampling voxel (m; FAST-LIO filter_size_surf; 0: off)."
+    )
     threads: int = Field(_SCAN.threads, ge=0, le=MAX_THREADS, description="Worker threads (0 = all cores).")
-    clearance: float = Field(0.1, ge=0, le=100, description="Free space a pose needs around the sensor: no map "
-                                                            "point closer (m).")
+    clearance: float = Field(
+        0.1, ge=0, le=100, description="Free space a pose needs around the sensor: no map point closer (m)."
+    )
 
     def noise_for(self, sensor) -> float:
         """The range noise sigma: this section's, else the sensor's."""
@@ -134,8 +147,15 @@ class ScanConfig(Section):
 
     def core(self, sensor, stream: int = 0) -> _core.ScanParams:
         """The C++ struct for ``sensor``'s ranges."""
-        return scan_params(sensor.min_range, sensor.max_range, noise=self.noise_for(sensor), seed=self.seed,
-                           stream=stream, scan_voxel=self.scan_voxel, threads=self.threads)
+        return scan_params(
+            sensor.min_range,
+            sensor.max_range,
+            noise=self.noise_for(sensor),
+            seed=self.seed,
+            stream=stream,
+            scan_voxel=self.scan_voxel,
+            threads=self.threads,
+        )
 
 
 class MetricConfig(Section):
@@ -143,8 +163,10 @@ class MetricConfig(Section):
 
     dof: Literal[3, 6] = Field(_EVAL.dof, description="6 for SE(3), 3 for (x, y, yaw).")
     association: Literal["knn", "surfel"] = Field(
-        _EVAL.association.name, description="'knn' (FAST-LIO's k-NN plane at each hit) or 'surfel' "
-                                            "(the hit map point's precomputed plane; faster).")
+        _EVAL.association.name,
+        description="'knn' (FAST-LIO's k-NN plane at each hit) or 'surfel' "
+        "(the hit map point's precomputed plane; faster).",
+    )
     w1: float = Field(_EVAL.weights.w1, gt=0, lt=1, description="Metric weight w1 (w2 = 1 - w1).")
 
     def core(self, scan: _core.ScanParams, ray_weight: float = 1.0) -> _core.EvalParams:
@@ -174,20 +196,32 @@ class SolmConfig(Section):
     space: Literal[SPACES] = Field("r2", description="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z).")
     res: float = Field(0.5, gt=0, le=MAX_RES, description="Cell size (m).")
     yaw_bins: int = Field(36, ge=1, le=3600, description="Yaw bins (se2).")
-    yaw_reuse: bool = Field(False, description="se2: one scan per yaw sector, summed per bin (faster, "
-                                               "approximate; docs/solm.md).")
-    ray_stride: int = Field(1, ge=1, le=1000, description="Cast every K-th azimuth column and scale the Gram "
-                                                         "(about K times faster, approximate; docs/solm.md).")
-    height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the local ground (m; r2, se2).")
-    bounds: Optional[Tuple[float, float, float, float]] = Field(
-        None, description="XMIN YMIN XMAX YMAX (m; none: the map's extent).")
+    yaw_reuse: bool = Field(
+        False, description="se2: one scan per yaw sector, summed per bin (faster, approximate; docs/solm.md)."
+    )
+    ray_stride: int = Field(
+        1,
+        ge=1,
+        le=1000,
+        description="Cast every K-th azimuth column and scale the Gram "
+        "(about K times faster, approximate; docs/solm.md).",
+    )
+    height: float = Field(
+        DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the local ground (m; r2, se2)."
+    )
+    bounds: tuple[float, float, float, float] | None = Field(
+        None, description="XMIN YMIN XMAX YMAX (m; none: the map's extent)."
+    )
     robot_radius: float = Field(0.3, ge=0, le=100, description="Robot radius for the obstacle mask (m).")
-    floor_clearance: float = Field(0.2, ge=0, le=100, description="Height above the ground from which a point "
-                                                                  "blocks a ground robot's cell (m).")
-    max_cells: int = Field(10_000_000, ge=1, le=MAX_CELLS_CEILING,
-                           description="Refuse a grid of more poses than this.")
-    crop_above: int = Field(20_000_000, ge=1, description="Build maps of more points than this tile by tile, "
-                                                          "each tile on its crop (docs/scale.md).")
+    floor_clearance: float = Field(
+        0.2, ge=0, le=100, description="Height above the ground from which a point blocks a ground robot's cell (m)."
+    )
+    max_cells: int = Field(10_000_000, ge=1, le=MAX_CELLS_CEILING, description="Refuse a grid of more poses than this.")
+    crop_above: int = Field(
+        20_000_000,
+        ge=1,
+        description="Build maps of more points than this tile by tile, each tile on its crop (docs/scale.md).",
+    )
 
 
 class RobotConfig(Section):
@@ -208,20 +242,30 @@ class RobotConfig(Section):
 
     kind: Literal[ROBOT_KINDS] = Field("omni", description="omni, diff (differential drive) or car.")
     vmax_lon: float = Field(_LIMITS.vmax_lon, ge=MIN_LIMIT, le=MAX_LIMIT, description="Longitudinal speed limit (m/s).")
-    vmax_lat: float = Field(_LIMITS.vmax_lat, ge=MIN_LIMIT, le=MAX_LIMIT,
-                            description="Lateral speed limit (m/s; omni).")
+    vmax_lat: float = Field(
+        _LIMITS.vmax_lat, ge=MIN_LIMIT, le=MAX_LIMIT, description="Lateral speed limit (m/s; omni)."
+    )
     wmax: float = Field(_LIMITS.wmax, ge=MIN_LIMIT, le=MAX_LIMIT, description="Yaw rate limit (rad/s).")
-    amax_lon: float = Field(_LIMITS.amax_lon, ge=MIN_LIMIT, le=MAX_LIMIT,
-                            description="Longitudinal (tangential) acceleration limit (m/s^2).")
-    amax_lat: float = Field(_LIMITS.amax_lat, ge=MIN_LIMIT, le=MAX_LIMIT,
-                            description="Lateral (centripetal) acceleration limit (m/s^2).")
-    alpha_max: float = Field(_LIMITS.alpha_max, ge=MIN_LIMIT, le=MAX_LIMIT,
-                             description="Yaw acceleration limit (rad/s^2).")
+    amax_lon: float = Field(
+        _LIMITS.amax_lon,
+        ge=MIN_LIMIT,
+        le=MAX_LIMIT,
+        description="Longitudinal (tangential) acceleration limit (m/s^2).",
+    )
+    amax_lat: float = Field(
+        _LIMITS.amax_lat, ge=MIN_LIMIT, le=MAX_LIMIT, description="Lateral (centripetal) acceleration limit (m/s^2)."
+    )
+    alpha_max: float = Field(
+        _LIMITS.alpha_max, ge=MIN_LIMIT, le=MAX_LIMIT, description="Yaw acceleration limit (rad/s^2)."
+    )
     min_turn_radius: float = Field(_LIMITS.min_turn_radius, ge=0, description="Minimum turning radius (m; car).")
     r_safe: float = Field(_LIMITS.r_safe, ge=0, description="Clearance beyond the SOLM's robot radius (m).")
-    vmax_norm: Optional[float] = Field(None, gt=0, allow_inf_nan=True,
-                                       description="Speed-norm limit (m/s; omni; inf: none; default: the larger "
-                                                   "of vmax_lon and vmax_lat).")
+    vmax_norm: float | None = Field(
+        None,
+        gt=0,
+        allow_inf_nan=True,
+        description="Speed-norm limit (m/s; omni; inf: none; default: the larger of vmax_lon and vmax_lat).",
+    )
 
     @model_validator(mode="after")
     def _kind_limits(self):
@@ -255,35 +299,48 @@ class GuidanceConfig(Section):
     """
 
     metric: Literal[COST_CHANNELS] = Field("q_n", description="SOLM channel guiding the plan (none: shortest path).")
-    weight: float = Field(3.0, ge=0, le=1e6, description="lambda: an edge through cells of cost c costs "
-                                                         "length (1 + lambda c); a median cell has c = 1.")
+    weight: float = Field(
+        3.0,
+        ge=0,
+        le=1e6,
+        description="lambda: an edge through cells of cost c costs length (1 + lambda c); a median cell has c = 1.",
+    )
     power: float = Field(1.0, gt=0, le=10, description="Exponent applied to the channel (over its median).")
-    turn_radius: float = Field(2.0, ge=0, le=100, description="The front end prices a turn of the sensor as the arc a "
-                                                             "point this far from its axis travels (m per rad; "
-                                                             "docs/lio.md).")
+    turn_radius: float = Field(
+        2.0,
+        ge=0,
+        le=100,
+        description="The front end prices a turn of the sensor as the arc a "
+        "point this far from its axis travels (m per rad; "
+        "docs/lio.md).",
+    )
 
 
 class ReplayConfig(Section):
     """Replays of a trajectory through a state estimator."""
 
     method: Literal[REPLAY_METHODS] = Field(
-        "localization", description="localization (prior map), lio or odometry (KISS-ICP).")
+        "localization", description="localization (prior map), lio or odometry (KISS-ICP)."
+    )
     seeds: int = Field(1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1.")
     height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the smoothed ground (m).")
     rate: float = Field(10.0, gt=0, le=1000, description="Scans per second.")
     imu_rate: float = Field(200.0, gt=0, le=100_000, description="The lio method's IMU samples per second.")
     imu_noise: bool = Field(True, description="The lio method's IMU noise (false: exact samples).")
     odometry: Literal[LIO_ODOMETRIES] = Field(
-        "auto", description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio), liosam "
-                            "(LIO-SAM, from evalio; spinning sensors only) or auto (dlio for a spinning "
-                            "sensor, genz for a non-repetitive one: docs/lio.md).")
+        "auto",
+        description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio), liosam "
+        "(LIO-SAM, from evalio; spinning sensors only) or auto (dlio for a spinning "
+        "sensor, genz for a non-repetitive one: docs/lio.md).",
+    )
 
 
 class KissIcpConfig(Section):
     """The odometry replay's KISS-ICP."""
 
-    voxel_size: float = Field(1.0, gt=0, le=100, description="Local map voxel (m; KISS-ICP's own choice for "
-                                                             "outdoor 100 m LiDARs).")
+    voxel_size: float = Field(
+        1.0, gt=0, le=100, description="Local map voxel (m; KISS-ICP's own choice for outdoor 100 m LiDARs)."
+    )
     min_points: int = Field(100, ge=1, description="Scans with fewer hits are not given to KISS-ICP.")
 
 
@@ -294,8 +351,7 @@ def _seed(what: str):
 class Table1Config(Section):
     """`lf3pm experiment table1` (the disturbances: the mde section's)."""
 
-    poses: int = Field(8, ge=1, le=100_000, description="Poses per scene (reference position at 4 yaws, "
-                                                        "then random).")
+    poses: int = Field(8, ge=1, le=100_000, description="Poses per scene (reference position at 4 yaws, then random).")
     trials: int = Field(10, ge=1, le=100_000, description="MDE trials per pose.")
     seed: int = _seed("the scenes, poses, noise and disturbances")
 
@@ -315,19 +371,24 @@ class BenefitConfig(Section):
     seeds: int = Field(3, ge=1, le=10_000, description="Replay seeds per plan and method.")
     workers: int = Field(2, ge=1, le=MAX_THREADS, description="Replay processes.")
     pair_seed: int = _seed("the start/goal pairs")
-    lio: Literal["all", "default"] = Field("all", description="Plans the LIO replays too: all, or default (the "
-                                                              "default's and the unguided one; a shorter run).")
+    lio: Literal["all", "default"] = Field(
+        "all",
+        description="Plans the LIO replays too: all, or default (the default's and the unguided one; a shorter run).",
+    )
     odometry: Literal[LIO_ODOMETRIES] = Field(
-        "auto", description="The LIO replays' odometry, as replay.odometry (liosam: on the maps of a spinning "
-                            "sensor, auto's choice on the others); each odometry keeps its own replays.")
+        "auto",
+        description="The LIO replays' odometry, as replay.odometry (liosam: on the maps of a spinning "
+        "sensor, auto's choice on the others); each odometry keeps its own replays.",
+    )
 
 
 class GobiConfig(Section):
     """`lf3pm experiment gobi` (the rest of its setup: experiments/gobi.py)."""
 
     seed: int = _seed("the scene, the noise and the disturbances")
-    seeds: Optional[int] = Field(None, ge=1, le=10_000, description="Replay seeds per plan and method "
-                                                                    "(none: the setup's).")
+    seeds: int | None = Field(
+        None, ge=1, le=10_000, description="Replay seeds per plan and method (none: the setup's)."
+    )
 
 
 class SceneConfig(Section):
@@ -365,12 +426,27 @@ def core_struct(struct, **fields):
     return struct
 
 
-def scan_params(min_range: float, max_range: float, *, noise: float = 0.0, seed: int = 0, stream: int = 0,
-                scan_voxel: float = 0.0, threads: int = 0) -> _core.ScanParams:
+def scan_params(
+    min_range: float,
+    max_range: float,
+    *,
+    noise: float = 0.0,
+    seed: int = 0,
+    stream: int = 0,
+    scan_voxel: float = 0.0,
+    threads: int = 0,
+) -> _core.ScanParams:
     """The core's ScanParams (values as given: ScanConfig validates what users set)."""
-    return core_struct(_core.ScanParams(), min_range=float(min_range), max_range=float(max_range),
-                       noise_sigma=float(noise), seed=int(seed), stream=int(stream), scan_voxel=float(scan_voxel),
-                       threads=int(threads))
+    return core_struct(
+        _core.ScanParams(),
+        min_range=float(min_range),
+        max_range=float(max_range),
+        noise_sigma=float(noise),
+        seed=int(seed),
+        stream=int(stream),
+        scan_voxel=float(scan_voxel),
+        threads=int(threads),
+    )
 
 
 def validated(section: type[Section], where: str = "", flags: dict | None = None, **values) -> Section:
@@ -395,13 +471,13 @@ def describe(err: ValidationError, where: str = "", flags: dict | None = None) -
     message = first["msg"]
     if first["type"] == "invalid_key":  # a YAML key such as 1 or 2.5
         return f"{name + ': ' if name else ''}key {excerpt(first['input'])} is not a parameter name"
-    if first["type"] == "value_error":   # a check across fields (a model validator's)
+    if first["type"] == "value_error":  # a check across fields (a model validator's)
         text = message.removeprefix("Value error, ")
         return f"{name}: {text}" if name else text
     if first["type"] == "finite_number":
         message = "must be finite"
     elif message.startswith("Input should be "):
-        message = "must be " + message[len("Input should be "):]
+        message = "must be " + message[len("Input should be ") :]
     elif first["type"] == "extra_forbidden":
         message = "is not a parameter lf3pm knows"
     value = first.get("input")
@@ -415,8 +491,7 @@ def _parameter(loc) -> str:
     return ".".join(str(part) for part in loc if not isinstance(part, int))
 
 
-def load_config(path: str | Path | None = None, overrides: dict | None = None,
-                flags: dict | None = None) -> Config:
+def load_config(path: str | Path | None = None, overrides: dict | None = None, flags: dict | None = None) -> Config:
     """The configuration of ``path`` (YAML; None: the defaults), then ``overrides``.
 
     ``overrides``: {"section.name": value} (None values are skipped: an option not given);

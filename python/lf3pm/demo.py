@@ -25,18 +25,24 @@ import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.experiments.data import shared_data_dir
-from lf3pm.metric import evaluate
 from lf3pm.map import load_map
+from lf3pm.metric import evaluate
 from lf3pm.sensors import get_sensor
 
 #: (map file, sensor, poses x y z yaw). Both maps are single scans in their
 #: sensor frame. The room scan holds a cluster of returns within 0.2 m of its
 #: origin (the scanner's own mount), so its poses keep clear of it.
 DEMO_CASES = [
-    ("indoor_pcl_room_scan1.pcd", "vlp16",
-     [(1.0, 0.5, 0.0, 0.0), (2.0, 1.0, 0.0, 0.0), (-1.5, 1.5, 0.0, 1.57), (4.0, 0.5, 0.0, 3.14)]),
-    ("outdoor_urban64_2021-10-26-16-21-29-468.pcd", "os1-64",
-     [(0.0, 0.0, 0.0, 0.0), (8.0, 0.0, 0.0, 0.0), (-10.0, 0.5, 0.0, 0.0)]),
+    (
+        "indoor_pcl_room_scan1.pcd",
+        "vlp16",
+        [(1.0, 0.5, 0.0, 0.0), (2.0, 1.0, 0.0, 0.0), (-1.5, 1.5, 0.0, 1.57), (4.0, 0.5, 0.0, 3.14)],
+    ),
+    (
+        "outdoor_urban64_2021-10-26-16-21-29-468.pcd",
+        "os1-64",
+        [(0.0, 0.0, 0.0, 0.0), (8.0, 0.0, 0.0, 0.0), (-10.0, 0.5, 0.0, 0.0)],
+    ),
 ]
 
 
@@ -45,6 +51,7 @@ def plot_scan(path: Path, world, result, title: str) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     from lf3pm.solm.figures import save_figure
 
     pts = world.points
@@ -58,9 +65,11 @@ def plot_scan(path: Path, world, result, title: str) -> None:
     fig.colorbar(sc, ax=ax, label="hit z (m)", shrink=0.8)
     pose = np.asarray(result.pose)
     ax.plot(pose[0, 3], pose[1, 3], "r*", ms=14)
-    handles = [Line2D([], [], ls="", marker="o", ms=4, color="0.6", label="map"),
-               Line2D([], [], ls="", marker="o", ms=4, color="tab:green", label="simulated hits"),
-               Line2D([], [], ls="", marker="*", ms=10, color="r", label="sensor")]
+    handles = [
+        Line2D([], [], ls="", marker="o", ms=4, color="0.6", label="map"),
+        Line2D([], [], ls="", marker="o", ms=4, color="tab:green", label="simulated hits"),
+        Line2D([], [], ls="", marker="*", ms=10, color="r", label="sensor"),
+    ]
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -90,41 +99,65 @@ def main() -> None:
             ms = (time.perf_counter() - t) * 1e3
             if i == 0:
                 png = args.out / f"scan_{Path(filename).stem}.png"
-                plot_scan(png, world, res, f"{filename}: {sensor.name} scan at {pose}, "
-                                           f"q_n = {res.q_n:.4g}, m = {res.m}")
+                plot_scan(
+                    png, world, res, f"{filename}: {sensor.name} scan at {pose}, q_n = {res.q_n:.4g}, m = {res.m}"
+                )
             rows.append((filename, sensor.name, pose, res, ms))
             records.append({"map": filename, "pose": list(pose), "ms": ms, **res.to_dict()})
-    header = ("| map | sensor | pose x y z yaw | m | sigma1 | q_min | q_n | q_max | "
-              "cond | ms |\n|---|---|---|---|---|---|---|---|---|---|")
+    header = (
+        "| map | sensor | pose x y z yaw | m | sigma1 | q_min | q_n | q_max | "
+        "cond | ms |\n|---|---|---|---|---|---|---|---|---|---|"
+    )
     lines = [header] + [
         f"| {f} | {s} | {' '.join(f'{v:g}' for v in p)} | {r.m} | {r.sigma1:.4g} | {r.q_min:.4g} | "
         f"{r.q_n:.4g} | {r.q_max:.4g} | {r.condition_number:.4g} | {ms:.1f} |"
-        for f, s, p, r, ms in rows]
+        for f, s, p, r, ms in rows
+    ]
     table = "\n".join(lines)
     print(table)
     report = args.out / "report.md"
     with atomic_write(report) as fp:
-        fp.write(("# lf3pm demo\n\n## 1. Perception-aware planning on a reduced Gobi scene\n\n"
-                  + gobi_report.split("\n", 1)[1]
-                  + "\nFigures: gobi/trajectories.png (plans over the SOLM), gobi/along.png (MDE, "
-                    "localization and LIO error along them), gobi/solm_q_n.png.\n\n"
-                    "## 2. The LF-3PM metric on real maps\n\n"
-                    "Noise: each sensor's range noise, seed 0; association: FAST-LIO k-NN (k = 5); "
-                    "w1 = w2 = 0.5; no scan downsampling.\n\n" + table + "\n").encode())
+        fp.write(
+            (
+                "# lf3pm demo\n\n## 1. Perception-aware planning on a reduced Gobi scene\n\n"
+                + gobi_report.split("\n", 1)[1]
+                + "\nFigures: gobi/trajectories.png (plans over the SOLM), gobi/along.png (MDE, "
+                "localization and LIO error along them), gobi/solm_q_n.png.\n\n"
+                "## 2. The LF-3PM metric on real maps\n\n"
+                "Noise: each sensor's range noise, seed 0; association: FAST-LIO k-NN (k = 5); "
+                "w1 = w2 = 0.5; no scan downsampling.\n\n" + table + "\n"
+            ).encode()
+        )
     with atomic_write(args.out / "report.json") as fp:
         fp.write(json.dumps(records, indent=1).encode())
-    print(f"wrote {report}, {args.out / 'report.json'}, figures in {args.out}/ and {args.out / 'gobi'}/ "
-          f"in {time.perf_counter() - started:.0f} s")
+    print(
+        f"wrote {report}, {args.out / 'report.json'}, figures in {args.out}/ and {args.out / 'gobi'}/ "
+        f"in {time.perf_counter() - started:.0f} s"
+    )
     print(f"look at them in 3D (docs/view.md): {view_command(args.out / 'gobi')}")
 
 
 def view_command(gobi: Path) -> str:
     """The `lf3pm view` command line of the demo's Gobi outputs in ``gobi``, runnable as
     printed from the folder the demo ran in (:func:`cli_command`)."""
-    return cli_command() + " " + shlex.join(
-        ["view", str(gobi / "map.npy"), "--solm", str(gobi / "solm.zarr"),
-         "--plan", str(gobi / "trajectories/default.csv"), "--plan", str(gobi / "trajectories/none.csv"),
-         "--replay", str(gobi / "replays/default_localization_0.json")])
+    return (
+        cli_command()
+        + " "
+        + shlex.join(
+            [
+                "view",
+                str(gobi / "map.npy"),
+                "--solm",
+                str(gobi / "solm.zarr"),
+                "--plan",
+                str(gobi / "trajectories/default.csv"),
+                "--plan",
+                str(gobi / "trajectories/none.csv"),
+                "--replay",
+                str(gobi / "replays/default_localization_0.json"),
+            ]
+        )
+    )
 
 
 def cli_command() -> str:

@@ -36,8 +36,9 @@ class GridField:
         if not np.isfinite(values).all():
             raise Lf3pmError("grid field values must be finite (fill NaN cells first)")
         if not all(math.isfinite(v) for v in (self.x0, self.y0, self.res)) or self.res <= 0:
-            raise Lf3pmError(f"grid field geometry must be finite with res > 0, got x0={self.x0}, "
-                             f"y0={self.y0}, res={self.res}")
+            raise Lf3pmError(
+                f"grid field geometry must be finite with res > 0, got x0={self.x0}, y0={self.y0}, res={self.res}"
+            )
         from lf3pm import _core
 
         object.__setattr__(self, "values", values)
@@ -84,4 +85,3 @@ def bilinear(values, x, y, x0: float, y0: float, res: float, layer=None):
     ddx = ((1 - ty) * (v01 - v00) + ty * (v11 - v10)) / res * inx
     ddy = ((1 - tx) * (v10 - v00) + tx * (v11 - v01)) / res * iny
     return value, ddx, ddy
-

@@ -69,8 +69,10 @@ def read_text_file(path, what: str, error: type[Lf3pmError] = Lf3pmError, limit:
         except OSError as err:
             raise error(f"{path}: cannot read the {what} ({err.strerror or err})") from None
     if len(data) > limit:
-        raise error(f"{path}: the {what} is larger than {limit:,} bytes, the most lf3pm reads: "
-                    f"a {what} is a short YAML file (config/*.yaml)")
+        raise error(
+            f"{path}: the {what} is larger than {limit:,} bytes, the most lf3pm reads: "
+            f"a {what} is a short YAML file (config/*.yaml)"
+        )
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
@@ -156,8 +158,10 @@ def _check_expanded_size(root) -> None:
             open_nodes.discard(key)
             sizes[key] = 1 + sum(sizes[id(child)] for child in _children(node))
             if sizes[key] > MAX_YAML_NODES:
-                raise _Refused(f"YAML whose aliases expand to more than {MAX_YAML_NODES:,} values, the most "
-                               "lf3pm reads: write the values out without aliases")
+                raise _Refused(
+                    f"YAML whose aliases expand to more than {MAX_YAML_NODES:,} values, the most "
+                    "lf3pm reads: write the values out without aliases"
+                )
         elif key not in sizes:
             if key in open_nodes:
                 raise _Refused("YAML with an alias inside the node it names (a cycle): remove the alias")

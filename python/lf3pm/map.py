@@ -56,26 +56,38 @@ class Map:
         lower, upper = self.bounds
         xy = matrix[:2, 3]
         if np.any(xy < lower[:2]) or np.any(xy > upper[:2]):
-            raise PoseError(f"pose x, y = {xy.tolist()} lies outside the map's extent "
-                            f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]")
+            raise PoseError(
+                f"pose x, y = {xy.tolist()} lies outside the map's extent "
+                f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]"
+            )
         if clearance > 0:
             _, dist = self.index.nearest(np.ascontiguousarray(matrix[None, :3, 3]), 1, clearance)
             if np.isfinite(dist[0, 0]):
-                raise PoseError(f"pose {matrix[:3, 3].tolist()} lies inside an obstacle: a map point "
-                                f"is {dist[0, 0]:.3f} m from the sensor (clearance {clearance} m)")
+                raise PoseError(
+                    f"pose {matrix[:3, 3].tolist()} lies inside an obstacle: a map point "
+                    f"is {dist[0, 0]:.3f} m from the sensor (clearance {clearance} m)"
+                )
 
     @property
-    def frame(self) -> "_core.MapFrame":
+    def frame(self) -> _core.MapFrame:
         """The frame of the map's index (in which its crops are indexed)."""
         return self.index.frame
 
-    def crop(self, bounds, margin: float, threads: int = DEFAULTS.scan.threads) -> "Map":
+    def crop(self, bounds, margin: float, threads: int = DEFAULTS.scan.threads) -> Map:
         """The points within ``margin`` m (in x, y) of ``bounds`` (xmin, ymin, xmax,
         ymax), indexed in this map's frame: a point whose k nearest neighbours all lie
         in the crop has this map's plane and disc there, and a ray that stays within
         the crop hits what it hits here (see :func:`crop_points`)."""
-        return crop_points(self.points, self.frame, self.association_params, bounds, margin,
-                           source=self.source, sha256=self.sha256, threads=threads)
+        return crop_points(
+            self.points,
+            self.frame,
+            self.association_params,
+            bounds,
+            margin,
+            source=self.source,
+            sha256=self.sha256,
+            threads=threads,
+        )
 
     def describe(self) -> dict:
         lower, upper = self.bounds
@@ -91,8 +103,17 @@ class Map:
         }
 
 
-def crop_points(points: np.ndarray, frame: "_core.MapFrame", association_params: dict, bounds, margin: float, *,
-                source: str, sha256: str, threads: int = DEFAULTS.scan.threads) -> Map:
+def crop_points(
+    points: np.ndarray,
+    frame: _core.MapFrame,
+    association_params: dict,
+    bounds,
+    margin: float,
+    *,
+    source: str,
+    sha256: str,
+    threads: int = DEFAULTS.scan.threads,
+) -> Map:
     """The crop (bounds grown by ``margin`` in x and y, every z) of a map's ``points``
     (in its index order), indexed in the map's ``frame`` with its association
     parameters. The crop keeps the points' order, and its grids share the map's
@@ -100,8 +121,12 @@ def crop_points(points: np.ndarray, frame: "_core.MapFrame", association_params:
     result carries the whole map's source and hash: a SOLM tile built on it belongs
     to the whole map's store."""
     xmin, ymin, xmax, ymax = bounds
-    keep = ((points[:, 0] >= xmin - margin) & (points[:, 0] <= xmax + margin) &
-            (points[:, 1] >= ymin - margin) & (points[:, 1] <= ymax + margin))
+    keep = (
+        (points[:, 0] >= xmin - margin)
+        & (points[:, 0] <= xmax + margin)
+        & (points[:, 1] >= ymin - margin)
+        & (points[:, 1] <= ymax + margin)
+    )
     return _indexed(np.ascontiguousarray(points[keep]), frame, association_params, source, sha256, threads)
 
 
@@ -117,16 +142,23 @@ def _indexed(points, frame, association_params: dict, source: str, sha256: str, 
     return Map(index=index, source=source, sha256=sha256, association_params=dict(association_params))
 
 
-def as_map(map, threads: int = DEFAULTS.scan.threads) -> "Map":
+def as_map(map, threads: int = DEFAULTS.scan.threads) -> Map:
     """``map`` itself when it is a Map, else the map :func:`load_map` reads from it (a
     file, or an N x 3 array): what every entry point taking "a Map or a map file" does."""
     return map if isinstance(map, Map) else load_map(map, threads=threads)
 
 
-def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
-             knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
-             max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads,
-             progress: Callable[[str], None] | None = None) -> Map:
+def load_map(
+    source,
+    *,
+    voxel: float | None = None,
+    cell_size: float = _DEFAULT.cell_size,
+    knn: int = _DEFAULT.knn,
+    plane_threshold: float = _DEFAULT.plane_threshold,
+    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance,
+    threads: int = DEFAULTS.scan.threads,
+    progress: Callable[[str], None] | None = None,
+) -> Map:
     """Reads a map file (or takes an N x 3 array) and indexes it.
 
     ``voxel`` downsamples the map first (one centroid per voxel); ``cell_size``
@@ -135,8 +167,16 @@ def load_map(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.
     ``progress``, if given, is called with what is being done as each phase starts
     (reading the file, indexing its points): a large map takes tens of seconds.
     """
-    points = load_map_points(source, voxel=voxel, cell_size=cell_size, knn=knn, plane_threshold=plane_threshold,
-                             max_neighbor_distance=max_neighbor_distance, threads=threads, progress=progress)
+    points = load_map_points(
+        source,
+        voxel=voxel,
+        cell_size=cell_size,
+        knn=knn,
+        plane_threshold=plane_threshold,
+        max_neighbor_distance=max_neighbor_distance,
+        threads=threads,
+        progress=progress,
+    )
     if progress is not None:
         progress(f"indexing {points.size:,} points of {points.source}")
     return points.indexed(threads)
@@ -168,14 +208,23 @@ class MapPoints:
         """The whole map indexed (in its frame: the index :func:`load_map` builds)."""
         whole = _indexed(self.points, self.frame, self.association_params, self.source, self.sha256, threads)
         if whole.index.duplicates_removed:
-            warnings.warn(f"{self.source}: {whole.index.duplicates_removed} duplicate points dropped", UserWarning,
-                          stacklevel=3)
+            warnings.warn(
+                f"{self.source}: {whole.index.duplicates_removed} duplicate points dropped", UserWarning, stacklevel=3
+            )
         return whole
 
     def crop(self, bounds, margin: float, threads: int = DEFAULTS.scan.threads) -> Map:
         """As :meth:`Map.crop`."""
-        return crop_points(self.points, self.frame, self.association_params, bounds, margin,
-                           source=self.source, sha256=self.sha256, threads=threads)
+        return crop_points(
+            self.points,
+            self.frame,
+            self.association_params,
+            bounds,
+            margin,
+            source=self.source,
+            sha256=self.sha256,
+            threads=threads,
+        )
 
 
 def _sha256(points: np.ndarray) -> str:
@@ -183,14 +232,28 @@ def _sha256(points: np.ndarray) -> str:
     return hashlib.sha256(memoryview(points).cast("B")).hexdigest()
 
 
-def load_map_points(source, *, voxel: float | None = None, cell_size: float = _DEFAULT.cell_size,
-                    knn: int = _DEFAULT.knn, plane_threshold: float = _DEFAULT.plane_threshold,
-                    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance, threads: int = DEFAULTS.scan.threads,
-                    progress: Callable[[str], None] | None = None) -> MapPoints:
+def load_map_points(
+    source,
+    *,
+    voxel: float | None = None,
+    cell_size: float = _DEFAULT.cell_size,
+    knn: int = _DEFAULT.knn,
+    plane_threshold: float = _DEFAULT.plane_threshold,
+    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance,
+    threads: int = DEFAULTS.scan.threads,
+    progress: Callable[[str], None] | None = None,
+) -> MapPoints:
     """Reads a map as :func:`load_map` does, without indexing it whole (:class:`MapPoints`);
     its hash is load_map's, so a SOLM store accepts either."""
-    config = validated(MapConfig, "map", voxel=voxel, cell_size=cell_size, knn=knn,
-                       plane_threshold=plane_threshold, max_neighbor_distance=max_neighbor_distance)
+    config = validated(
+        MapConfig,
+        "map",
+        voxel=voxel,
+        cell_size=cell_size,
+        knn=knn,
+        plane_threshold=plane_threshold,
+        max_neighbor_distance=max_neighbor_distance,
+    )
     threads = check_threads(threads)
     if progress is not None:
         progress(f"reading {os.fspath(source) if isinstance(source, (str, os.PathLike)) else 'the map array'}")
@@ -213,5 +276,6 @@ def load_map_points(source, *, voxel: float | None = None, cell_size: float = _D
         frame = _core.map_frame(points, config.core(threads))
     except ValueError as err:
         raise MapError(f"{name}: {err}") from None
-    return MapPoints(points=points, frame=frame, source=name, sha256=_sha256(points),
-                     association_params=config.association_params())
+    return MapPoints(
+        points=points, frame=frame, source=name, sha256=_sha256(points), association_params=config.association_params()
+    )

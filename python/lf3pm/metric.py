@@ -6,19 +6,34 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
-
 from lf3pm import _core
-from lf3pm.calibration import (LOCALIZATION_PACKAGED, calibration_applies, packaged_calibration, predict_mde,
-                               predict_localization_error, withheld_reason)
+from lf3pm.calibration import (
+    LOCALIZATION_PACKAGED,
+    calibration_applies,
+    packaged_calibration,
+    predict_localization_error,
+    predict_mde,
+    withheld_reason,
+)
 from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, scan_params, validated
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, as_sensor
 
-
 #: Metric fields, in the order tables print them.
-METRIC_FIELDS = ("sigma1", "xi", "q_min", "q_n", "q_max", "zhang", "condition_number", "cov_trace",
-                 "step_norm", "residual_norm", "scaled_cov_trace")
+METRIC_FIELDS = (
+    "sigma1",
+    "xi",
+    "q_min",
+    "q_n",
+    "q_max",
+    "zhang",
+    "condition_number",
+    "cov_trace",
+    "step_norm",
+    "residual_norm",
+    "scaled_cov_trace",
+)
 
 
 @dataclass(frozen=True)
@@ -69,20 +84,38 @@ def _json_number(value):
     return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
-def eval_params(min_range: float, max_range: float, *, dof: int = DEFAULTS.metric.dof,
-                association: str = DEFAULTS.metric.association, w1: float = DEFAULTS.metric.w1, ray_weight: float = 1.0,
-                **scan) -> _core.EvalParams:
+def eval_params(
+    min_range: float,
+    max_range: float,
+    *,
+    dof: int = DEFAULTS.metric.dof,
+    association: str = DEFAULTS.metric.association,
+    w1: float = DEFAULTS.metric.w1,
+    ray_weight: float = 1.0,
+    **scan,
+) -> _core.EvalParams:
     """The core's EvalParams (values as given: lf3pm.config validates what users set);
     ``scan``: :func:`lf3pm.scan.scan_simulator.scan_params`'s keywords."""
     return MetricConfig.model_construct(dof=dof, association=association, w1=w1).core(
-        scan_params(min_range, max_range, **scan), ray_weight)
+        scan_params(min_range, max_range, **scan), ray_weight
+    )
 
 
-def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, seed: int = DEFAULTS.scan.seed,
-             noise: float | None = DEFAULTS.scan.noise, dof: int = DEFAULTS.metric.dof, w1: float = DEFAULTS.metric.w1,
-             scan_voxel: float = DEFAULTS.scan.scan_voxel, association: str = DEFAULTS.metric.association,
-             threads: int = DEFAULTS.scan.threads, observations: bool = False,
-             clearance: float = DEFAULTS.scan.clearance) -> Evaluation:
+def evaluate(
+    map: Map | str,
+    pose,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    *,
+    seed: int = DEFAULTS.scan.seed,
+    noise: float | None = DEFAULTS.scan.noise,
+    dof: int = DEFAULTS.metric.dof,
+    w1: float = DEFAULTS.metric.w1,
+    scan_voxel: float = DEFAULTS.scan.scan_voxel,
+    association: str = DEFAULTS.metric.association,
+    threads: int = DEFAULTS.scan.threads,
+    observations: bool = False,
+    clearance: float = DEFAULTS.scan.clearance,
+) -> Evaluation:
     """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric.
 
     pose: (x, y, z, yaw), (x, y, z, qw, qx, qy, qz) or a 4 x 4 sensor-to-world
@@ -119,25 +152,50 @@ def evaluate(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, se
     else:
         result = _core.evaluate(map.index, matrix, sensor.directions, params)
     values = result.metric.as_dict()
-    conditions = {"sensor": sensor.name, "dof": metric.dof, "association": metric.association,
-                  "scan_voxel": scan.scan_voxel, "noise_is_default": scan.noise is None, "w1": metric.w1}
+    conditions = {
+        "sensor": sensor.name,
+        "dof": metric.dof,
+        "association": metric.association,
+        "scan_voxel": scan.scan_voxel,
+        "noise_is_default": scan.noise is None,
+        "w1": metric.w1,
+    }
     calibration = packaged_calibration()
     mde_value = values[calibration["predictor"]] if calibration is not None else math.nan
     prediction = None
     if calibration is not None and calibration_applies(calibration, **conditions):
         prediction = predict_mde(calibration, mde_value)
     fit = packaged_calibration(LOCALIZATION_PACKAGED)
-    error = (predict_localization_error(fit, values["q_n"])
-             if fit is not None and calibration_applies(fit, **conditions) else None)
-    recorded = {"seed": scan.seed, "noise": scan.noise_for(sensor), "dof": metric.dof, "w1": metric.w1,
-                "scan_voxel": scan.scan_voxel, "association": metric.association, "map_sha256": map.sha256,
-                **map.association_params}
-    return Evaluation(**{k: values[k] for k in METRIC_FIELDS}, m=values["m"], n=values["n"],
-                      degenerate=values["degenerate"], rays=result.rays, hits=result.hits,
-                      predicted_mde=prediction[0] if prediction else None,
-                      predicted_mde_interval=list(prediction[1:]) if prediction else None,
-                      predicted_localization_error_m=error[0] if error else None,
-                      predicted_localization_error_interval_m=list(error[1:]) if error else None,
-                      predicted_mde_withheld=withheld_reason(calibration, mde_value, **conditions),
-                      predicted_localization_error_withheld=withheld_reason(fit, values["q_n"], **conditions),
-                      pose=matrix.tolist(), sensor=sensor.name, params=recorded, observations=obs)
+    error = (
+        predict_localization_error(fit, values["q_n"])
+        if fit is not None and calibration_applies(fit, **conditions)
+        else None
+    )
+    recorded = {
+        "seed": scan.seed,
+        "noise": scan.noise_for(sensor),
+        "dof": metric.dof,
+        "w1": metric.w1,
+        "scan_voxel": scan.scan_voxel,
+        "association": metric.association,
+        "map_sha256": map.sha256,
+        **map.association_params,
+    }
+    return Evaluation(
+        **{k: values[k] for k in METRIC_FIELDS},
+        m=values["m"],
+        n=values["n"],
+        degenerate=values["degenerate"],
+        rays=result.rays,
+        hits=result.hits,
+        predicted_mde=prediction[0] if prediction else None,
+        predicted_mde_interval=list(prediction[1:]) if prediction else None,
+        predicted_localization_error_m=error[0] if error else None,
+        predicted_localization_error_interval_m=list(error[1:]) if error else None,
+        predicted_mde_withheld=withheld_reason(calibration, mde_value, **conditions),
+        predicted_localization_error_withheld=withheld_reason(fit, values["q_n"], **conditions),
+        pose=matrix.tolist(),
+        sensor=sensor.name,
+        params=recorded,
+        observations=obs,
+    )

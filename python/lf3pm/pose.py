@@ -33,8 +33,7 @@ def pose_matrix(pose) -> np.ndarray:
         matrix[:3, :3] = quaternion_to_rotation(q / norm)
         matrix[:3, 3] = arr[:3]
     else:
-        raise PoseError(
-            f"a pose is x y z yaw, x y z qw qx qy qz or a 4x4 matrix, got shape {arr.shape}")
+        raise PoseError(f"a pose is x y z yaw, x y z qw qx qy qz or a 4x4 matrix, got shape {arr.shape}")
     if not np.all(np.isfinite(matrix)):
         raise PoseError(f"pose has non-finite values: {arr.ravel().tolist()}")
     rotation = matrix[:3, :3]
@@ -58,11 +57,13 @@ def pose_matrices(poses) -> np.ndarray:
 def quaternion_to_rotation(q) -> np.ndarray:
     """Rotation matrix of the unit quaternion (qw, qx, qy, qz)."""
     w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _hat(v) -> np.ndarray:
@@ -75,8 +76,7 @@ def _left_jacobian(phi) -> np.ndarray:
     K = _hat(phi)
     if theta < 1e-8:
         return np.eye(3) + 0.5 * K + K @ K / 6.0
-    return (np.eye(3) + (1 - np.cos(theta)) / theta**2 * K
-            + (theta - np.sin(theta)) / theta**3 * K @ K)
+    return np.eye(3) + (1 - np.cos(theta)) / theta**2 * K + (theta - np.sin(theta)) / theta**3 * K @ K
 
 
 def se3_exp(xi) -> np.ndarray:
@@ -108,6 +108,5 @@ def se3_log(T) -> np.ndarray:
         signs = np.sign(np.array([1.0, R[0, 1] + R[1, 0], R[0, 2] + R[2, 0]]))
         phi = theta * axis * np.where(signs == 0, 1.0, signs)
     else:
-        phi = theta / (2 * np.sin(theta)) * np.array(
-            [R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+        phi = theta / (2 * np.sin(theta)) * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
     return np.concatenate([np.linalg.solve(_left_jacobian(phi), t), phi])

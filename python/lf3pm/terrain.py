@@ -8,7 +8,6 @@ import numpy as np
 
 from lf3pm.map import Map
 
-
 #: Points binned at a time by column_minimum: its temporaries stay near 50 MB, not
 #: three times the map (a 60 M-point map's bins took 2.9 GB at once).
 _CHUNK = 1 << 20
@@ -18,7 +17,7 @@ def _binned(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: 
     """Chunk by chunk, the (row, column, z) of the points inside the (ny, nx) columns of
     edge ``cell`` from (x0, y0)."""
     for start in range(0, len(points), _CHUNK):
-        part = points[start:start + _CHUNK]
+        part = points[start : start + _CHUNK]
         ij = np.floor((part[:, :2] - [x0, y0]) / cell).astype(np.int64)
         inside = (ij[:, 0] >= 0) & (ij[:, 0] < nx) & (ij[:, 1] >= 0) & (ij[:, 1] < ny)
         yield ij[inside, 1], ij[inside, 0], part[inside, 2]
@@ -33,8 +32,9 @@ def column_minimum(points: np.ndarray, x0: float, y0: float, cell: float, nx: in
     return ground
 
 
-def occupied_cells(points: np.ndarray, x0: float, y0: float, cell: float, bottom: np.ndarray,
-                   top: np.ndarray) -> np.ndarray:
+def occupied_cells(
+    points: np.ndarray, x0: float, y0: float, cell: float, bottom: np.ndarray, top: np.ndarray
+) -> np.ndarray:
     """(ny, nx) bool: the columns of edge ``cell`` from (x0, y0) that hold a map point
     between ``bottom`` and ``top`` ((ny, nx) arrays, metres; inf or NaN: never). Exact:
     a point off every column's centre (a thin pole, a bush's stem) still marks its own."""
@@ -59,4 +59,3 @@ def body_blocked(world: Map, x, y, z_low, z_high, radius: float) -> np.ndarray:
         _, dist = world.index.nearest(np.ascontiguousarray(probes), 1, radius)
         blocked |= np.isfinite(dist[:, 0]).reshape(x.shape)
     return blocked
-

@@ -28,8 +28,7 @@ template <typename Body>
 void parallel_for(std::size_t n, std::size_t chunk, int threads, Body&& body) {
   if (n == 0) return;
   chunk = std::max<std::size_t>(chunk, 1);
-  const int workers =
-      static_cast<int>(std::min<std::size_t>(resolve_threads(threads), (n + chunk - 1) / chunk));
+  const int workers = static_cast<int>(std::min<std::size_t>(resolve_threads(threads), (n + chunk - 1) / chunk));
   if (workers <= 1) {
     for (std::size_t b = 0; b < n; b += chunk) body(b, std::min(n, b + chunk));
     return;

@@ -16,9 +16,7 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
 }
 
 /// Uniform double in (0, 1) from a 64-bit hash.
-inline double unit_open(std::uint64_t h) {
-  return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0);
-}
+inline double unit_open(std::uint64_t h) { return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0); }
 
 /// Standard normal sample number `index` of stream `stream` under `seed` (Box-Muller).
 inline double normal_sample(std::uint64_t seed, std::uint64_t stream, std::uint64_t index) {

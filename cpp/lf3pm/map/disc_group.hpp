@@ -33,8 +33,8 @@ struct alignas(64) DiscGroup {
 /// ray o + t d with the discs of `groups[0, count)`, and sets `best_id` to that
 /// disc's id; among equal t the first disc wins. Rays in a disc's plane
 /// (|n.d| < 1e-7) miss it.
-inline void nearest_disc_hit(const DiscGroup* groups, std::uint32_t count, const float* o, const float* d,
-                             float t_min, float& best, std::uint32_t& best_id) {
+inline void nearest_disc_hit(const DiscGroup* groups, std::uint32_t count, const float* o, const float* d, float t_min,
+                             float& best, std::uint32_t& best_id) {
 #ifdef LF3PM_DISC_AVX2
   const __m256 ox = _mm256_set1_ps(o[0]), oy = _mm256_set1_ps(o[1]), oz = _mm256_set1_ps(o[2]);
   const __m256 dx = _mm256_set1_ps(d[0]), dy = _mm256_set1_ps(d[1]), dz = _mm256_set1_ps(d[2]);
@@ -44,10 +44,11 @@ inline void nearest_disc_hit(const DiscGroup* groups, std::uint32_t count, const
     const DiscGroup& q = groups[g];
     const __m256 n0 = _mm256_load_ps(q.nx), n1 = _mm256_load_ps(q.ny), n2 = _mm256_load_ps(q.nz);
     const __m256 c0 = _mm256_load_ps(q.cx), c1 = _mm256_load_ps(q.cy), c2 = _mm256_load_ps(q.cz);
-    const __m256 denom = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n0, dx), _mm256_mul_ps(n1, dy)), _mm256_mul_ps(n2, dz));
-    const __m256 num = _mm256_add_ps(
-        _mm256_add_ps(_mm256_mul_ps(n0, _mm256_sub_ps(c0, ox)), _mm256_mul_ps(n1, _mm256_sub_ps(c1, oy))),
-        _mm256_mul_ps(n2, _mm256_sub_ps(c2, oz)));
+    const __m256 denom =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n0, dx), _mm256_mul_ps(n1, dy)), _mm256_mul_ps(n2, dz));
+    const __m256 num =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n0, _mm256_sub_ps(c0, ox)), _mm256_mul_ps(n1, _mm256_sub_ps(c1, oy))),
+                      _mm256_mul_ps(n2, _mm256_sub_ps(c2, oz)));
     const __m256 t = _mm256_div_ps(num, denom);
     const __m256 qx = _mm256_sub_ps(_mm256_add_ps(ox, _mm256_mul_ps(t, dx)), c0);
     const __m256 qy = _mm256_sub_ps(_mm256_add_ps(oy, _mm256_mul_ps(t, dy)), c1);

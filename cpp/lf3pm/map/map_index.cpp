@@ -70,12 +70,10 @@ double estimate_spacing(const double* xyz, std::size_t n, const Eigen::Vector3d&
 namespace {
 
 void check_params(const MapParams& params, std::size_t count) {
-  if (params.knn < 3 || params.knn > kMaxKnn)
-    throw std::invalid_argument("knn must be between 3 and 32");
+  if (params.knn < 3 || params.knn > kMaxKnn) throw std::invalid_argument("knn must be between 3 and 32");
   if (!(params.plane_threshold > 0) || !(params.max_neighbor_distance > 0))
     throw std::invalid_argument("plane_threshold and max_neighbor_distance must be positive");
-  if (count < static_cast<std::size_t>(params.knn))
-    throw std::invalid_argument("the map has fewer points than knn");
+  if (count < static_cast<std::size_t>(params.knn)) throw std::invalid_argument("the map has fewer points than knn");
   if (count >= std::size_t(0xFFFFFFFEu)) throw std::invalid_argument("the map has too many points");
 }
 
@@ -102,12 +100,12 @@ MapFrame frame_of(const double* xyz, std::size_t count, const MapParams& params)
   }
   MapFrame f;
   f.median_spacing = estimate_spacing(xyz, count, lo, hi, params.threads);
-  f.cell_size = params.cell_size > 0 ? params.cell_size
-                                     : std::clamp(f.median_spacing * std::sqrt(kPointsPerCell), 0.05, 4.0);
+  f.cell_size =
+      params.cell_size > 0 ? params.cell_size : std::clamp(f.median_spacing * std::sqrt(kPointsPerCell), 0.05, 4.0);
   f.point_lower = lo;
   // One cell more than the widest disc: float rounding of the radii never crosses it.
-  f.caster_lower = f.point_lower -
-                   Eigen::Vector3d::Constant(largest_disc(f.cell_size, f.median_spacing, params) + f.cell_size);
+  f.caster_lower =
+      f.point_lower - Eigen::Vector3d::Constant(largest_disc(f.cell_size, f.median_spacing, params) + f.cell_size);
   return f;
 }
 
@@ -184,8 +182,8 @@ bool MapIndex::associate(const Eigen::Vector3d& w, Plane* plane) const {
 
 std::size_t MapIndex::memory_bytes() const {
   const std::size_t n = size();
-  return n * (3 * sizeof(Eigen::Vector3d) + sizeof(std::uint32_t) + 1 + sizeof(float)) +
-         grid_.grid().memory_bytes() + caster_.memory_bytes();
+  return n * (3 * sizeof(Eigen::Vector3d) + sizeof(std::uint32_t) + 1 + sizeof(float)) + grid_.grid().memory_bytes() +
+         caster_.memory_bytes();
 }
 
 }  // namespace lf3pm

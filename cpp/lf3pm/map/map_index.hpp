@@ -15,11 +15,11 @@
 namespace lf3pm {
 
 struct MapParams {
-  double cell_size = 0.0;                      // voxel edge (m); 0 = chosen from the point spacing
-  int knn = 5;                                 // FAST-LIO NUM_MATCH_POINTS
-  double plane_threshold = 0.1;                // FAST-LIO: every neighbour within 0.1 m of the plane
-  double max_neighbor_distance = 2.2360679775; // FAST-LIO: 5th neighbour within sqrt(5) m
-  int threads = 0;                             // 0 = all cores
+  double cell_size = 0.0;                       // voxel edge (m); 0 = chosen from the point spacing
+  int knn = 5;                                  // FAST-LIO NUM_MATCH_POINTS
+  double plane_threshold = 0.1;                 // FAST-LIO: every neighbour within 0.1 m of the plane
+  double max_neighbor_distance = 2.2360679775;  // FAST-LIO: 5th neighbour within sqrt(5) m
+  int threads = 0;                              // 0 = all cores
 };
 
 /// What an index takes from its whole map beyond its own points: an index of a crop

@@ -33,8 +33,8 @@ bool smallest_eigenvector(const Eigen::Matrix3d& c, Eigen::Vector3d* v) {
   const Eigen::Matrix3d a = c / scale;  // entries in [-1, 1]: the cubic cannot overflow
   // det(lambda I - a) = lambda^3 - t lambda^2 + s lambda - d.
   const double t = a.trace();
-  const double s = a(0, 0) * a(1, 1) - a(0, 1) * a(0, 1) + a(0, 0) * a(2, 2) - a(0, 2) * a(0, 2) +
-                   a(1, 1) * a(2, 2) - a(1, 2) * a(1, 2);
+  const double s = a(0, 0) * a(1, 1) - a(0, 1) * a(0, 1) + a(0, 0) * a(2, 2) - a(0, 2) * a(0, 2) + a(1, 1) * a(2, 2) -
+                   a(1, 2) * a(1, 2);
   const double d = a.determinant();
   // From 0 (no root lies below it): left of its smallest root the cubic is
   // increasing and concave, so the iterates rise monotonically to the root;
@@ -88,8 +88,7 @@ Plane fit_plane(const Eigen::Vector3d* points, int count) {
   }
   plane.centroid = mean;
   double worst = 0.0;
-  for (int i = 0; i < count; ++i)
-    worst = std::max(worst, std::abs(plane.normal.dot(points[i] - mean)));
+  for (int i = 0; i < count; ++i) worst = std::max(worst, std::abs(plane.normal.dot(points[i] - mean)));
   plane.max_distance = worst;
   return plane;
 }

@@ -99,9 +99,8 @@ void scan_cell(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& points
 // of 49 in z-y-x order, on surface maps). gap2[a][d + 1] is the squared lower
 // bound on the distance from q to the cells at offset d along axis a. The
 // cells span at most 2x2x2 blocks, so each block is looked up once, not per cell.
-void scan_neighbourhood(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& points,
-                        const CellCoord& c, const Eigen::Vector3d& q, const double (&gap2)[3][3],
-                        KBest& best) {
+void scan_neighbourhood(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& points, const CellCoord& c,
+                        const Eigen::Vector3d& q, const double (&gap2)[3][3], KBest& best) {
   constexpr int B = VoxelGrid::kBlockBits;
   const int bx = (c.x - 1) >> B, by = (c.y - 1) >> B, bz = (c.z - 1) >> B;
   std::int32_t block[2][2][2];
@@ -139,8 +138,8 @@ constexpr int kCellShells = 3;
 
 // k-NN over whole 4x4x4-cell blocks in Chebyshev shells around q's block, from
 // scratch (best must be empty): for queries whose neighbours are many cells away.
-void scan_blocks(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& points,
-                 const Eigen::Vector3d& q, KBest& best) {
+void scan_blocks(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& q,
+                 KBest& best) {
   constexpr int B = VoxelGrid::kBlockSize;
   const double hb = grid.cell_size() * B;
   const Eigen::Vector3d f = (q - grid.origin()) / hb;
@@ -154,9 +153,7 @@ void scan_blocks(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& poin
     margin = std::min(margin, std::min(frac[a], 1.0 - frac[a]) * hb);
   }
   margin = std::max(margin - kGapSlack * hb, 0.0);
-  auto gap = [&](int a, int d) {
-    return std::max(0.0, std::max(d - frac[a], frac[a] - 1 - d) * hb - kGapSlack * hb);
-  };
+  auto gap = [&](int a, int d) { return std::max(0.0, std::max(d - frac[a], frac[a] - 1 - d) * hb - kGapSlack * hb); };
   const int max_shell = static_cast<int>(std::ceil(std::sqrt(best.max_sq) / hb)) + 1;
   for (int L = 0; L <= max_shell; ++L) {
     for (int dz = -L; dz <= L; ++dz)
@@ -165,8 +162,8 @@ void scan_blocks(const VoxelGrid& grid, const std::vector<Eigen::Vector3d>& poin
         for (int dx = -L; dx <= L; dx += (face ? 1 : 2 * L)) {
           const int x = bq[0] + dx, y = bq[1] + dy, z = bq[2] + dz;
           const double gx = gap(0, dx), gy = gap(1, dy), gz = gap(2, dz);
-          if (gx * gx + gy * gy + gz * gz <= best.limit() && x >= 0 && y >= 0 && z >= 0 &&
-              x < nb[0] && y < nb[1] && z < nb[2]) {
+          if (gx * gx + gy * gy + gz * gz <= best.limit() && x >= 0 && y >= 0 && z >= 0 && x < nb[0] && y < nb[1] &&
+              z < nb[2]) {
             const std::int32_t block = grid.block_at(x, y, z);
             if (block >= 0) {
               const auto [first, last] = grid.block_items(block);

@@ -25,8 +25,7 @@ class PointGrid {
 
   /// Up to k nearest points to q within max_distance, nearest first (equal
   /// distances by index). Returns the count found; idx/sq_dist receive them.
-  int nearest(const Eigen::Vector3d& q, int k, double max_distance, std::uint32_t* idx,
-              double* sq_dist) const;
+  int nearest(const Eigen::Vector3d& q, int k, double max_distance, std::uint32_t* idx, double* sq_dist) const;
 
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
   const std::vector<std::uint32_t>& order() const { return order_; }

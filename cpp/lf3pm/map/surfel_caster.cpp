@@ -96,9 +96,8 @@ std::vector<std::uint8_t> upward_chebyshev_distance(const VoxelGrid& grid) {
 }
 }  // namespace
 
-SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
-                           const std::vector<Eigen::Vector3d>& normals, const std::vector<float>& radii,
-                           double cell_size, const Eigen::Vector3d* lower) {
+SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& normals,
+                           const std::vector<float>& radii, double cell_size, const Eigen::Vector3d* lower) {
   Eigen::Vector3d lo = centres.front(), hi = centres.front();
   for (std::size_t i = 0; i < centres.size(); ++i) {
     lo = lo.cwiseMin(centres[i] - Eigen::Vector3d::Constant(radii[i]));
@@ -125,14 +124,12 @@ SurfelCaster::SurfelCaster(const std::vector<Eigen::Vector3d>& centres,
   std::vector<float> column_top(static_cast<std::size_t>(nbx) * nby, 0.0f);
   for (std::size_t i = 0; i < centres.size(); ++i) {
     const Eigen::Vector3d& n = normals[i];
-    const Eigen::Vector3d r =
-        radii[i] * (Eigen::Vector3d::Ones() - n.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt() +
-        Eigen::Vector3d::Constant(1e-4 + 1e-3 * radii[i]);
+    const Eigen::Vector3d r = radii[i] * (Eigen::Vector3d::Ones() - n.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt() +
+                              Eigen::Vector3d::Constant(1e-4 + 1e-3 * radii[i]);
     const CellCoord a = grid_.cell_of(centres[i] - r), b = grid_.cell_of(centres[i] + r);
     for (int z = a.z; z <= b.z; ++z)
       for (int y = a.y; y <= b.y; ++y)
-        for (int x = a.x; x <= b.x; ++x)
-          pairs.emplace_back(grid_.key_of({x, y, z}), static_cast<std::uint32_t>(i));
+        for (int x = a.x; x <= b.x; ++x) pairs.emplace_back(grid_.key_of({x, y, z}), static_cast<std::uint32_t>(i));
     const double top = centres[i].z() - grid_.origin().z() + r.z();
     float top_f = static_cast<float>(top);
     if (top_f < top) top_f = std::nextafter(top_f, std::numeric_limits<float>::infinity());
@@ -277,8 +274,7 @@ inline double advance(Dda& w, int sx, int sy, int sz, double dtx, double dty, do
 }
 }  // namespace
 
-RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir,
-                          double max_range) const {
+RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir, double max_range) const {
   RayHit result;
   if (groups_.empty()) return result;
   constexpr int B = VoxelGrid::kBlockSize;
@@ -338,9 +334,9 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
     w.tz = next_face(w.z, ray.sz, hb, ray.oz, ray.iz, t);
     return w;
   };
-  const std::uint8_t* distance = block_distance_.empty()       ? nullptr
-                                 : ray.dz >= 0.0 ? block_distance_up_.data()
-                                                 : block_distance_.data();
+  const std::uint8_t* distance = block_distance_.empty() ? nullptr
+                                 : ray.dz >= 0.0         ? block_distance_up_.data()
+                                                         : block_distance_.data();
   Dda bw = blocks_at(t0);
   double tb_enter = t0;
   for (;;) {
@@ -363,8 +359,7 @@ RayHit SurfelCaster::cast(const Eigen::Vector3d& origin_world, const Eigen::Vect
     const std::int32_t blk = dist == 0 ? grid_.block_at(bw.x, bw.y, bw.z) : -1;
     const double tb_exit = std::min(bw.tx, std::min(bw.ty, bw.tz));
     if (blk >= 0) {
-      const double px = ray.ox + tb_enter * ray.dx, py = ray.oy + tb_enter * ray.dy,
-                   pz = ray.oz + tb_enter * ray.dz;
+      const double px = ray.ox + tb_enter * ray.dx, py = ray.oy + tb_enter * ray.dy, pz = ray.oz + tb_enter * ray.dz;
       Dda cw;
       cw.x = std::clamp(static_cast<int>(std::floor(px * inv_h)) - bw.x * B, 0, B - 1);
       cw.y = std::clamp(static_cast<int>(std::floor(py * inv_h)) - bw.y * B, 0, B - 1);

@@ -74,8 +74,8 @@ class SurfelCaster {
   Eigen::Vector3d frame_origin_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d lower_ = Eigen::Vector3d::Zero();
   VoxelGrid grid_;
-  std::vector<Cell> cells_;         // per occupied cell
-  std::vector<DiscGroup> groups_;   // centres relative to the grid origin
+  std::vector<Cell> cells_;        // per occupied cell
+  std::vector<DiscGroup> groups_;  // centres relative to the grid origin
   // Per block (x fastest): Chebyshev distance in blocks to the nearest occupied
   // block, capped at 255; empty when the grid is too large to afford it.
   std::vector<std::uint8_t> block_distance_;

@@ -17,8 +17,7 @@ VoxelGrid::VoxelGrid(const Eigen::Vector3d& lower, const Eigen::Vector3d& upper,
     : cell_size_(cell_size), inv_cell_(1.0 / cell_size) {
   if (!(cell_size > 0.0) || !std::isfinite(cell_size))
     throw std::invalid_argument("voxel grid cell size must be positive");
-  if (!lower.allFinite() || !upper.allFinite())
-    throw std::invalid_argument("voxel grid bounds must be finite");
+  if (!lower.allFinite() || !upper.allFinite()) throw std::invalid_argument("voxel grid bounds must be finite");
   origin_ = lower - Eigen::Vector3d::Constant(cell_size);
   for (int a = 0; a < 3; ++a) {
     const double extent = upper[a] - origin_[a] + cell_size;
@@ -47,11 +46,10 @@ CellCoord VoxelGrid::cell_of(const Eigen::Vector3d& p) const {
 std::uint64_t VoxelGrid::key_of(const CellCoord& c) const {
   // Column-major over blocks, then z-block, then the cell within the block, so
   // sorting by key groups a column's blocks and a block's cells in mask order.
-  const std::uint64_t column =
-      static_cast<std::uint64_t>(c.x >> kBlockBits) +
-      static_cast<std::uint64_t>(nblocks_[0]) * static_cast<std::uint64_t>(c.y >> kBlockBits);
-  const std::uint64_t block = column * static_cast<std::uint64_t>(nblocks_[2]) +
-                              static_cast<std::uint64_t>(c.z >> kBlockBits);
+  const std::uint64_t column = static_cast<std::uint64_t>(c.x >> kBlockBits) +
+                               static_cast<std::uint64_t>(nblocks_[0]) * static_cast<std::uint64_t>(c.y >> kBlockBits);
+  const std::uint64_t block =
+      column * static_cast<std::uint64_t>(nblocks_[2]) + static_cast<std::uint64_t>(c.z >> kBlockBits);
   const std::uint64_t local = static_cast<std::uint64_t>((c.x & 3) | ((c.y & 3) << 2) | ((c.z & 3) << 4));
   return (block << 6) | local;
 }
@@ -101,9 +99,8 @@ void VoxelGrid::build(std::vector<std::pair<std::uint64_t, std::uint32_t>>& pair
 }
 
 std::size_t VoxelGrid::memory_bytes() const {
-  return columns_.size() * sizeof(Column) + block_ids_.size() * sizeof(std::int32_t) +
-         blocks_.size() * sizeof(Block) + cell_start_.size() * sizeof(std::uint32_t) +
-         items_.size() * sizeof(std::uint32_t);
+  return columns_.size() * sizeof(Column) + block_ids_.size() * sizeof(std::int32_t) + blocks_.size() * sizeof(Block) +
+         cell_start_.size() * sizeof(std::uint32_t) + items_.size() * sizeof(std::uint32_t);
 }
 
 }  // namespace lf3pm

@@ -92,12 +92,12 @@ class VoxelGrid {
 
  private:
   struct Column {
-    std::uint32_t offset = 0;  // into block_ids_
+    std::uint32_t offset = 0;     // into block_ids_
     std::int32_t lo = 0, hi = 0;  // occupied z-range of blocks [lo, hi)
   };
   struct Block {
-    std::uint64_t mask = 0;       // bit (x + 4y + 16z): cell occupied
-    std::uint32_t first_cell = 0; // compact index of the block's first occupied cell
+    std::uint64_t mask = 0;        // bit (x + 4y + 16z): cell occupied
+    std::uint32_t first_cell = 0;  // compact index of the block's first occupied cell
   };
 
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
@@ -105,8 +105,8 @@ class VoxelGrid {
   double inv_cell_ = 1.0;
   int cells_[3] = {0, 0, 0};
   int nblocks_[3] = {0, 0, 0};
-  std::vector<Column> columns_;         // dense over (bx, by)
-  std::vector<std::int32_t> block_ids_; // per column z-range: index into blocks_, or -1
+  std::vector<Column> columns_;          // dense over (bx, by)
+  std::vector<std::int32_t> block_ids_;  // per column z-range: index into blocks_, or -1
   std::vector<Block> blocks_;
   std::vector<std::uint32_t> cell_start_;  // CSR offsets into items_
   std::vector<std::uint32_t> items_;

@@ -1,7 +1,6 @@
 #include "lf3pm/metric/evaluator.hpp"
 
 #include <cmath>
-
 #include <stdexcept>
 
 #include "lf3pm/common/parallel.hpp"
@@ -18,8 +17,7 @@ void check_dof(int dof) {
 }
 }  // namespace
 
-GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
-                          const EvalParams& params) {
+GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan, const EvalParams& params) {
   check_dof(params.dof);
   const std::size_t hits = scan.world_points.size();
   const std::size_t blocks = (hits + kGramBlock - 1) / kGramBlock;
@@ -60,8 +58,8 @@ Observations scan_observations(const MapIndex& map, const Pose& pose, const Simu
     obs.hit.push_back(static_cast<std::uint32_t>(j));
   }
   const Eigen::Index m = static_cast<Eigen::Index>(bs.size());
-  obs.a = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      rows.data(), m, params.dof);
+  obs.a = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(rows.data(), m,
+                                                                                                   params.dof);
   obs.b = Eigen::Map<const Eigen::VectorXd>(bs.data(), m);
   return obs;
 }
@@ -73,8 +71,8 @@ Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params) {
                           std::llround(static_cast<double>(gram.rows()) * params.ray_weight), params.weights);
 }
 
-PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
-                             std::size_t count, const EvalParams& params, PoseObservations* observations) {
+PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
+                             const EvalParams& params, PoseObservations* observations) {
   SimulatedScan scan = simulate_scan(map, pose, directions, count, params.scan);
   const GramAccumulator gram = scan_gram(map, pose, scan, params);
   PoseEvaluation out;
@@ -89,9 +87,8 @@ PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double
 }
 
 std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,
-                                           const std::vector<std::uint64_t>& streams,
-                                           const double* directions, std::size_t count,
-                                           const EvalParams& params) {
+                                           const std::vector<std::uint64_t>& streams, const double* directions,
+                                           std::size_t count, const EvalParams& params) {
   if (streams.size() != poses.size()) throw std::invalid_argument("one noise stream per pose");
   std::vector<PoseEvaluation> out(poses.size());
   parallel_for(poses.size(), 1, params.scan.threads, [&](std::size_t b, std::size_t e) {

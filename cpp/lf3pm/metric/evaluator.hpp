@@ -38,15 +38,14 @@ struct PoseObservations {
 
 /// Simulates the scan at `pose` and computes its metric; given `observations`, also fills
 /// in that same scan and its explicit observations.
-PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions,
-                             std::size_t count, const EvalParams& params, PoseObservations* observations = nullptr);
+PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
+                             const EvalParams& params, PoseObservations* observations = nullptr);
 
 /// The metric of an accumulated Gram, scaled by params.ray_weight.
 Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params);
 
 /// The Gram of [A | b] of a scan and its row count; deterministic for any thread count.
-GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
-                          const EvalParams& params);
+GramAccumulator scan_gram(const MapIndex& map, const Pose& pose, const SimulatedScan& scan, const EvalParams& params);
 
 Observations scan_observations(const MapIndex& map, const Pose& pose, const SimulatedScan& scan,
                                const EvalParams& params);
@@ -55,8 +54,7 @@ Observations scan_observations(const MapIndex& map, const Pose& pose, const Simu
 /// size). Pose i draws its noise from stream streams[i], so a pose's result does
 /// not depend on which batch it was evaluated in.
 std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,
-                                           const std::vector<std::uint64_t>& streams,
-                                           const double* directions, std::size_t count,
-                                           const EvalParams& params);
+                                           const std::vector<std::uint64_t>& streams, const double* directions,
+                                           std::size_t count, const EvalParams& params);
 
 }  // namespace lf3pm

@@ -60,7 +60,7 @@ Metric metric_from_gram(const Eigen::MatrixXd& gram, std::int64_t m, const Metri
   gm(n, n) = btb;
   const Eigen::VectorXd g = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(gm, Eigen::EigenvaluesOnly).eigenvalues();
   const double lambda_1 = m > n + 1 ? 0.0 : std::max(g(0), 0.0);
-  const double lambda_n = std::max(g(1), 0.0);       // lambda_{m-n+1}
+  const double lambda_n = std::max(g(1), 0.0);  // lambda_{m-n+1}
   const double lambda_m = std::max(g(n), 0.0);
   auto q = [&](double lambda) { return std::sqrt(weights.w1 * lambda + weights.w2()) / out.sigma1; };
   out.q_min = q(lambda_1);

@@ -14,8 +14,8 @@ struct MetricWeights {
 };
 
 struct Metric {
-  std::int64_t m = 0;   // observation rows
-  int n = 6;            // state dimension (6: SE(3), 3: x, y, yaw)
+  std::int64_t m = 0;  // observation rows
+  int n = 6;           // state dimension (6: SE(3), 3: x, y, yaw)
   bool degenerate = true;
   double sigma1 = 0.0;  // smallest singular value of A
   double xi = 0.0;      // |dx*| + |r| / sigma1

@@ -12,8 +12,8 @@ namespace lf3pm {
 
 /// Explicit observations of a simulated scan (for export and tests).
 struct Observations {
-  Eigen::MatrixXd a;             // m x dof
-  Eigen::VectorXd b;             // m
+  Eigen::MatrixXd a;               // m x dof
+  Eigen::VectorXd b;               // m
   std::vector<std::uint32_t> hit;  // row -> index into the scan's hits
 };
 
@@ -29,10 +29,16 @@ inline double observation_row(const Eigen::Vector3d& w, const Eigen::Vector3d& u
                               const Eigen::Vector3d& t, int dof, double* row) {
   const Eigen::Vector3d lever = (w - t).cross(u);
   if (dof == 6) {
-    row[0] = u.x(); row[1] = u.y(); row[2] = u.z();
-    row[3] = lever.x(); row[4] = lever.y(); row[5] = lever.z();
+    row[0] = u.x();
+    row[1] = u.y();
+    row[2] = u.z();
+    row[3] = lever.x();
+    row[4] = lever.y();
+    row[5] = lever.z();
   } else {
-    row[0] = u.x(); row[1] = u.y(); row[2] = lever.z();
+    row[0] = u.x();
+    row[1] = u.y();
+    row[2] = lever.z();
   }
   return u.dot(w - q);
 }

@@ -8,9 +8,8 @@
 namespace lf3pm {
 
 std::vector<Metric> evaluate_yaw_sectors(const MapIndex& map, const std::vector<Eigen::Vector3d>& positions,
-                                         const std::vector<std::uint64_t>& streams,
-                                         const double* sector_rays, std::size_t count, int bins,
-                                         int half_width, const EvalParams& params) {
+                                         const std::vector<std::uint64_t>& streams, const double* sector_rays,
+                                         std::size_t count, int bins, int half_width, const EvalParams& params) {
   if (bins < 1 || half_width < 0 || 2 * half_width + 1 > bins)
     throw std::invalid_argument("need bins >= 1 and 0 <= 2 * half_width + 1 <= bins");
   if (streams.size() != positions.size()) throw std::invalid_argument("one noise stream per position");

@@ -24,8 +24,7 @@ namespace lf3pm {
 /// sectors on each side of a bin's own are summed. Cell noise stream for
 /// sector j of position i: streams[i] * bins + j. Output index i * bins + k.
 std::vector<Metric> evaluate_yaw_sectors(const MapIndex& map, const std::vector<Eigen::Vector3d>& positions,
-                                         const std::vector<std::uint64_t>& streams,
-                                         const double* sector_rays, std::size_t count, int bins,
-                                         int half_width, const EvalParams& params);
+                                         const std::vector<std::uint64_t>& streams, const double* sector_rays,
+                                         std::size_t count, int bins, int half_width, const EvalParams& params);
 
 }  // namespace lf3pm

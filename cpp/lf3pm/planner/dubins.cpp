@@ -62,8 +62,8 @@ DubinsPath csc(int word, const Pose2& a, const Pose2& b, double s1, double s3, d
     straight = std::sqrt(std::max(d * d - 4.0 * radius * radius, 0.0));
     phi = std::atan2(vy, vx) + s1 * std::atan2(2.0 * radius, straight);
   }
-  return make(word, s1 / radius, mod2pi(s1 * (phi - a.yaw)), 0.0, straight, s3 / radius,
-              mod2pi(s3 * (b.yaw - phi)), radius);
+  return make(word, s1 / radius, mod2pi(s1 * (phi - a.yaw)), 0.0, straight, s3 / radius, mod2pi(s3 * (b.yaw - phi)),
+              radius);
 }
 
 // CCC with sides s, -s, s: the better of the two middle circles.

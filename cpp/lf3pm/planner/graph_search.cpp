@@ -220,10 +220,10 @@ class Heuristic {
   int nx_, layers_;
   int goal_x_, goal_y_, goal_k_;
   double res_;
-  double edge_factor_;  // 1 + lambda * c_min: the least cost of a metre
-  double turn_;         // the least cost of one yaw step
-  std::vector<double> cell_cost_;       // per cell, the least cost of its traversable states
-  std::vector<std::uint8_t> cell_open_;  // per cell, 1 if any of its states is traversable
+  double edge_factor_;                    // 1 + lambda * c_min: the least cost of a metre
+  double turn_;                           // the least cost of one yaw step
+  std::vector<double> cell_cost_;         // per cell, the least cost of its traversable states
+  std::vector<std::uint8_t> cell_open_;   // per cell, 1 if any of its states is traversable
   std::optional<RelaxedCostToGo> to_go_;  // SE(2) only
 };
 
@@ -265,9 +265,7 @@ SearchResult grid_search(const double* cost, const std::uint8_t* traversable, co
     y = int(row);
     x = int(cell - row * std::uint32_t(nx));
   };
-  auto index = [&](int x, int y, int k) {
-    return std::uint32_t((std::uint64_t(y) * nx + x) * layers + k);
-  };
+  auto index = [&](int x, int y, int k) { return std::uint32_t((std::uint64_t(y) * nx + x) * layers + k); };
   std::optional<Heuristic> h_of;  // none: Dijkstra
   if (params.heuristic) h_of.emplace(cost, traversable, grid, goal, params, c_min);
   auto heuristic = [&](int x, int y, int k) { return h_of ? (*h_of)(x, y, k) : 0.0; };

@@ -63,10 +63,10 @@ struct SearchParams {
 struct SearchResult {
   bool found = false;
   double cost = 0.0;
-  std::vector<std::uint32_t> path;  ///< state indices, start to goal
-  std::uint64_t expanded = 0;       ///< states closed
-  std::uint64_t pushed = 0;         ///< heap insertions
-  std::size_t heap_peak = 0;        ///< largest heap size (entries of 16 bytes)
+  std::vector<std::uint32_t> path;     ///< state indices, start to goal
+  std::uint64_t expanded = 0;          ///< states closed
+  std::uint64_t pushed = 0;            ///< heap insertions
+  std::size_t heap_peak = 0;           ///< largest heap size (entries of 16 bytes)
   std::uint64_t relaxed_expanded = 0;  ///< SE(2) A*: cells the heuristic's backward pass closed
 };
 

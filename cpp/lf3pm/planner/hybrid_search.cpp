@@ -25,8 +25,7 @@ struct Node {
 
 class Search {
  public:
-  Search(const GridField& esdf, const GridField* cells, const GridField* cost, const Pose2& goal,
-         const HybridParams& p)
+  Search(const GridField& esdf, const GridField* cells, const GridField* cost, const Pose2& goal, const HybridParams& p)
       : esdf_(esdf), cells_(cells ? *cells : esdf), cost_(cost && !cost->empty() ? cost : nullptr), goal_(goal), p_(p) {
     if (esdf.empty() || esdf.layers() != 1) throw std::invalid_argument("hybrid search: the ESDF needs one layer");
     if (cells_.empty() || cells_.layers() != 1)
@@ -41,8 +40,8 @@ class Search {
     if (!(p.step >= 0.0) || !(p.sample_step >= 0.0) || p.analytic_every < 1)
       throw std::invalid_argument("hybrid search: step and sample_step must be >= 0, analytic_every >= 1");
     nx_ = cells_.nx(), ny_ = cells_.ny(), x0_ = cells_.x0(), y0_ = cells_.y0(), res_ = cells_.res();
-    if (cost_ && (cost_->nx() != nx_ || cost_->ny() != ny_ || cost_->x0() != x0_ || cost_->y0() != y0_ ||
-                  cost_->res() != res_))
+    if (cost_ &&
+        (cost_->nx() != nx_ || cost_->ny() != ny_ || cost_->x0() != x0_ || cost_->y0() != y0_ || cost_->res() != res_))
       throw std::invalid_argument("hybrid search: the cost and the search's grids differ");
     step_ = p.step > 0.0 ? p.step : std::sqrt(2.0) * res_;
     ds_ = p.sample_step > 0.0 ? p.sample_step : 0.25 * res_;
@@ -69,7 +68,8 @@ class Search {
 
   HybridResult run(const Pose2& start) {
     HybridResult out;
-    if (!free(start)) throw std::invalid_argument("hybrid search: the start is off the grid or too close to an obstacle");
+    if (!free(start))
+      throw std::invalid_argument("hybrid search: the start is off the grid or too close to an obstacle");
     out.relaxed_cells = relaxed_cells_;
     if (!std::isfinite(relaxed_[cell(start)])) {
       out.reason = "no chain of cells clear of obstacles joins start and goal";
@@ -158,9 +158,7 @@ class Search {
   }
 
  private:
-  bool inside(double x, double y) const {
-    return x >= x0_ && y >= y0_ && x < x0_ + nx_ * res_ && y < y0_ + ny_ * res_;
-  }
+  bool inside(double x, double y) const { return x >= x0_ && y >= y0_ && x < x0_ + nx_ * res_ && y < y0_ + ny_ * res_; }
   std::size_t cell(const Pose2& q) const {
     const int i = std::clamp(static_cast<int>(std::floor((q.x - x0_) / res_)), 0, nx_ - 1);
     const int j = std::clamp(static_cast<int>(std::floor((q.y - y0_) / res_)), 0, ny_ - 1);
@@ -243,7 +241,8 @@ class Search {
           double m = kInf;
           for (int dj = -1; dj <= 1; ++dj)
             for (int di = -1; di <= 1; ++di)
-              m = std::min(m, below[std::size_t(std::clamp(j + dj, 0, ny_ - 1)) * nx_ + std::clamp(i + di, 0, nx_ - 1)]);
+              m = std::min(m,
+                           below[std::size_t(std::clamp(j + dj, 0, ny_ - 1)) * nx_ + std::clamp(i + di, 0, nx_ - 1)]);
           least[std::size_t(j) * nx_ + i] = m;
           if (open[std::size_t(j) * nx_ + i]) most = std::max(most, m);
         }
@@ -267,8 +266,7 @@ class Search {
           const int a = i + di, b = j + dj;
           if ((di == 0 && dj == 0) || a < 0 || b < 0 || a >= nx_ || b >= ny_) continue;
           const std::size_t c2 = std::size_t(b) * nx_ + a;
-          const double d2 =
-              d + (di != 0 && dj != 0 ? diag : res_) * (1.0 + p_.weight * std::min(least[c], least[c2]));
+          const double d2 = d + (di != 0 && dj != 0 ? diag : res_) * (1.0 + p_.weight * std::min(least[c], least[c2]));
           if (open[c2] && d2 < relaxed_[c2]) {
             relaxed_[c2] = d2;
             heap.push({d2, c2});

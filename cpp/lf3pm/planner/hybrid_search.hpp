@@ -49,15 +49,15 @@
 namespace lf3pm {
 
 struct HybridParams {
-  double radius = 0.5;        ///< R: the car's least turning radius (m), > 0
-  double weight = 1.0;        ///< lambda: perception cost against length
-  double clearance = 0.0;     ///< least ESDF value at every sample (m)
-  int yaw_bins = 72;          ///< closed set: yaw bins per x-y cell
-  double step = 0.0;          ///< primitive length (m); 0: sqrt 2 res
-  double sample_step = 0.0;   ///< collision and cost sample spacing (m); 0: res / 4
-  int analytic_every = 5;     ///< try a Dubins path to the goal every this many expansions
+  double radius = 0.5;       ///< R: the car's least turning radius (m), > 0
+  double weight = 1.0;       ///< lambda: perception cost against length
+  double clearance = 0.0;    ///< least ESDF value at every sample (m)
+  int yaw_bins = 72;         ///< closed set: yaw bins per x-y cell
+  double step = 0.0;         ///< primitive length (m); 0: sqrt 2 res
+  double sample_step = 0.0;  ///< collision and cost sample spacing (m); 0: res / 4
+  int analytic_every = 5;    ///< try a Dubins path to the goal every this many expansions
   std::uint64_t max_expansions = 2'000'000;
-  bool heuristic = true;      ///< false: h = 0 (uniform-cost search), for tests
+  bool heuristic = true;  ///< false: h = 0 (uniform-cost search), for tests
   /// epsilon >= 1: f = g + epsilon h (weighted A*: a path within epsilon of the lattice's
   /// best, found far sooner on large maps; sqrt(4 - 2 sqrt 2) undoes G's kappa).
   double heuristic_weight = 1.0;
@@ -87,8 +87,7 @@ HybridResult hybrid_search(const GridField& esdf, const GridField* cells, const 
 
 /// h at each of `poses` for `goal` (same arguments): for tests.
 std::vector<double> hybrid_heuristic(const GridField& esdf, const GridField* cells, const GridField* cost,
-                                     const std::vector<Pose2>& poses,
-                                     const Pose2& goal, const HybridParams& params);
+                                     const std::vector<Pose2>& poses, const Pose2& goal, const HybridParams& params);
 
 /// Poses every `spacing` metres (and at each segment's end) along `segments` from
 /// `start`, integrated exactly; yaw continuous (unwrapped).

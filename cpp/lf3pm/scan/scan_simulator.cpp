@@ -71,7 +71,9 @@ SimulatedScan simulate(const MapIndex& map, PoseOf pose_of, const double* direct
     if (hit[k] == kNoHit) continue;
     const Eigen::Vector3d p = range[k] * Eigen::Vector3d(directions + 3 * k);
     if (downsample) {
-      const auto q = [&](double v) { return static_cast<std::uint64_t>(std::floor(v / params.scan_voxel) + (1 << 20)) & 0x1FFFFFu; };
+      const auto q = [&](double v) {
+        return static_cast<std::uint64_t>(std::floor(v / params.scan_voxel) + (1 << 20)) & 0x1FFFFFu;
+      };
       const std::uint64_t key = q(p.x()) | (q(p.y()) << 21) | (q(p.z()) << 42);
       if (!kept_voxels.insert(key).second) continue;
     }
@@ -88,14 +90,14 @@ bool finite(const Pose& pose) { return pose.rotation.allFinite() && pose.positio
 
 }  // namespace
 
-SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions,
-                            std::size_t count, const ScanParams& params) {
+SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
+                            const ScanParams& params) {
   if (!finite(pose)) throw std::invalid_argument("the pose is not finite");
   return simulate(map, [&](std::size_t) -> const Pose& { return pose; }, directions, count, params);
 }
 
-SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions,
-                            std::size_t count, const ScanParams& params) {
+SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions, std::size_t count,
+                            const ScanParams& params) {
   for (std::size_t k = 0; k < count; ++k)
     if (!finite(ray_poses[k])) throw std::invalid_argument("the pose of ray " + std::to_string(k) + " is not finite");
   return simulate(map, [&](std::size_t k) -> const Pose& { return ray_poses[k]; }, directions, count, params);

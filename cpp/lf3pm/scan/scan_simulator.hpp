@@ -13,7 +13,7 @@
 namespace lf3pm {
 
 struct ScanParams {
-  double min_range = 0.0;    // nearer first hits give no return (they still block the ray)
+  double min_range = 0.0;  // nearer first hits give no return (they still block the ray)
   double max_range = 100.0;
   double noise_sigma = 0.0;  // Gaussian range noise (m), 1 sigma
   std::uint64_t seed = 0;
@@ -30,14 +30,14 @@ struct SimulatedScan {
 };
 
 /// directions: `count` unit vectors (x, y, z) in the sensor frame, row-major.
-SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions,
-                            std::size_t count, const ScanParams& params);
+SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
+                            const ScanParams& params);
 
 /// A scan taken while the sensor moves (motion distortion): ray k is cast from
 /// ray_poses[k], the sensor pose at its firing time (`count` poses). sensor_points
 /// are then each in its own ray's sensor frame (what the sensor measured), and
 /// scan_voxel keys on those. The noise of ray k is the same as in simulate_scan.
-SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions,
-                            std::size_t count, const ScanParams& params);
+SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions, std::size_t count,
+                            const ScanParams& params);
 
 }  // namespace lf3pm

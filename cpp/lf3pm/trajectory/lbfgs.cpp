@@ -1,8 +1,8 @@
 #include "lf3pm/trajectory/lbfgs.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -81,7 +81,7 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
   }
   d = -g;
   double step = 1.0 / d.norm();  // first step: unit length in x
-  int stored = 0, next = 0;  // ring buffer of correction pairs; `next` is the slot to fill
+  int stored = 0, next = 0;      // ring buffer of correction pairs; `next` is the slot to fill
   for (int k = 1;; ++k) {
     x_prev = x;
     g_prev = g;
@@ -98,14 +98,17 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
       const double rounding = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(f_prev));
       if (search.f_moved <= rounding && promised <= 2.0 * search.f_moved) {
         res.status = LbfgsStatus::Converged;
-        res.reason = format("float precision: over the line search f changed by at most %.3g, within rounding "
-                            "(<= sqrt(eps) max(1, |f|) = %.3g), and by no less than the %.3g decrease the step "
-                            "promised", search.f_moved, rounding, promised);
+        res.reason = format(
+            "float precision: over the line search f changed by at most %.3g, within rounding "
+            "(<= sqrt(eps) max(1, |f|) = %.3g), and by no less than the %.3g decrease the step "
+            "promised",
+            search.f_moved, rounding, promised);
       } else {
         res.status = LbfgsStatus::LineSearchFailed;
-        res.reason = format("no step met the Wolfe conditions: f changed by up to %.3g over the search "
-                            "(rounding stays within %.3g) against a promised decrease of %.3g",
-                            search.f_moved, rounding, promised);
+        res.reason = format(
+            "no step met the Wolfe conditions: f changed by up to %.3g over the search "
+            "(rounding stays within %.3g) against a promised decrease of %.3g",
+            search.f_moved, rounding, promised);
       }
       break;
     }
@@ -158,10 +161,14 @@ LbfgsResult lbfgs_minimize(const Objective& f, Eigen::VectorXd& x, const LbfgsPa
 
 const char* to_string(LbfgsStatus status) {
   switch (status) {
-    case LbfgsStatus::Converged: return "converged";
-    case LbfgsStatus::Stalled: return "stalled";
-    case LbfgsStatus::MaxIterations: return "max_iterations";
-    case LbfgsStatus::LineSearchFailed: return "line_search_failed";
+    case LbfgsStatus::Converged:
+      return "converged";
+    case LbfgsStatus::Stalled:
+      return "stalled";
+    case LbfgsStatus::MaxIterations:
+      return "max_iterations";
+    case LbfgsStatus::LineSearchFailed:
+      return "line_search_failed";
   }
   return "unknown";
 }

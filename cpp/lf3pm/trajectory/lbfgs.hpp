@@ -31,14 +31,14 @@
 namespace lf3pm {
 
 struct LbfgsParams {
-  int memory = 8;              ///< stored correction pairs
-  double g_epsilon = 1e-6;     ///< stop when ||g|| <= g_epsilon * max(1, ||x||)
-  int past = 3;                ///< stop when f fell by less than delta * max(1, |f|) over `past` iterations
+  int memory = 8;           ///< stored correction pairs
+  double g_epsilon = 1e-6;  ///< stop when ||g|| <= g_epsilon * max(1, ||x||)
+  int past = 3;             ///< stop when f fell by less than delta * max(1, |f|) over `past` iterations
   double delta = 1e-9;
-  int max_iterations = 0;      ///< 0: no limit
+  int max_iterations = 0;  ///< 0: no limit
   int max_linesearch = 64;
-  double armijo = 1e-4;        ///< sufficient decrease coefficient
-  double wolfe = 0.9;          ///< curvature coefficient (weak Wolfe)
+  double armijo = 1e-4;  ///< sufficient decrease coefficient
+  double wolfe = 0.9;    ///< curvature coefficient (weak Wolfe)
   double min_step = 1e-20;
   double max_step = 1e20;
 };

@@ -107,16 +107,36 @@ void MincoS2::set_parameters(const Eigen::Matrix3Xd& q, const Eigen::VectorXd& d
     auto velocity_end = [&] { a_(r, c + 1) = 1.0, a_(r, c + 2) = 2.0 * t, a_(r, c + 3) = 3.0 * t2; };
     auto acceleration_end = [&] { a_(r, c + 2) = 2.0, a_(r, c + 3) = 6.0 * t; };
     switch (row.kind) {
-      case Kind::HeadPosition: a_(r, 0) = 1.0, coef_.row(r) = head_.col(0).transpose(); break;
-      case Kind::HeadVelocity: a_(r, 1) = 1.0, coef_.row(r) = head_.col(1).transpose(); break;
-      case Kind::HeadAcceleration: a_(r, 2) = 2.0, coef_.row(r) = head_.col(2).transpose(); break;
-      case Kind::AccelerationContinuity: acceleration_end(), a_(r, c + 6) = -2.0; break;
-      case Kind::Waypoint: position_end(), coef_.row(r) = q.col(row.waypoint).transpose(); break;
-      case Kind::PositionContinuity: position_end(), a_(r, c + 4) = -1.0; break;
-      case Kind::VelocityContinuity: velocity_end(), a_(r, c + 5) = -1.0; break;
-      case Kind::TailPosition: position_end(), coef_.row(r) = tail_.col(0).transpose(); break;
-      case Kind::TailVelocity: velocity_end(), coef_.row(r) = tail_.col(1).transpose(); break;
-      case Kind::TailAcceleration: acceleration_end(), coef_.row(r) = tail_.col(2).transpose(); break;
+      case Kind::HeadPosition:
+        a_(r, 0) = 1.0, coef_.row(r) = head_.col(0).transpose();
+        break;
+      case Kind::HeadVelocity:
+        a_(r, 1) = 1.0, coef_.row(r) = head_.col(1).transpose();
+        break;
+      case Kind::HeadAcceleration:
+        a_(r, 2) = 2.0, coef_.row(r) = head_.col(2).transpose();
+        break;
+      case Kind::AccelerationContinuity:
+        acceleration_end(), a_(r, c + 6) = -2.0;
+        break;
+      case Kind::Waypoint:
+        position_end(), coef_.row(r) = q.col(row.waypoint).transpose();
+        break;
+      case Kind::PositionContinuity:
+        position_end(), a_(r, c + 4) = -1.0;
+        break;
+      case Kind::VelocityContinuity:
+        velocity_end(), a_(r, c + 5) = -1.0;
+        break;
+      case Kind::TailPosition:
+        position_end(), coef_.row(r) = tail_.col(0).transpose();
+        break;
+      case Kind::TailVelocity:
+        velocity_end(), coef_.row(r) = tail_.col(1).transpose();
+        break;
+      case Kind::TailAcceleration:
+        acceleration_end(), coef_.row(r) = tail_.col(2).transpose();
+        break;
     }
   }
   a_.factorize();
@@ -161,13 +181,27 @@ void MincoS2::propagate_gradient(Eigen::MatrixX3d& grad_c, const Eigen::VectorXd
     // d(row . c)/dT_i: the end position's rate is the end velocity, and so on.
     const Eigen::RowVector3d vel = c1 + 2.0 * t1_(i) * c2 + 3.0 * t2_(i) * c3, acc = 2.0 * c2 + 6.0 * t1_(i) * c3;
     switch (row.kind) {
-      case Kind::HeadPosition: if (grad_head) grad_head->col(0) = g.row(r).transpose(); break;
-      case Kind::HeadVelocity: if (grad_head) grad_head->col(1) = g.row(r).transpose(); break;
-      case Kind::HeadAcceleration: if (grad_head) grad_head->col(2) = g.row(r).transpose(); break;
-      case Kind::AccelerationContinuity: grad_T(i) -= 6.0 * g.row(r).dot(c3); break;
-      case Kind::Waypoint: grad_q.col(row.waypoint) = g.row(r).transpose(), grad_T(i) -= g.row(r).dot(vel); break;
-      case Kind::PositionContinuity: grad_T(i) -= g.row(r).dot(vel); break;
-      case Kind::VelocityContinuity: grad_T(i) -= g.row(r).dot(acc); break;
+      case Kind::HeadPosition:
+        if (grad_head) grad_head->col(0) = g.row(r).transpose();
+        break;
+      case Kind::HeadVelocity:
+        if (grad_head) grad_head->col(1) = g.row(r).transpose();
+        break;
+      case Kind::HeadAcceleration:
+        if (grad_head) grad_head->col(2) = g.row(r).transpose();
+        break;
+      case Kind::AccelerationContinuity:
+        grad_T(i) -= 6.0 * g.row(r).dot(c3);
+        break;
+      case Kind::Waypoint:
+        grad_q.col(row.waypoint) = g.row(r).transpose(), grad_T(i) -= g.row(r).dot(vel);
+        break;
+      case Kind::PositionContinuity:
+        grad_T(i) -= g.row(r).dot(vel);
+        break;
+      case Kind::VelocityContinuity:
+        grad_T(i) -= g.row(r).dot(acc);
+        break;
       case Kind::TailPosition:
         if (grad_tail) grad_tail->col(0) = g.row(r).transpose();
         grad_T(i) -= g.row(r).dot(vel);

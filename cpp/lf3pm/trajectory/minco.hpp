@@ -77,8 +77,18 @@ class MincoS2 {
 
  private:
   // One condition row: what it states and for which piece (a junction's rows: its left piece).
-  enum class Kind { HeadPosition, HeadVelocity, HeadAcceleration, AccelerationContinuity, Waypoint,
-                    PositionContinuity, VelocityContinuity, TailPosition, TailVelocity, TailAcceleration };
+  enum class Kind {
+    HeadPosition,
+    HeadVelocity,
+    HeadAcceleration,
+    AccelerationContinuity,
+    Waypoint,
+    PositionContinuity,
+    VelocityContinuity,
+    TailPosition,
+    TailVelocity,
+    TailAcceleration
+  };
   struct Row {
     Kind kind;
     int piece;

@@ -13,9 +13,10 @@ struct RobotLimits {
   double wmax = 1.0;                      ///< yaw rate, rad/s
   double amax_lon = 2.0, amax_lat = 2.0;  ///< body-frame acceleration limits, m/s^2
   double alpha_max = 3.0;                 ///< yaw acceleration, rad/s^2
-  double min_turn_radius = 0.0;  ///< car only
-  double vmax_norm = 0.0;        ///< omni: limit on the speed |v| (0: none; planner/robots.py gives omni robots max(vmax_lon, vmax_lat), derived from these)
-  double r_safe = 0.3;           ///< clearance kept from obstacles beyond the SOLM's robot radius, m
+  double min_turn_radius = 0.0;           ///< car only
+  double vmax_norm = 0.0;  ///< omni: limit on the speed |v| (0: none; planner/robots.py gives omni robots max(vmax_lon,
+                           ///< vmax_lat), derived from these)
+  double r_safe = 0.3;     ///< clearance kept from obstacles beyond the SOLM's robot radius, m
   bool nonholonomic() const { return kind != RobotKind::Omni; }
   /// Diff and car robots leave and reach rest on straight pieces (straight_end.hpp): a car
   /// along its given yaws, a diff robot along the direction it turned to on the spot.

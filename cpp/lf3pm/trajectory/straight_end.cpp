@@ -45,8 +45,8 @@ void StraightEnd::set(const Eigen::VectorXd& u) {
 Eigen::Matrix<double, 4, 3> StraightEnd::coefficients() const {
   // Along e: lead-in (0, 0, alpha, beta); lead-out, sigma(T - t) expanded in t and
   // negated: (-d, s, alpha - s / T, beta).
-  const Eigen::Vector4d k = lead_out_ ? Eigen::Vector4d(-d_, s_, alpha_ - s_ / t_, beta_)
-                                      : Eigen::Vector4d(0.0, 0.0, alpha_, beta_);
+  const Eigen::Vector4d k =
+      lead_out_ ? Eigen::Vector4d(-d_, s_, alpha_ - s_ / t_, beta_) : Eigen::Vector4d(0.0, 0.0, alpha_, beta_);
   Eigen::Matrix<double, 4, 3> c = Eigen::Matrix<double, 4, 3>::Zero();
   c.row(0) = base_.transpose();
   for (int r = 0; r < 4; ++r) c.block<1, 2>(r, 0) += k(r) * e_.transpose();
@@ -74,7 +74,8 @@ Eigen::VectorXd StraightEnd::gradient(const Eigen::Matrix<double, 4, 3>& grad_c,
     gk(r) = grad_c.block<1, 2>(r, 0).dot(e_.transpose());
     gn(r) = grad_c.block<1, 2>(r, 0).dot(n.transpose());
   }
-  const double sign = lead_out_ ? -1.0 : 1.0;  // the lead-out's junction sits at base - e d, its acceleration -e sigma''
+  const double sign =
+      lead_out_ ? -1.0 : 1.0;  // the lead-out's junction sits at base - e d, its acceleration -e sigma''
   const double gjp = grad_junction.block<2, 1>(0, 0).dot(e_), gjv = grad_junction.block<2, 1>(0, 1).dot(e_);
   const double gja = sign * grad_junction.block<2, 1>(0, 2).dot(e_);
   const double t = t_, t2 = t * t, t3 = t2 * t;

@@ -121,13 +121,15 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
         {
           const double num = cr * cr - w2 * s2 * s2, den = w2 * se2;
           const double dz = cubic_penalty(num / den, w, f.omega);
-          const Eigen::Vector2d gzv = (2.0 * cr * dcr_dv - 2.0 * w2 * s2 * ds_dv) / den - (num / den) * (2.0 / se) * ds_dv;
+          const Eigen::Vector2d gzv =
+              (2.0 * cr * dcr_dv - 2.0 * w2 * s2 * ds_dv) / den - (num / den) * (2.0 / se) * ds_dv;
           gv.head<2>() += dz * gzv, ga.head<2>() += dz * (2.0 * cr / den) * dcr_da;
         }
         if (car) {
           const double num = r2 * cr * cr - s2 * s2 * s2, den = se2 * se;
           const double dz = cubic_penalty(num / den, w, f.turn);
-          const Eigen::Vector2d gzv = (2.0 * r2 * cr * dcr_dv - 3.0 * s2 * s2 * ds_dv) / den - (num / den) * (3.0 / se) * ds_dv;
+          const Eigen::Vector2d gzv =
+              (2.0 * r2 * cr * dcr_dv - 3.0 * s2 * s2 * ds_dv) / den - (num / den) * (3.0 / se) * ds_dv;
           gv.head<2>() += dz * gzv, ga.head<2>() += dz * (2.0 * r2 * cr / den) * dcr_da;
         }
         {
@@ -205,8 +207,8 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
       gc.noalias() += wt * (b0 * qp.transpose() + b1 * qv.transpose() + b2 * qa.transpose()) +
                       wp * (b0 * gp.transpose() + b1 * gv.transpose() + b2 * ga.transpose());
       gc.row(3) += wp * 6.0 * gj.transpose();
-      gt += (f.q + penalties) * wt / dur + alpha * (wt * (qp.dot(v) + qv.dot(a) + qa.dot(jerk)) +
-                                                     wp * (gp.dot(v) + gv.dot(a) + ga.dot(jerk)));
+      gt += (f.q + penalties) * wt / dur +
+            alpha * (wt * (qp.dot(v) + qv.dot(a) + qa.dot(jerk)) + wp * (gp.dot(v) + gv.dot(a) + ga.dot(jerk)));
     }
     grad_c.middleRows<4>(4 * i) += gc;
     grad_t(i) += gt;

@@ -44,15 +44,15 @@
 namespace lf3pm {
 
 struct CostWeights {
-  double w_q = 1.0;          ///< weight of the cost field's integral over time
-  double penalty = 1e5;      ///< W: weight of the cubic feasibility penalties
-  double esdf_margin = 0.05; ///< the clearance penalty starts at r_safe + margin
-  int samples = 16;          ///< K: samples per piece (K + 1 with both ends)
+  double w_q = 1.0;           ///< weight of the cost field's integral over time
+  double penalty = 1e5;       ///< W: weight of the cubic feasibility penalties
+  double esdf_margin = 0.05;  ///< the clearance penalty starts at r_safe + margin
+  int samples = 16;           ///< K: samples per piece (K + 1 with both ends)
   /// Omni robots: a radian of yaw travel costs what `turn` seconds of travel cost there,
   /// (w_time + w_q c) per second, in the q term: the front end's price of a turn
   /// (turn_radius / vmax_lon, docs/planner_backend.md); 0: turns are free.
   double turn = 0.0;
-  double w_time = 1.0;       ///< the time term's weight rho_T, which prices the turn's time
+  double w_time = 1.0;  ///< the time term's weight rho_T, which prices the turn's time
 };
 
 /// The objective's terms (unweighted by nothing: each as it enters the objective).
@@ -80,7 +80,6 @@ class TrajectoryCost {
   /// to `terms`, their partial gradients to grad_c (4N x 3) and grad_t (N).
   void add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& durations, Eigen::MatrixX3d& grad_c,
            Eigen::VectorXd& grad_t, CostTerms& terms) const;
-
 
  private:
   GridField cost_, esdf_;

@@ -66,11 +66,11 @@ class TrajectoryProblem {
 
 struct OptimizeOutcome {
   Eigen::VectorXd x;
-  int iterations = 0;        ///< L-BFGS iterations
-  int evaluations = 0;       ///< objective evaluations
-  std::string status;        ///< L-BFGS's status
-  std::string reason;        ///< and why it stopped (LbfgsResult::reason)
-  CostTerms terms;           ///< at the solution
+  int iterations = 0;   ///< L-BFGS iterations
+  int evaluations = 0;  ///< objective evaluations
+  std::string status;   ///< L-BFGS's status
+  std::string reason;   ///< and why it stopped (LbfgsResult::reason)
+  CostTerms terms;      ///< at the solution
 };
 
 /// The trajectory optimiser's L-BFGS: lbfgs.hpp's defaults but a relative decrease of

@@ -25,16 +25,20 @@ def _choose_level() -> str:
     asked = os.environ.get("LF3PM_CORE", "").strip()
     if asked:
         if asked not in built:
-            raise CoreLevelError(f"LF3PM_CORE={asked}: this build has the core for {', '.join(built)} "
-                                 "(rebuild with -Ccmake.define.LF3PM_ARCH=...; README, Supported CPUs)")
+            raise CoreLevelError(
+                f"LF3PM_CORE={asked}: this build has the core for {', '.join(built)} "
+                "(rebuild with -Ccmake.define.LF3PM_ARCH=...; README, Supported CPUs)"
+            )
         if not cpu_check.runs(asked):
             raise CoreLevelError(f"LF3PM_CORE={asked}: this CPU cannot run code built for {asked}")
         return asked
     for arch in built:
         if cpu_check.runs(arch):
             return arch
-    raise CoreLevelError(f"this CPU runs none of the core's levels ({', '.join(built)}): rebuild with "
-                         "-Ccmake.define.LF3PM_ARCH=x86-64 (README, Supported CPUs)")
+    raise CoreLevelError(
+        f"this CPU runs none of the core's levels ({', '.join(built)}): rebuild with "
+        "-Ccmake.define.LF3PM_ARCH=x86-64 (README, Supported CPUs)"
+    )
 
 
 #: The -march level of the core this process loaded.

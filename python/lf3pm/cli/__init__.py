@@ -1,9 +1,9 @@
 """The ``lf3pm`` command line: one module per command or command group, each a few
 lines over the library (lf3pm.__main__ runs :func:`main` behind the core check)."""
 
-from lf3pm.cli import evaluate, experiment, info, plan, replay, solm, view  # noqa: F401  (they register their commands)
 import sys
 
+from lf3pm.cli import evaluate, experiment, info, plan, replay, solm, view  # noqa: F401  (they register their commands)
 from lf3pm.cli._common import app, print_error
 
 

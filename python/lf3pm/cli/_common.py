@@ -18,8 +18,11 @@ from lf3pm.atomic import check_replaceable
 from lf3pm.config import Config, help_with_default, load_config
 from lf3pm.errors import Lf3pmError, one_line, one_line_warning
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="LiDAR perception-aware planning: where will LiDAR localization hold?")
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="LiDAR perception-aware planning: where will LiDAR localization hold?",
+)
 # No markup: what the consoles print holds paths, names and values as the user gave them,
 # and Rich would take "[red]" in a path or "[nan, 0.0]" in a message for a tag and drop it.
 console = Console(markup=False)
@@ -28,8 +31,9 @@ err_console = Console(stderr=True, markup=False)
 
 def print_warning(text) -> None:
     """``lf3pm: warning: TEXT`` on stderr, one line, TEXT verbatim."""
-    err_console.print(Text.assemble(("lf3pm: warning:", "bold yellow"), " ", one_line(text)), highlight=False,
-                      soft_wrap=True)
+    err_console.print(
+        Text.assemble(("lf3pm: warning:", "bold yellow"), " ", one_line(text)), highlight=False, soft_wrap=True
+    )
 
 
 @contextmanager
@@ -58,8 +62,9 @@ def user_errors():
 
 def print_error(text) -> None:
     """``lf3pm: error: TEXT`` on stderr, one line, TEXT verbatim."""
-    err_console.print(Text.assemble(("lf3pm: error:", "bold red"), " ", one_line(text)), highlight=False,
-                      soft_wrap=True)
+    err_console.print(
+        Text.assemble(("lf3pm: error:", "bold red"), " ", one_line(text)), highlight=False, soft_wrap=True
+    )
 
 
 def check_output(path: Path | None, *, folder: bool = False, parents: bool = False, new: bool = False) -> None:
@@ -75,8 +80,9 @@ def check_output(path: Path | None, *, folder: bool = False, parents: bool = Fal
     path = Path(path)
     if os.path.lexists(path):
         if new:
-            raise Lf3pmError(f"{path} exists: lf3pm writes it as a new folder and replaces nothing; remove it "
-                             "or choose another name")
+            raise Lf3pmError(
+                f"{path} exists: lf3pm writes it as a new folder and replaces nothing; remove it or choose another name"
+            )
         if folder and not path.is_dir():
             raise Lf3pmError(f"{path}: cannot write into the folder: it is not a folder; choose another name")
         if not folder:
@@ -111,8 +117,13 @@ def option(path: str, *names: str, help: str | None = None, **kwargs):
     return typer.Option(None, *names, help=help_with_default(path, help), **kwargs)
 
 
-CONFIG_OPTION = typer.Option(None, "--config", metavar="FILE.yaml", exists=False,
-                             help="Parameters from a YAML file (config/*.yaml; flags given override it).")
+CONFIG_OPTION = typer.Option(
+    None,
+    "--config",
+    metavar="FILE.yaml",
+    exists=False,
+    help="Parameters from a YAML file (config/*.yaml; flags given override it).",
+)
 
 
 def configure(config_file: Path | None, given: dict, paths: dict) -> Config:
@@ -129,17 +140,32 @@ def section_paths(section: str, *names: str) -> dict:
 
 
 #: Where each option of evaluate and mde lives in the config.
-SCAN_PATHS = {"sensor": "sensor", "seed": "scan.seed", "noise": "scan.noise", "scan_voxel": "scan.scan_voxel",
-              "threads": "scan.threads"}
-MAP_PATHS = {"map_voxel": "map.voxel", "knn": "map.knn", "plane_threshold": "map.plane_threshold",
-             "max_neighbor_distance": "map.max_neighbor_distance"}
+SCAN_PATHS = {
+    "sensor": "sensor",
+    "seed": "scan.seed",
+    "noise": "scan.noise",
+    "scan_voxel": "scan.scan_voxel",
+    "threads": "scan.threads",
+}
+MAP_PATHS = {
+    "map_voxel": "map.voxel",
+    "knn": "map.knn",
+    "plane_threshold": "map.plane_threshold",
+    "max_neighbor_distance": "map.max_neighbor_distance",
+}
 
 
 def map_options(config: Config) -> dict:
     """load_map's keywords from the config."""
     m = config.map
-    return {"voxel": m.voxel, "cell_size": m.cell_size, "knn": m.knn, "plane_threshold": m.plane_threshold,
-            "max_neighbor_distance": m.max_neighbor_distance, "threads": config.scan.threads}
+    return {
+        "voxel": m.voxel,
+        "cell_size": m.cell_size,
+        "knn": m.knn,
+        "plane_threshold": m.plane_threshold,
+        "max_neighbor_distance": m.max_neighbor_distance,
+        "threads": config.scan.threads,
+    }
 
 
 def scan_options(config: Config) -> dict:
@@ -156,9 +182,14 @@ def progress_bar():
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     # The label holds paths (`writing OUT.bag`): shown as text, not markup.
-    bar = Progress(TextColumn("{task.description}", style="progress.description", markup=False), BarColumn(),
-                   "{task.completed}/{task.total}", TimeElapsedColumn(), TimeRemainingColumn(),
-                   console=err_console)
+    bar = Progress(
+        TextColumn("{task.description}", style="progress.description", markup=False),
+        BarColumn(),
+        "{task.completed}/{task.total}",
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err_console,
+    )
     task = None
 
     def step(label, total, advance=1, restart=False):
@@ -188,8 +219,13 @@ def map_loading():
         return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    line = Progress(SpinnerColumn(), TextColumn("{task.description}", markup=False), TimeElapsedColumn(),
-                    console=err_console, transient=True)
+    line = Progress(
+        SpinnerColumn(),
+        TextColumn("{task.description}", markup=False),
+        TimeElapsedColumn(),
+        console=err_console,
+        transient=True,
+    )
     task = None
 
     def phase(text):

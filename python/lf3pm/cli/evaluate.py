@@ -4,56 +4,83 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional, Tuple
 
 import numpy as np
 import typer
 from rich.table import Table
 
 from lf3pm.atomic import atomic_write
-from lf3pm.cli._common import (CONFIG_OPTION, MAP_PATHS, SCAN_PATHS, app, check_output, configure, console, map_loading,
-                               map_options, option, scan_options, user_errors)
+from lf3pm.cli._common import (
+    CONFIG_OPTION,
+    MAP_PATHS,
+    SCAN_PATHS,
+    app,
+    check_output,
+    configure,
+    console,
+    map_loading,
+    map_options,
+    option,
+    scan_options,
+    user_errors,
+)
 
 
 @app.command()
 def evaluate(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
-    pose: Tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
-    config: Optional[Path] = CONFIG_OPTION,
-    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
-    seed: Optional[int] = option("scan.seed"),
-    noise: Optional[float] = option("scan.noise"),
-    dof: Optional[int] = option("metric.dof"),
-    w1: Optional[float] = option("metric.w1"),
-    scan_voxel: Optional[float] = option("scan.scan_voxel"),
-    association: Optional[str] = option("metric.association"),
-    map_voxel: Optional[float] = option("map.voxel"),
-    knn: Optional[int] = option("map.knn"),
-    plane_threshold: Optional[float] = option("map.plane_threshold"),
-    max_neighbor_distance: Optional[float] = option("map.max_neighbor_distance"),
-    threads: Optional[int] = option("scan.threads"),
+    pose: tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
+    config: Path | None = CONFIG_OPTION,
+    sensor: str | None = option("sensor", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
+    seed: int | None = option("scan.seed"),
+    noise: float | None = option("scan.noise"),
+    dof: int | None = option("metric.dof"),
+    w1: float | None = option("metric.w1"),
+    scan_voxel: float | None = option("scan.scan_voxel"),
+    association: str | None = option("metric.association"),
+    map_voxel: float | None = option("map.voxel"),
+    knn: int | None = option("map.knn"),
+    plane_threshold: float | None = option("map.plane_threshold"),
+    max_neighbor_distance: float | None = option("map.max_neighbor_distance"),
+    threads: int | None = option("scan.threads"),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
-    save_observations: Optional[Path] = typer.Option(None, metavar="OBS.npz",
-                                                     help="Write A, b and the simulated points."),
+    save_observations: Path | None = typer.Option(None, metavar="OBS.npz", help="Write A, b and the simulated points."),
 ):
     """Simulate the scan at one pose and print the LF-3PM metric and baselines."""
     with user_errors():
-        cfg = configure(config, locals(), {**SCAN_PATHS, **MAP_PATHS, "dof": "metric.dof", "w1": "metric.w1",
-                                           "association": "metric.association"})
-        from lf3pm.metric import evaluate as run_evaluate
+        cfg = configure(
+            config,
+            locals(),
+            {**SCAN_PATHS, **MAP_PATHS, "dof": "metric.dof", "w1": "metric.w1", "association": "metric.association"},
+        )
         from lf3pm.map import load_map
+        from lf3pm.metric import evaluate as run_evaluate
 
         check_output(save_observations)
         with map_loading() as progress:
             world = load_map(map_path, **map_options(cfg), progress=progress)
-        result = run_evaluate(world, pose, cfg.sensor, **scan_options(cfg), dof=cfg.metric.dof, w1=cfg.metric.w1,
-                              association=cfg.metric.association, observations=save_observations is not None)
+        result = run_evaluate(
+            world,
+            pose,
+            cfg.sensor,
+            **scan_options(cfg),
+            dof=cfg.metric.dof,
+            w1=cfg.metric.w1,
+            association=cfg.metric.association,
+            observations=save_observations is not None,
+        )
         if save_observations is not None:
             obs = result.observations
             with atomic_write(save_observations) as fp:
-                np.savez(fp, A=obs["A"], b=obs["b"], points=obs["points"],
-                         sensor_points=obs["sensor_points"], row_hit=obs["row_hit"],
-                         pose=np.asarray(result.pose))
+                np.savez(
+                    fp,
+                    A=obs["A"],
+                    b=obs["b"],
+                    points=obs["points"],
+                    sensor_points=obs["sensor_points"],
+                    row_hit=obs["row_hit"],
+                    pose=np.asarray(result.pose),
+                )
         out = result.to_dict()
         out["map"] = world.describe()
         if as_json:
@@ -66,15 +93,31 @@ def print_evaluation(out: dict) -> None:
     table = Table(title=f"LF-3PM metric, sensor {out['sensor']}", show_header=True)
     table.add_column("quantity")
     table.add_column("value", justify="right")
-    for key in ("q_min", "q_n", "q_max", "sigma1", "xi", "zhang", "condition_number", "cov_trace",
-                "step_norm", "residual_norm", "scaled_cov_trace"):
+    for key in (
+        "q_min",
+        "q_n",
+        "q_max",
+        "sigma1",
+        "xi",
+        "zhang",
+        "condition_number",
+        "cov_trace",
+        "step_norm",
+        "residual_norm",
+        "scaled_cov_trace",
+    ):
         value = out[key]
         table.add_row(key, "inf" if value is None else f"{value:.6g}")
     reasons = []
     for label, key, interval, withheld in (
-            ("predicted MDE", "predicted_mde", "predicted_mde_interval", "predicted_mde_withheld"),
-            ("predicted localization error (m)", "predicted_localization_error_m",
-             "predicted_localization_error_interval_m", "predicted_localization_error_withheld")):
+        ("predicted MDE", "predicted_mde", "predicted_mde_interval", "predicted_mde_withheld"),
+        (
+            "predicted localization error (m)",
+            "predicted_localization_error_m",
+            "predicted_localization_error_interval_m",
+            "predicted_localization_error_withheld",
+        ),
+    ):
         if out[key] is not None:
             lo, hi = out[interval]
             table.add_row(label, f"{out[key]:.3g} [{lo:.2g}, {hi:.2g}]")
@@ -92,29 +135,37 @@ def print_evaluation(out: dict) -> None:
 @app.command()
 def mde(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
-    pose: Tuple[float, float, float, float] = typer.Option(..., help="True sensor pose X Y Z YAW (m, rad)."),
-    config: Optional[Path] = CONFIG_OPTION,
-    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
-    trials: Optional[int] = option("mde.trials"),
-    sigma_t: Optional[float] = option("mde.sigma_t"),
-    sigma_r: Optional[float] = option("mde.sigma_r"),
-    noise: Optional[float] = option("scan.noise"),
-    seed: Optional[int] = option("scan.seed", help="Seed of the scan noise and the disturbances."),
-    scan_voxel: Optional[float] = option("scan.scan_voxel"),
-    threads: Optional[int] = option("scan.threads"),
+    pose: tuple[float, float, float, float] = typer.Option(..., help="True sensor pose X Y Z YAW (m, rad)."),
+    config: Path | None = CONFIG_OPTION,
+    sensor: str | None = option("sensor", help="Sensor preset name or YAML file."),
+    trials: int | None = option("mde.trials"),
+    sigma_t: float | None = option("mde.sigma_t"),
+    sigma_r: float | None = option("mde.sigma_r"),
+    noise: float | None = option("scan.noise"),
+    seed: int | None = option("scan.seed", help="Seed of the scan noise and the disturbances."),
+    scan_voxel: float | None = option("scan.scan_voxel"),
+    threads: int | None = option("scan.threads"),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ):
     """MDE: mean squared error of point-to-plane ICP (small_gicp) from disturbed starts."""
     with user_errors():
-        cfg = configure(config, locals(), {**SCAN_PATHS, "trials": "mde.trials", "sigma_t": "mde.sigma_t",
-                                           "sigma_r": "mde.sigma_r"})
-        from lf3pm.validation import mde as run_mde
+        cfg = configure(
+            config, locals(), {**SCAN_PATHS, "trials": "mde.trials", "sigma_t": "mde.sigma_t", "sigma_r": "mde.sigma_r"}
+        )
         from lf3pm.map import load_map
+        from lf3pm.validation import mde as run_mde
 
         with map_loading() as progress:
             world = load_map(map_path, **map_options(cfg), progress=progress)
-        result = run_mde(world, pose, cfg.sensor, trials=cfg.mde.trials, sigma_t=cfg.mde.sigma_t,
-                         sigma_r_deg=cfg.mde.sigma_r, **scan_options(cfg))
+        result = run_mde(
+            world,
+            pose,
+            cfg.sensor,
+            trials=cfg.mde.trials,
+            sigma_t=cfg.mde.sigma_t,
+            sigma_r_deg=cfg.mde.sigma_r,
+            **scan_options(cfg),
+        )
         out = result.to_dict()
         if as_json:
             print(json.dumps(out))

@@ -3,24 +3,22 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
 
 import typer
 from rich.table import Table
 
 from lf3pm.cli._common import app, check_output, configure, console, option, progress_bar, section_paths, user_errors
 
-experiment_app = typer.Typer(help="Reproducible experiments (tables, figures, summary.json).",
-                              no_args_is_help=True)
+experiment_app = typer.Typer(help="Reproducible experiments (tables, figures, summary.json).", no_args_is_help=True)
 app.add_typer(experiment_app, name="experiment")
 
 
 @experiment_app.command("table1")
 def experiment_table1(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
-    poses: Optional[int] = option("table1.poses"),
-    trials: Optional[int] = option("table1.trials"),
-    seed: Optional[int] = option("table1.seed"),
+    poses: int | None = option("table1.poses"),
+    trials: int | None = option("table1.trials"),
+    seed: int | None = option("table1.seed"),
 ):
     """The paper's Table I: q_min, q_n, q_max and MDE on houses, house_meadow, meadow, wall."""
     with user_errors():
@@ -37,41 +35,57 @@ def experiment_table1(
 @experiment_app.command("correlation")
 def experiment_correlation(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
-    poses_per_map: Optional[int] = option("correlation.poses_per_map"),
-    trials: Optional[int] = option("correlation.trials"),
-    sensor: Optional[str] = option("sensor"),
-    bootstrap: Optional[int] = option("correlation.bootstrap"),
-    seed: Optional[int] = option("correlation.seed"),
+    poses_per_map: int | None = option("correlation.poses_per_map"),
+    trials: int | None = option("correlation.trials"),
+    sensor: str | None = option("sensor"),
+    bootstrap: int | None = option("correlation.bootstrap"),
+    seed: int | None = option("correlation.seed"),
 ):
     """Spearman correlation of each predictor with MDE, pooled and within maps."""
     with user_errors():
         check_output(out, folder=True, parents=True)
         from lf3pm.experiments import correlation
 
-        cfg = configure(None, locals(), {"sensor": "sensor", **section_paths(
-            "correlation", "poses_per_map", "trials", "bootstrap", "seed")})
+        cfg = configure(
+            None,
+            locals(),
+            {"sensor": "sensor", **section_paths("correlation", "poses_per_map", "trials", "bootstrap", "seed")},
+        )
         study = cfg.correlation
         with progress_bar() as step:
-            summary = correlation.run(out, poses_per_map=study.poses_per_map, trials=study.trials, sensor=cfg.sensor,
-                                      seed=study.seed, bootstrap=study.bootstrap, progress=step)
+            summary = correlation.run(
+                out,
+                poses_per_map=study.poses_per_map,
+                trials=study.trials,
+                sensor=cfg.sensor,
+                seed=study.seed,
+                bootstrap=study.bootstrap,
+                progress=step,
+            )
         table = Table(title=f"Spearman rho with MDE ({summary['params']['poses']} poses)")
         for col in ("predictor", "pooled rho", "95% CI", "mean within-map rho", "95% CI"):
             table.add_column(col)
         for name, p in summary["predictors"].items():
-            table.add_row(name, f"{p['rho']:.2f}", f"[{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]",
-                          f"{p['within_mean_rho']:.2f}",
-                          f"[{p['within_mean_ci'][0]:.2f}, {p['within_mean_ci'][1]:.2f}]")
+            table.add_row(
+                name,
+                f"{p['rho']:.2f}",
+                f"[{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]",
+                f"{p['within_mean_rho']:.2f}",
+                f"[{p['within_mean_ci'][0]:.2f}, {p['within_mean_ci'][1]:.2f}]",
+            )
         console.print(table)
-        console.print(f"best within maps: {summary['best_within_map']}; best pooled: "
-                      f"{summary['best_pooled']}; wrote {out}/summary.json, poses.csv, scatter.png")
+        console.print(
+            f"best within maps: {summary['best_within_map']}; best pooled: "
+            f"{summary['best_pooled']}; wrote {out}/summary.json, poses.csv, scatter.png"
+        )
 
 
 @experiment_app.command("gobi")
 def experiment_gobi(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (its SOLM and replays resume on a rerun)."),
     reduced: bool = typer.Option(False, help="A smaller desert (115 x 90 m; the demo's)."),
-    seeds: Optional[int] = option("gobi.seeds"),
-    seed: Optional[int] = option("gobi.seed"),
+    seeds: int | None = option("gobi.seeds"),
+    seed: int | None = option("gobi.seed"),
 ):
     """Town -> warehouse guided by q_n, q_min, |dx*|, the default and none; S, localization and LIO."""
     with user_errors():
@@ -94,26 +108,39 @@ def experiment_gobi(
 def experiment_benefit(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
-    seeds: Optional[int] = option("benefit.seeds"),
-    workers: Optional[int] = option("benefit.workers"),
-    pair_seed: Optional[int] = option("benefit.pair_seed"),
-    guidance: Optional[list[str]] = typer.Option(
-        None, metavar="NAME=CHANNEL:POWER:WEIGHT",
-        help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run)."),
-    lio: Optional[str] = option("benefit.lio"),
-    odometry: Optional[str] = option("benefit.odometry"),
+    seeds: int | None = option("benefit.seeds"),
+    workers: int | None = option("benefit.workers"),
+    pair_seed: int | None = option("benefit.pair_seed"),
+    guidance: list[str] | None = typer.Option(
+        None,
+        metavar="NAME=CHANNEL:POWER:WEIGHT",
+        help="Compare these instead of q_n, q_min, step_norm and the default (repeat; a tuning run).",
+    ),
+    lio: str | None = option("benefit.lio"),
+    odometry: str | None = option("benefit.odometry"),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
         check_output(out, folder=True, parents=True)
         from lf3pm.experiments import benefit
 
-        study = configure(None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry")).benefit
+        study = configure(
+            None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry")
+        ).benefit
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
         with progress_bar() as step:
-            benefit.run(out, quick=quick, seeds=study.seeds, workers=study.workers, pair_seed=study.pair_seed,
-                        guidance=candidates, lio=study.lio, odometry=study.odometry, progress=step)
+            benefit.run(
+                out,
+                quick=quick,
+                seeds=study.seeds,
+                workers=study.workers,
+                pair_seed=study.pair_seed,
+                guidance=candidates,
+                lio=study.lio,
+                odometry=study.odometry,
+                progress=step,
+            )
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")

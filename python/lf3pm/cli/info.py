@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Optional
 
 import typer
 from rich.table import Table
@@ -16,8 +15,11 @@ from lf3pm.errors import Lf3pmError
 
 
 @app.command("config")
-def show_config(config: Optional[Path] = typer.Option(None, "--config", metavar="FILE.yaml",
-                                                      help="Show this file's parameters merged with the defaults.")):
+def show_config(
+    config: Path | None = typer.Option(
+        None, "--config", metavar="FILE.yaml", help="Show this file's parameters merged with the defaults."
+    ),
+):
     """Print every parameter and its value (the defaults, or FILE.yaml's) as YAML for --config."""
     with user_errors():
         from lf3pm.config import to_yaml
@@ -34,15 +36,22 @@ def sensors():
     for col in ("name", "rays", "range (m)", "noise (m)", "h-FoV (deg)", "model"):
         table.add_column(col)
     for s in list_sensors():
-        table.add_row(s.name, str(s.num_rays), f"{s.min_range:g}-{s.max_range:g}",
-                      f"{s.range_noise_sigma:g}", f"{math.degrees(s.horizontal_fov):.1f}",
-                      ("approximation of " if s.approximate else "") + s.description.split(":")[0])
+        table.add_row(
+            s.name,
+            str(s.num_rays),
+            f"{s.min_range:g}-{s.max_range:g}",
+            f"{s.range_noise_sigma:g}",
+            f"{math.degrees(s.horizontal_fov):.1f}",
+            ("approximation of " if s.approximate else "") + s.description.split(":")[0],
+        )
     console.print(table)
 
 
 @app.command()
-def info(map_path: Path = typer.Argument(..., metavar="MAP"),
-         map_voxel: Optional[float] = typer.Option(None, help="Voxel-downsample the map first (m).")):
+def info(
+    map_path: Path = typer.Argument(..., metavar="MAP"),
+    map_voxel: float | None = typer.Option(None, help="Voxel-downsample the map first (m)."),
+):
     """Load and index a map; print its size, extent and index statistics."""
     with user_errors():
         from lf3pm.map import load_map
@@ -54,10 +63,11 @@ def info(map_path: Path = typer.Argument(..., metavar="MAP"),
 
 @app.command()
 def scene(
-    name: Optional[str] = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
-    output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="MAP.pcd",
-                                          help="Map file to write (format by suffix; .pcd is binary)."),
-    seed: Optional[int] = option("scene.seed", help="Seed of the scene's randomness (0 to 2^63 - 1)."),
+    name: str | None = typer.Argument(None, metavar="NAME", help="Scene name (see --list)."),
+    output: Path | None = typer.Option(
+        None, "-o", "--output", metavar="MAP.pcd", help="Map file to write (format by suffix; .pcd is binary)."
+    ),
+    seed: int | None = option("scene.seed", help="Seed of the scene's randomness (0 to 2^63 - 1)."),
     list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
 ):
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
@@ -81,12 +91,15 @@ def scene(
         from lf3pm.io import SUPPORTED_SUFFIXES, write_points
 
         if output.suffix.lower() not in SUPPORTED_SUFFIXES:
-            raise Lf3pmError(f"{output}: unknown suffix {output.suffix or '(none)'}; "
-                             f"supported: {' '.join(SUPPORTED_SUFFIXES)}")
+            raise Lf3pmError(
+                f"{output}: unknown suffix {output.suffix or '(none)'}; supported: {' '.join(SUPPORTED_SUFFIXES)}"
+            )
         check_output(output)
         built = build_scene(name, seed=seed)
         write_points(output, built.points)
         x, y, z, yaw = built.reference_pose
         console.print(f"{built.name}: {built.size:,} points (seed {seed}) -> {output}", highlight=False)
-        console.print(f"reference pose x y z yaw: {x:g} {y:g} {z:g} {yaw:g}  "
-                      f"(free radius {built.free_radius:g} m)", highlight=False)
+        console.print(
+            f"reference pose x y z yaw: {x:g} {y:g} {z:g} {yaw:g}  (free radius {built.free_radius:g} m)",
+            highlight=False,
+        )

@@ -4,54 +4,88 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional, Tuple
 
 import typer
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, map_loading, option, print_warning,
-                               user_errors)
+from lf3pm.cli._common import (
+    CONFIG_OPTION,
+    app,
+    check_output,
+    configure,
+    console,
+    map_loading,
+    option,
+    print_warning,
+    user_errors,
+)
 from lf3pm.errors import Lf3pmError
 
-
 #: Where each option of plan lives in the config.
-PLAN_PATHS = {"robot": "robot.kind", "metric": "guidance.metric", "weight": "guidance.weight",
-              "power": "guidance.power", "turn_radius": "guidance.turn_radius", **{name: f"robot.{name}" for name in (
-                  "vmax_lon", "vmax_lat", "vmax_norm", "wmax", "amax_lon", "amax_lat", "alpha_max",
-                  "min_turn_radius", "r_safe")}}
+PLAN_PATHS = {
+    "robot": "robot.kind",
+    "metric": "guidance.metric",
+    "weight": "guidance.weight",
+    "power": "guidance.power",
+    "turn_radius": "guidance.turn_radius",
+    **{
+        name: f"robot.{name}"
+        for name in (
+            "vmax_lon",
+            "vmax_lat",
+            "vmax_norm",
+            "wmax",
+            "amax_lon",
+            "amax_lat",
+            "alpha_max",
+            "min_turn_radius",
+            "r_safe",
+        )
+    },
+}
 
 
 @app.command()
 def plan(
     solm_path: Path = typer.Option(..., "--solm", metavar="S.zarr", help="A built r2 or se2 SOLM."),
-    start: Tuple[float, float, float] = typer.Option(..., help="Start X Y YAW (m, rad)."),
-    goal: Tuple[float, float, float] = typer.Option(..., help="Goal X Y YAW (m, rad)."),
-    out: Path = typer.Option(..., "-o", "--out", metavar="TRAJ.csv",
-                             help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."),
-    config: Optional[Path] = CONFIG_OPTION,
-    robot: Optional[str] = option("robot.kind", help="omni, diff (differential drive) or car."),
-    metric: Optional[str] = option("guidance.metric", help="SOLM channel guiding the plan: q_n, q_min, "
-                                                           "q_max, step_norm, q_n_q_min (the worse of q_n "
-                                                           "and q_min per cell) or none."),
-    weight: Optional[float] = option("guidance.weight", help="lambda: an edge through cells of cost c costs "
-                                                             "length (1 + lambda c); a median cell has c = 1 "
-                                                             "(docs/benefit.md)."),
-    power: Optional[float] = option("guidance.power", help="Exponent applied to the channel (over its median) "
-                                                           "before the weight (docs/benefit.md)."),
-    turn_radius: Optional[float] = option("guidance.turn_radius", help="A turn of the sensor costs the arc a point "
-                                                                       "this far from its axis travels (m per rad; "
-                                                                       "docs/benefit.md)."),
-    vmax_lon: Optional[float] = option("robot.vmax_lon", help="Longitudinal speed limit (m/s)."),
-    vmax_lat: Optional[float] = option("robot.vmax_lat", help="Lateral speed limit (m/s; omni)."),
-    vmax_norm: Optional[float] = typer.Option(
-        None, help="Limit on the speed |v| (m/s; omni; default max(vmax-lon, vmax-lat), inf: none)."),
-    wmax: Optional[float] = option("robot.wmax", help="Yaw rate limit (rad/s)."),
-    amax_lon: Optional[float] = option("robot.amax_lon", help="Longitudinal (tangential) acceleration limit (m/s^2)."),
-    amax_lat: Optional[float] = option("robot.amax_lat", help="Lateral (centripetal) acceleration limit (m/s^2)."),
-    alpha_max: Optional[float] = option("robot.alpha_max", help="Yaw acceleration limit (rad/s^2)."),
-    min_turn_radius: Optional[float] = option("robot.min_turn_radius", help="Minimum turning radius (m; car)."),
-    r_safe: Optional[float] = option("robot.r_safe", help="Clearance beyond the SOLM's robot radius (m)."),
-    png: Optional[Path] = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
-    map_path: Optional[Path] = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
+    start: tuple[float, float, float] = typer.Option(..., help="Start X Y YAW (m, rad)."),
+    goal: tuple[float, float, float] = typer.Option(..., help="Goal X Y YAW (m, rad)."),
+    out: Path = typer.Option(
+        ..., "-o", "--out", metavar="TRAJ.csv", help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."
+    ),
+    config: Path | None = CONFIG_OPTION,
+    robot: str | None = option("robot.kind", help="omni, diff (differential drive) or car."),
+    metric: str | None = option(
+        "guidance.metric",
+        help="SOLM channel guiding the plan: q_n, q_min, "
+        "q_max, step_norm, q_n_q_min (the worse of q_n "
+        "and q_min per cell) or none.",
+    ),
+    weight: float | None = option(
+        "guidance.weight",
+        help="lambda: an edge through cells of cost c costs "
+        "length (1 + lambda c); a median cell has c = 1 "
+        "(docs/benefit.md).",
+    ),
+    power: float | None = option(
+        "guidance.power", help="Exponent applied to the channel (over its median) before the weight (docs/benefit.md)."
+    ),
+    turn_radius: float | None = option(
+        "guidance.turn_radius",
+        help="A turn of the sensor costs the arc a point this far from its axis travels (m per rad; docs/benefit.md).",
+    ),
+    vmax_lon: float | None = option("robot.vmax_lon", help="Longitudinal speed limit (m/s)."),
+    vmax_lat: float | None = option("robot.vmax_lat", help="Lateral speed limit (m/s; omni)."),
+    vmax_norm: float | None = typer.Option(
+        None, help="Limit on the speed |v| (m/s; omni; default max(vmax-lon, vmax-lat), inf: none)."
+    ),
+    wmax: float | None = option("robot.wmax", help="Yaw rate limit (rad/s)."),
+    amax_lon: float | None = option("robot.amax_lon", help="Longitudinal (tangential) acceleration limit (m/s^2)."),
+    amax_lat: float | None = option("robot.amax_lat", help="Lateral (centripetal) acceleration limit (m/s^2)."),
+    alpha_max: float | None = option("robot.alpha_max", help="Yaw acceleration limit (rad/s^2)."),
+    min_turn_radius: float | None = option("robot.min_turn_radius", help="Minimum turning radius (m; car)."),
+    r_safe: float | None = option("robot.r_safe", help="Clearance beyond the SOLM's robot radius (m)."),
+    png: Path | None = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
+    map_path: Path | None = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan's summary as JSON."),
 ):
     """Plan a perception-aware trajectory on a SOLM (graph search, then MINCO + L-BFGS)."""
@@ -61,14 +95,20 @@ def plan(
         check_output(png)
         from lf3pm.planner.plan import Planner
         from lf3pm.solm import Solm
-
         from lf3pm.trajectory.robots import Robot
 
         vehicle, guidance = Robot.from_config(cfg.robot), cfg.guidance
         metric = guidance.metric
         solm = Solm.open(solm_path)
-        result = Planner(solm).plan(start, goal, robot=vehicle, metric=metric, weight=guidance.weight,
-                                    power=guidance.power, turn_radius=guidance.turn_radius)
+        result = Planner(solm).plan(
+            start,
+            goal,
+            robot=vehicle,
+            metric=metric,
+            weight=guidance.weight,
+            power=guidance.power,
+            turn_radius=guidance.turn_radius,
+        )
         # All or none: the figure first (the likelier to fail), then the CSV; a CSV that
         # cannot be written takes the new figure with it.
         if png is not None:
@@ -79,8 +119,13 @@ def plan(
             if map_path is not None:
                 with map_loading() as progress:
                     points = load_map(map_path, progress=progress).points
-            plans_figure(solm, {metric: result}, png, map_points=points,
-                         title=f"{vehicle.kind} plan guided by {metric} over the SOLM (dotted: front-end path)")
+            plans_figure(
+                solm,
+                {metric: result},
+                png,
+                map_points=points,
+                title=f"{vehicle.kind} plan guided by {metric} over the SOLM (dotted: front-end path)",
+            )
         try:
             result.trajectory.to_csv(out)
         except Lf3pmError:
@@ -93,7 +138,9 @@ def plan(
         if as_json:
             print(json.dumps(summary, indent=1))
         else:
-            console.print(f"{out}: {summary['duration_s']:.1f} s, {summary['trajectory_length_m']:.1f} m "
-                          f"(front-end path {summary['path_length_m']:.1f} m); search "
-                          f"{summary['search_s'] * 1e3:.0f} ms, optimisation "
-                          f"{summary['optimize_s'] * 1e3:.0f} ms")
+            console.print(
+                f"{out}: {summary['duration_s']:.1f} s, {summary['trajectory_length_m']:.1f} m "
+                f"(front-end path {summary['path_length_m']:.1f} m); search "
+                f"{summary['search_s'] * 1e3:.0f} ms, optimisation "
+                f"{summary['optimize_s'] * 1e3:.0f} ms"
+            )

@@ -6,42 +6,64 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Optional
 
 import typer
 from rich import box
 from rich.table import Table
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, map_loading, option, print_warning,
-                               progress_bar, user_errors)
+from lf3pm.cli._common import (
+    CONFIG_OPTION,
+    app,
+    check_output,
+    configure,
+    console,
+    map_loading,
+    option,
+    print_warning,
+    progress_bar,
+    user_errors,
+)
 from lf3pm.config import MAX_TRAJECTORY_SECONDS
 from lf3pm.errors import Lf3pmError
 
 #: Where each option of replay lives in the config.
-REPLAY_PATHS = {"sensor": "sensor", "method": "replay.method", "odometry": "replay.odometry", "seeds": "replay.seeds",
-                "seed": "scan.seed", "height": "replay.height", "rate": "replay.rate", "noise": "scan.noise",
-                "threads": "scan.threads"}
+REPLAY_PATHS = {
+    "sensor": "sensor",
+    "method": "replay.method",
+    "odometry": "replay.odometry",
+    "seeds": "replay.seeds",
+    "seed": "scan.seed",
+    "height": "replay.height",
+    "rate": "replay.rate",
+    "noise": "scan.noise",
+    "threads": "scan.threads",
+}
 
 
 @app.command("replay")
 def replay_command(
     trajectory: Path = typer.Argument(..., metavar="TRAJ.csv", help="Trajectory CSV as `lf3pm plan` writes it."),
     map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
-    config: Optional[Path] = CONFIG_OPTION,
-    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
-    method: Optional[str] = option("replay.method"),
-    odometry: Optional[str] = option("replay.odometry"),
-    seeds: Optional[int] = option("replay.seeds", help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
-    seed: Optional[int] = option("scan.seed", help="First seed (range noise, odometry and IMU noise)."),
-    height: Optional[float] = option("replay.height"),
-    rate: Optional[float] = option("replay.rate"),
-    noise: Optional[float] = option("scan.noise"),
-    threads: Optional[int] = option("scan.threads", help="Scan simulation threads (0 = all cores)."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (each run with its true and "
-                                 "estimated positions and errors: what `lf3pm view --replay` shows)."),
-    png: Optional[Path] = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
-    bag: Optional[Path] = typer.Option(None, metavar="OUT.bag",
-                                       help="ROS 2 bag (directory) of the first seed's simulated stream."),
+    config: Path | None = CONFIG_OPTION,
+    sensor: str | None = option("sensor", help="Sensor preset name or YAML file."),
+    method: str | None = option("replay.method"),
+    odometry: str | None = option("replay.odometry"),
+    seeds: int | None = option("replay.seeds", help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seed: int | None = option("scan.seed", help="First seed (range noise, odometry and IMU noise)."),
+    height: float | None = option("replay.height"),
+    rate: float | None = option("replay.rate"),
+    noise: float | None = option("scan.noise"),
+    threads: int | None = option("scan.threads", help="Scan simulation threads (0 = all cores)."),
+    as_json: bool = typer.Option(
+        False,
+        "--json",
+        help="Print one JSON object (each run with its true and "
+        "estimated positions and errors: what `lf3pm view --replay` shows).",
+    ),
+    png: Path | None = typer.Option(None, metavar="P.png", help="Error along the trajectory and a top view."),
+    bag: Path | None = typer.Option(
+        None, metavar="OUT.bag", help="ROS 2 bag (directory) of the first seed's simulated stream."
+    ),
 ):
     """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
     with user_errors():
@@ -67,36 +89,71 @@ def replay_command(
         samples = read_trajectory(trajectory)
         with map_loading() as progress:
             world = load_map(map_path, threads=scan.threads, progress=progress)
-        motion = Motion.from_arrays(*(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")), map=world,
-                                    height=run.height)
+        motion = Motion.from_arrays(
+            *(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")), map=world, height=run.height
+        )
         common = {"rate": run.rate, "height": run.height, "noise": scan.noise, "threads": scan.threads}
         with progress_bar() as step:
-            series = replay_seeds(world, motion, lidar, run.method, run.seeds, scan.seed, **common, **options,
-                                  progress=lambda s, done, total: step(f"{run.method} replay, seed {s}", total,
-                                                                       restart=done == 1))
-            bag_info = None if bag is None else replay_bag(
-                bag, world, motion, lidar, seed=scan.seed, **common,
-                progress=lambda done, total: step(f"writing {bag}", total, restart=done == 1))
+            series = replay_seeds(
+                world,
+                motion,
+                lidar,
+                run.method,
+                run.seeds,
+                scan.seed,
+                **common,
+                **options,
+                progress=lambda s, done, total: step(f"{run.method} replay, seed {s}", total, restart=done == 1),
+            )
+            bag_info = (
+                None
+                if bag is None
+                else replay_bag(
+                    bag,
+                    world,
+                    motion,
+                    lidar,
+                    seed=scan.seed,
+                    **common,
+                    progress=lambda done, total: step(f"writing {bag}", total, restart=done == 1),
+                )
+            )
         results = series.results
         if png is not None:
             from lf3pm.replays.replay_figures import replay_figure
 
-            replay_figure(results, png, map_points=world.points,
-                          title=f"lf3pm replay {trajectory.name}: {run.method}"
-                          + (f" ({results[0].report.get('odometry')})" if options else "")
-                          + f", {lidar.name}, {run.rate:g} Hz")
+            replay_figure(
+                results,
+                png,
+                map_points=world.points,
+                title=f"lf3pm replay {trajectory.name}: {run.method}"
+                + (f" ({results[0].report.get('odometry')})" if options else "")
+                + f", {lidar.name}, {run.rate:g} Hz",
+            )
         if as_json:
-            print(json.dumps({"trajectory": str(trajectory), "map": str(map_path), "method": run.method, **options,
-                              "sensor": lidar.name, **series.to_dict(trajectories=True),
-                              "png": None if png is None else str(png), "bag": bag_info}))
+            print(
+                json.dumps(
+                    {
+                        "trajectory": str(trajectory),
+                        "map": str(map_path),
+                        "method": run.method,
+                        **options,
+                        "sensor": lidar.name,
+                        **series.to_dict(trajectories=True),
+                        "png": None if png is None else str(png),
+                        "bag": bag_info,
+                    }
+                )
+            )
             return
         print_series(series)
         if png is not None:
             console.print(f"wrote {png}", highlight=False)
         if bag_info is not None:
             counts = ", ".join(f"{topic} {n}" for topic, n in bag_info["topics"].items())
-            console.print(f"wrote {bag} (ROS 2 bag, sqlite3, {bag_info['point_layout']} points): {counts}",
-                          highlight=False)
+            console.print(
+                f"wrote {bag} (ROS 2 bag, sqlite3, {bag_info['point_layout']} points): {counts}", highlight=False
+            )
 
 
 def read_trajectory(path: Path) -> dict:
@@ -108,8 +165,10 @@ def read_trajectory(path: Path) -> dict:
     samples = read_csv(path)
     duration = float(samples["t"][-1] - samples["t"][0])
     if duration > MAX_TRAJECTORY_SECONDS:
-        raise Lf3pmError(f"{path}: the trajectory lasts {duration:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, the "
-                         "longest lf3pm replays: replay a part of it (its rows within an hour)")
+        raise Lf3pmError(
+            f"{path}: the trajectory lasts {duration:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, the "
+            "longest lf3pm replays: replay a part of it (its rows within an hour)"
+        )
     return samples
 
 
@@ -121,9 +180,13 @@ def print_series(series) -> None:
     first = series.results[0]
     odometry = first.report.get("odometry") if first.method == "lio" else None
     method = f"{first.method} ({odometry})" if odometry else first.method
-    table = Table(title=f"replay: {method}, {first.sensor}, {first.scans} scans at "
-                        f"{first.params['rate']:g} Hz (rmse in mm; RPE deg per scan)", box=box.SIMPLE_HEAD,
-                  collapse_padding=True, pad_edge=False)
+    table = Table(
+        title=f"replay: {method}, {first.sensor}, {first.scans} scans at "
+        f"{first.params['rate']:g} Hz (rmse in mm; RPE deg per scan)",
+        box=box.SIMPLE_HEAD,
+        collapse_padding=True,
+        pad_edge=False,
+    )
     table.add_column("seed")
     for _, header, _ in FIGURES:
         table.add_column(header, justify="right")
@@ -158,11 +221,16 @@ def print_rest(results) -> None:
     if not rested:
         return
     moves = ", ".join(f"seed {r.seed} {1000 * r.rest['drift_m']:.0f} mm" for r in rested)
-    console.print(f"rest ({rested[0].rest['seconds']:g} s still before the trajectory; APE re-anchored after it): "
-                  f"the estimate moved at most {moves}", highlight=False)
+    console.print(
+        f"rest ({rested[0].rest['seconds']:g} s still before the trajectory; APE re-anchored after it): "
+        f"the estimate moved at most {moves}",
+        highlight=False,
+    )
     for r in rested:
         if not r.rest["steady"]:
-            print_warning(f"seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at the end of "
-                          f"the rest (> {REST_SPEED_LIMIT:g} m/s): it entered the trajectory with a velocity "
-                          "error, so this APE measures its start, not the trajectory (docs/lio.md, \"A still "
-                          "sensor\")")
+            print_warning(
+                f"seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at the end of "
+                f"the rest (> {REST_SPEED_LIMIT:g} m/s): it entered the trajectory with a velocity "
+                'error, so this APE measures its start, not the trajectory (docs/lio.md, "A still '
+                'sensor")'
+            )

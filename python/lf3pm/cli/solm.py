@@ -3,12 +3,22 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional, Tuple
 
 import typer
 
-from lf3pm.cli._common import (CONFIG_OPTION, app, check_output, configure, console, err_console, map_loading,
-                               map_options, option, progress_bar, user_errors)
+from lf3pm.cli._common import (
+    CONFIG_OPTION,
+    app,
+    check_output,
+    configure,
+    console,
+    err_console,
+    map_loading,
+    map_options,
+    option,
+    progress_bar,
+    user_errors,
+)
 
 solm_app = typer.Typer(help="Static Observation Loss Maps: build, view, export.", no_args_is_help=True)
 app.add_typer(solm_app, name="solm")
@@ -18,35 +28,56 @@ app.add_typer(solm_app, name="solm")
 def solm_build(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     out: Path = typer.Option(..., "-o", "--out", help="Output Zarr store (resumed if it exists)."),
-    config: Optional[Path] = CONFIG_OPTION,
-    sensor: Optional[str] = option("sensor", help="Sensor preset name or YAML file."),
-    space: Optional[str] = option("solm.space"),
-    res: Optional[float] = option("solm.res"),
-    yaw_bins: Optional[int] = option("solm.yaw_bins"),
-    yaw_reuse: Optional[bool] = option("solm.yaw_reuse", "--yaw-reuse/--no-yaw-reuse"),
-    ray_stride: Optional[int] = option("solm.ray_stride"),
-    height: Optional[float] = option("solm.height"),
-    bounds: Optional[Tuple[float, float, float, float]] = option("solm.bounds"),
-    robot_radius: Optional[float] = option("solm.robot_radius"),
-    seed: Optional[int] = option("scan.seed"),
-    noise: Optional[float] = option("scan.noise"),
-    threads: Optional[int] = option("scan.threads"),
-    max_cells: Optional[int] = option("solm.max_cells"),
-    engine: str = typer.Option("local", help="local (this machine, --threads) or ray (one task per tile on a "
-                                             "Ray cluster; docs/scale.md)."),
-    address: Optional[str] = typer.Option(None, metavar="HOST:PORT",
-                                          help="The Ray cluster's head (`ray start --head`; default: a local "
-                                               "cluster on this machine's cores)."),
-    crop: bool = typer.Option(False, help="local: build each tile on its own crop of the map (exact; the "
-                                          "ray engine always does)."),
-    crop_above: Optional[int] = option("solm.crop_above"),
+    config: Path | None = CONFIG_OPTION,
+    sensor: str | None = option("sensor", help="Sensor preset name or YAML file."),
+    space: str | None = option("solm.space"),
+    res: float | None = option("solm.res"),
+    yaw_bins: int | None = option("solm.yaw_bins"),
+    yaw_reuse: bool | None = option("solm.yaw_reuse", "--yaw-reuse/--no-yaw-reuse"),
+    ray_stride: int | None = option("solm.ray_stride"),
+    height: float | None = option("solm.height"),
+    bounds: tuple[float, float, float, float] | None = option("solm.bounds"),
+    robot_radius: float | None = option("solm.robot_radius"),
+    seed: int | None = option("scan.seed"),
+    noise: float | None = option("scan.noise"),
+    threads: int | None = option("scan.threads"),
+    max_cells: int | None = option("solm.max_cells"),
+    engine: str = typer.Option(
+        "local", help="local (this machine, --threads) or ray (one task per tile on a Ray cluster; docs/scale.md)."
+    ),
+    address: str | None = typer.Option(
+        None,
+        metavar="HOST:PORT",
+        help="The Ray cluster's head (`ray start --head`; default: a local cluster on this machine's cores).",
+    ),
+    crop: bool = typer.Option(
+        False, help="local: build each tile on its own crop of the map (exact; the ray engine always does)."
+    ),
+    crop_above: int | None = option("solm.crop_above"),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():
-        paths = {"sensor": "sensor", "seed": "scan.seed", "noise": "scan.noise", "threads": "scan.threads",
-                 **{name: f"solm.{name}" for name in ("space", "res", "yaw_bins", "yaw_reuse", "ray_stride",
-                                                      "height", "bounds", "robot_radius", "max_cells",
-                                                      "crop_above")}}
+        paths = {
+            "sensor": "sensor",
+            "seed": "scan.seed",
+            "noise": "scan.noise",
+            "threads": "scan.threads",
+            **{
+                name: f"solm.{name}"
+                for name in (
+                    "space",
+                    "res",
+                    "yaw_bins",
+                    "yaw_reuse",
+                    "ray_stride",
+                    "height",
+                    "bounds",
+                    "robot_radius",
+                    "max_cells",
+                    "crop_above",
+                )
+            },
+        }
         cfg = configure(config, locals(), paths)
         check_output(out, folder=True)
         from lf3pm.map import load_map_points
@@ -57,27 +88,52 @@ def solm_build(
         lidar = get_sensor(cfg.sensor)
         with map_loading() as progress:
             world = load_map_points(map_path, **map_options(cfg), progress=progress)
-            grid = make_grid(world, grid_config.space, grid_config.res, bounds=grid_config.bounds,
-                             yaw_bins=grid_config.yaw_bins, height=grid_config.height,
-                             max_cells=grid_config.max_cells)
+            grid = make_grid(
+                world,
+                grid_config.space,
+                grid_config.res,
+                bounds=grid_config.bounds,
+                yaw_bins=grid_config.yaw_bins,
+                height=grid_config.height,
+                max_cells=grid_config.max_cells,
+            )
             if engine == "local" and not crop and world.size <= grid_config.crop_above:
                 progress(f"indexing {world.size:,} points of {map_path}")
                 world = world.indexed(cfg.scan.threads)  # what build_solm would do, here with its line
         with progress_bar() as step:
+
             def advance(cells, total):
                 step(f"SOLM {grid.space} {grid.shape} cells", total, cells)
 
-            result = build_solm(world, lidar, grid, out, seed=cfg.scan.seed, noise=cfg.scan.noise,
-                                robot_radius=grid_config.robot_radius, yaw_reuse=grid_config.yaw_reuse,
-                                ray_stride=grid_config.ray_stride, threads=cfg.scan.threads,
-                                association=cfg.metric.association, w1=cfg.metric.w1, crop=crop,
-                                crop_above=grid_config.crop_above, engine=engine, address=address,
-                                progress=advance)
+            result = build_solm(
+                world,
+                lidar,
+                grid,
+                out,
+                seed=cfg.scan.seed,
+                noise=cfg.scan.noise,
+                robot_radius=grid_config.robot_radius,
+                yaw_reuse=grid_config.yaw_reuse,
+                ray_stride=grid_config.ray_stride,
+                threads=cfg.scan.threads,
+                association=cfg.metric.association,
+                w1=cfg.metric.w1,
+                crop=crop,
+                crop_above=grid_config.crop_above,
+                engine=engine,
+                address=address,
+                progress=advance,
+            )
         if result["on_crops"] and engine == "local" and not crop:
-            err_console.print(f"{map_path}: {world.size:,} points, more than --crop-above "
-                              f"{grid_config.crop_above:,}: built tile by tile on crops", highlight=False)
-        console.print(f"{out}: {grid.space} grid {grid.shape} at {grid.res} m; tiles built now "
-                      f"{result['built_now']} of {result['tiles']}; complete: {result['complete']}")
+            err_console.print(
+                f"{map_path}: {world.size:,} points, more than --crop-above "
+                f"{grid_config.crop_above:,}: built tile by tile on crops",
+                highlight=False,
+            )
+        console.print(
+            f"{out}: {grid.space} grid {grid.shape} at {grid.res} m; tiles built now "
+            f"{result['built_now']} of {result['tiles']}; complete: {result['complete']}"
+        )
 
 
 @solm_app.command("view")
@@ -86,7 +142,7 @@ def solm_view(
     png: Path = typer.Option(..., "-o", "--out", help="PNG to write."),
     channel: str = typer.Option("q_n", help="Channel to draw."),
     reduce: str = typer.Option("mean", help="min, mean or max over yaw bins / z levels."),
-    map_path: Optional[Path] = typer.Option(None, "--map", help="Draw this map's top view under it."),
+    map_path: Path | None = typer.Option(None, "--map", help="Draw this map's top view under it."),
 ):
     """Heat map of a SOLM channel over the map's top view."""
     with user_errors():

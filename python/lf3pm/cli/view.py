@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import List, Optional
 
 import typer
 
@@ -15,14 +14,14 @@ from lf3pm.view.app import DEFAULT_HOST, DEFAULT_PORT
 @app.command("view")
 def view(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
-    solm: Optional[Path] = typer.Option(None, metavar="S.zarr", help="A SOLM of this map."),
-    plan: List[Path] = typer.Option([], metavar="T.csv", help="A trajectory CSV (`lf3pm plan`; repeat)."),
-    replay: List[Path] = typer.Option([], metavar="R.json", help="A replay (`lf3pm replay --json`; repeat)."),
+    solm: Path | None = typer.Option(None, metavar="S.zarr", help="A SOLM of this map."),
+    plan: list[Path] = typer.Option([], metavar="T.csv", help="A trajectory CSV (`lf3pm plan`; repeat)."),
+    replay: list[Path] = typer.Option([], metavar="R.json", help="A replay (`lf3pm replay --json`; repeat)."),
     port: int = typer.Option(DEFAULT_PORT, help="Port to serve the page on."),
     host: str = typer.Option(DEFAULT_HOST, help="Address to serve on (0.0.0.0: every interface)."),
-    config: Optional[Path] = CONFIG_OPTION,
-    robot: Optional[str] = option("robot.kind", help="Robot that plans between clicked poses: omni, diff or car."),
-    threads: Optional[int] = option("scan.threads"),
+    config: Path | None = CONFIG_OPTION,
+    robot: str | None = option("robot.kind", help="Robot that plans between clicked poses: omni, diff or car."),
+    threads: int | None = option("scan.threads"),
 ):
     """Serve an interactive 3D view (viser) of the map, the SOLM, plans and replays; Ctrl-C stops it."""
     with user_errors():
@@ -35,8 +34,7 @@ def view(
         with console.status("reading and indexing the map, reading the SOLM, plans and replays"):
             inputs = load_view_inputs(map_path, solm, plan, replay, threads=cfg.scan.threads)
         with console.status("preparing the page"):
-            viewer = serve(inputs, host=host, port=port, robot=Robot.from_config(cfg.robot),
-                           guidance=cfg.guidance)
+            viewer = serve(inputs, host=host, port=port, robot=Robot.from_config(cfg.robot), guidance=cfg.guidance)
     shown = "localhost" if host in ("127.0.0.1", "0.0.0.0") else host
     console.print(f"lf3pm view: http://{shown}:{port}  (Ctrl-C stops it)", highlight=False)
     try:
@@ -46,4 +44,3 @@ def view(
     except KeyboardInterrupt:
         viewer.stop()
         console.print("lf3pm view: stopped", highlight=False)
-

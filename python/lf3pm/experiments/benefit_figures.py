@@ -38,17 +38,23 @@ def scatter_figure(summary: dict, path: Path) -> None:
     below the diagonal guidance helped."""
     plt = _plt()
     names = [g["name"] for g in summary["guidance"] if g["name"] != "none"]
-    rows_of_panels = [[(name, "localization") for name in names],
-                      [(name, "lio") for name in names if name in summary["comparisons"]["lio"]]]
+    rows_of_panels = [
+        [(name, "localization") for name in names],
+        [(name, "lio") for name in names if name in summary["comparisons"]["lio"]],
+    ]
     rows_of_panels = [row for row in rows_of_panels if row]
     columns = max(len(row) for row in rows_of_panels)
-    fig, axes = plt.subplots(len(rows_of_panels), columns, figsize=(3.6 * columns, 3.9 * len(rows_of_panels)),
-                             dpi=110, squeeze=False)
+    fig, axes = plt.subplots(
+        len(rows_of_panels), columns, figsize=(3.6 * columns, 3.9 * len(rows_of_panels)), dpi=110, squeeze=False
+    )
     cases = [c["name"] for c in summary["cases"]]
     for ax in axes.flat:
         ax.set_visible(False)
-    panels = [(axes[r][k], guidance, method) for r, row in enumerate(rows_of_panels)
-              for k, (guidance, method) in enumerate(row)]
+    panels = [
+        (axes[r][k], guidance, method)
+        for r, row in enumerate(rows_of_panels)
+        for k, (guidance, method) in enumerate(row)
+    ]
     for ax, guidance, method in panels:
         ax.set_visible(True)
         rows = _errors(summary, guidance, method)
@@ -58,8 +64,13 @@ def scatter_figure(summary: dict, path: Path) -> None:
         ax.plot([lo, hi], [lo / 2, hi / 2], "k:", lw=0.8)
         for number, case in enumerate(cases):
             pts = np.array([(a, b) for c, a, b in rows if c == case]).reshape(-1, 2)
-            ax.scatter(np.maximum(pts[:, 0], lo), np.maximum(pts[:, 1], lo), s=18,
-                       marker=_MARKERS[number % len(_MARKERS)], label=case)
+            ax.scatter(
+                np.maximum(pts[:, 0], lo),
+                np.maximum(pts[:, 1], lo),
+                s=18,
+                marker=_MARKERS[number % len(_MARKERS)],
+                label=case,
+            )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlim(lo, hi)
@@ -72,8 +83,9 @@ def scatter_figure(summary: dict, path: Path) -> None:
         ax.set_title(f"{method}: {guidance}\n{ratio}", fontsize=9)
     axes[0][0].legend(fontsize=7, loc="upper left")
     # Wrapped to the figure's width: one column of panels (a single guidance) is narrow.
-    title = ("Each point a start/goal pair; below the solid line guidance localizes better, "
-             "below the dotted line by half")
+    title = (
+        "Each point a start/goal pair; below the solid line guidance localizes better, below the dotted line by half"
+    )
     fig.suptitle(textwrap.fill(title, width=int(14 * 3.6 * columns)), fontsize=9)
     fig.tight_layout()
     save_figure(fig, Path(path))
@@ -94,10 +106,14 @@ def ratio_figure(summary: dict, path: Path) -> None:
         for number, case in enumerate(cases):
             r = np.array([b / max(a, 1e-4) for c, a, b in rows if c == case])
             if r.size:
-                label = method if method == "localization" or "lio_odometry" not in summary else \
-                    f"LIO ({odometry_line(summary)})"
-                ax.scatter(np.full(r.size, number + offset), r, s=16, color=colour,
-                           label=label if number == 0 else None)
+                label = (
+                    method
+                    if method == "localization" or "lio_odometry" not in summary
+                    else f"LIO ({odometry_line(summary)})"
+                )
+                ax.scatter(
+                    np.full(r.size, number + offset), r, s=16, color=colour, label=label if number == 0 else None
+                )
                 ax.plot([number + offset - 0.1, number + offset + 0.1], [np.median(r)] * 2, color=colour, lw=2)
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_yscale("log")
@@ -114,9 +130,9 @@ def example_figures(cases, summary: dict, out: Path) -> None:
     their localization error along the way."""
     from lf3pm.experiments.benefit import replay_path
     from lf3pm.experiments.replay_tasks import load_replay
-    from lf3pm.trajectory.trajectory import read_csv
     from lf3pm.solm import Solm
     from lf3pm.solm.figures import draw_heat_map
+    from lf3pm.trajectory.trajectory import read_csv
 
     plt = _plt()
     folder = out / "examples"
@@ -138,14 +154,25 @@ def example_figures(cases, summary: dict, out: Path) -> None:
             if "localization" in plan:
                 label += f", localization APE {100 * plan['localization']['ape']:.1f} cm"
                 first = load_replay(replay_path(out, case, pair["pair"], name, "localization", 0))
-                bottom.plot(first["times_every_second"], first["errors_every_second"],
-                            color="k" if name == "none" else colour, label=f"{name} (seed 0)")
+                bottom.plot(
+                    first["times_every_second"],
+                    first["errors_every_second"],
+                    color="k" if name == "none" else colour,
+                    label=f"{name} (seed 0)",
+                )
             top.plot(x, y, "-", color=colour, lw=1.6, label=label, zorder=4)
-            top.quiver(x[::every], y[::every], np.cos(yaw[::every]), np.sin(yaw[::every]), color=colour,
-                       scale=28, width=0.003, zorder=5)
+            top.quiver(
+                x[::every],
+                y[::every],
+                np.cos(yaw[::every]),
+                np.sin(yaw[::every]),
+                color=colour,
+                scale=28,
+                width=0.003,
+                zorder=5,
+            )
         top.legend(loc="best", fontsize=8, facecolor="0.6")
-        top.set_title(f"{case.name}: pair {pair['pair']} ({pair['robot']}, {case.sensor}), heading ticks",
-                      fontsize=9)
+        top.set_title(f"{case.name}: pair {pair['pair']} ({pair['robot']}, {case.sensor}), heading ticks", fontsize=9)
         bottom.set_xlabel("time (s)")
         bottom.set_ylabel("localization error (m)")
         bottom.legend(fontsize=8)

@@ -24,18 +24,26 @@ from scipy.stats import spearmanr
 from lf3pm import __version__
 from lf3pm.atomic import atomic_write
 from lf3pm.calibration import fit_calibration
+from lf3pm.config import DEFAULTS
 from lf3pm.experiments.data import shared_data_dir
-from lf3pm.validation import RegistrationTarget, mde
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate
-from lf3pm.config import DEFAULTS
 from lf3pm.scenes import build_scene
+from lf3pm.validation import RegistrationTarget, mde
 
 #: Predictor -> sign that makes larger mean worse localization (Zhang's factor
 #: is the smallest eigenvalue of A^T A: larger is better).
-PREDICTORS = {"q_min": 1, "q_n": 1, "q_max": 1, "zhang": -1, "condition_number": 1,
-              "cov_trace": 1, "step_norm": 1, "scaled_cov_trace": 1}
+PREDICTORS = {
+    "q_min": 1,
+    "q_n": 1,
+    "q_max": 1,
+    "zhang": -1,
+    "condition_number": 1,
+    "cov_trace": 1,
+    "step_norm": 1,
+    "scaled_cov_trace": 1,
+}
 #: The procedural scenes of the study, in its order (the pose draws follow it): fixed here so
 #: that a new scene does not change the study or the calibration fitted from it.
 SCENES = ("houses", "house_meadow", "meadow", "wall", "gobi", "boxes")
@@ -79,9 +87,16 @@ def spearman(x, y) -> float:
     return float(rho) if np.isfinite(rho) else 0.0
 
 
-def run(out: Path, *, poses_per_map: int = DEFAULTS.correlation.poses_per_map,
-        trials: int = DEFAULTS.correlation.trials, sensor: str = DEFAULTS.sensor, seed: int = DEFAULTS.correlation.seed,
-        bootstrap: int = DEFAULTS.correlation.bootstrap, progress=None) -> dict:
+def run(
+    out: Path,
+    *,
+    poses_per_map: int = DEFAULTS.correlation.poses_per_map,
+    trials: int = DEFAULTS.correlation.trials,
+    sensor: str = DEFAULTS.sensor,
+    seed: int = DEFAULTS.correlation.seed,
+    bootstrap: int = DEFAULTS.correlation.bootstrap,
+    progress=None,
+) -> dict:
     """Runs the study and writes its files to ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x434F52]))
@@ -89,22 +104,38 @@ def run(out: Path, *, poses_per_map: int = DEFAULTS.correlation.poses_per_map,
     total = (len(SCENES) + len(REAL_MAPS)) * poses_per_map
     for map_name, world, height, region in map_cases(seed):
         target = RegistrationTarget(world)
-        for i, pose in enumerate(random_free_poses(world, poses_per_map, rng, sensor_height=height,
-                                                   region=region)):
+        for i, pose in enumerate(random_free_poses(world, poses_per_map, rng, sensor_height=height, region=region)):
             res = evaluate(world, pose, sensor, seed=seed + i, clearance=0.0)
             err = mde(world, pose, sensor, trials=trials, seed=seed + i, target=target, clearance=0.0)
-            records.append({"map": map_name, "x": pose[0], "y": pose[1], "z": pose[2],
-                            "yaw": pose[3], "m": res.m, "mde": err.mde,
-                            **{p: getattr(res, p) for p in PREDICTORS}})
+            records.append(
+                {
+                    "map": map_name,
+                    "x": pose[0],
+                    "y": pose[1],
+                    "z": pose[2],
+                    "yaw": pose[3],
+                    "m": res.m,
+                    "mde": err.mde,
+                    **{p: getattr(res, p) for p in PREDICTORS},
+                }
+            )
             if progress:
                 progress(f"{map_name} pose {i + 1}/{poses_per_map}", total)
     summary = analyse(records, bootstrap, rng)
-    summary["params"] = {"sensor": sensor, "poses_per_map": poses_per_map, "poses": len(records),
-                         "trials": trials, "sigma_t": 0.1, "sigma_r_deg": 2.0, "seed": seed,
-                         "maps": sorted({r["map"] for r in records}),
-                         "association": "knn (k=5, 0.1 m, sqrt(5) m)", "w1": 0.5, "w2": 0.5,
-                         "orientation": "each predictor signed so that larger = worse "
-                                        "(zhang negated)"}
+    summary["params"] = {
+        "sensor": sensor,
+        "poses_per_map": poses_per_map,
+        "poses": len(records),
+        "trials": trials,
+        "sigma_t": 0.1,
+        "sigma_r_deg": 2.0,
+        "seed": seed,
+        "maps": sorted({r["map"] for r in records}),
+        "association": "knn (k=5, 0.1 m, sqrt(5) m)",
+        "w1": 0.5,
+        "w2": 0.5,
+        "orientation": "each predictor signed so that larger = worse (zhang negated)",
+    }
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())
     with atomic_write(out / "poses.csv") as fp:
@@ -114,12 +145,16 @@ def run(out: Path, *, poses_per_map: int = DEFAULTS.correlation.poses_per_map,
     best = summary["best_within_map"]
     calibration = fit_calibration(
         np.array([r[best] for r in records], float) * PREDICTORS[best],
-        np.array([r["mde"] for r in records]), name=best,
-        provenance={"command": f"lf3pm experiment correlation (poses_per_map={poses_per_map}, "
-                               f"trials={trials}, seed={seed})",
-                    "why": "the predictor with the best mean within-map Spearman rho",
-                    "within_map_rho": summary["predictors"][best]["within_mean_rho"],
-                    "lf3pm_version": __version__, **summary["params"]})
+        np.array([r["mde"] for r in records]),
+        name=best,
+        provenance={
+            "command": f"lf3pm experiment correlation (poses_per_map={poses_per_map}, trials={trials}, seed={seed})",
+            "why": "the predictor with the best mean within-map Spearman rho",
+            "within_map_rho": summary["predictors"][best]["within_mean_rho"],
+            "lf3pm_version": __version__,
+            **summary["params"],
+        },
+    )
     with atomic_write(out / "calibration.json") as fp:
         fp.write(json.dumps(calibration).encode())
     return summary
@@ -147,8 +182,7 @@ def analyse(records, bootstrap: int, rng) -> dict:
             "rho": pooled,
             "ci": [float(np.percentile(boot_pooled, 2.5)), float(np.percentile(boot_pooled, 97.5))],
             "within_mean_rho": float(np.mean(list(within.values()))),
-            "within_mean_ci": [float(np.percentile(boot_within, 2.5)),
-                               float(np.percentile(boot_within, 97.5))],
+            "within_mean_ci": [float(np.percentile(boot_within, 2.5)), float(np.percentile(boot_within, 97.5))],
             "within": within,
         }
     best_within = max(predictors, key=lambda p: predictors[p]["within_mean_rho"])
@@ -171,8 +205,9 @@ def plot(path: Path, records, summary) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from lf3pm.solm.figures import save_figure
     from matplotlib.ticker import NullFormatter
+
+    from lf3pm.solm.figures import save_figure
 
     maps = sorted({r["map"] for r in records})
     colours = {m: plt.cm.tab10(i % 10) for i, m in enumerate(maps)}

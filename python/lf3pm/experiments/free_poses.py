@@ -20,7 +20,7 @@ class GroundGrid:
     def __init__(self, world: Map):
         lower, upper = world.bounds
         self.lower = lower[:2]
-        self.nx, self.ny = (np.floor((upper[:2] - lower[:2]) / GROUND_CELL).astype(int) + 1)
+        self.nx, self.ny = np.floor((upper[:2] - lower[:2]) / GROUND_CELL).astype(int) + 1
         self.z = column_minimum(world.points, lower[0], lower[1], GROUND_CELL, self.nx, self.ny)
 
     def height(self, x: float, y: float) -> float:
@@ -31,9 +31,16 @@ class GroundGrid:
         return float(self.z[j, i])
 
 
-def random_free_poses(world: Map, count: int, rng: np.random.Generator, *, sensor_height: float,
-                      region: tuple[float, float, float, float], clearance: float = 0.5,
-                      max_tries: int = 200) -> list[tuple]:
+def random_free_poses(
+    world: Map,
+    count: int,
+    rng: np.random.Generator,
+    *,
+    sensor_height: float,
+    region: tuple[float, float, float, float],
+    clearance: float = 0.5,
+    max_tries: int = 200,
+) -> list[tuple]:
     """``count`` poses (x, y, z, yaw) uniform over ``region`` (xmin, ymin, xmax,
     ymax) with random yaw, z = local ground + ``sensor_height``; a pose is kept
     only where the map has ground and no point lies within ``clearance`` of the

@@ -22,21 +22,20 @@ from pathlib import Path
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS
 from lf3pm.atomic import atomic_write
-from lf3pm.validation import RegistrationTarget
-from lf3pm.trajectory.sampling import sample_trajectory
-from lf3pm.validation.trajectory_mde import mde_along
+from lf3pm.config import DEFAULTS
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, case_source
+from lf3pm.experiments.replay_tasks import ReplayTask, load_replay, replay_json, replay_summary, run_replays, write_plan
 from lf3pm.io import write_points
 from lf3pm.map import load_map
-from lf3pm.experiments.replay_tasks import (ReplayTask, load_replay, replay_json, replay_summary, run_replays,
-                                            write_plan)
 from lf3pm.planner.plan import Planner
-from lf3pm.trajectory.robots import Robot
 from lf3pm.sensors import get_sensor
 from lf3pm.solm import Solm
+from lf3pm.trajectory.robots import Robot
+from lf3pm.trajectory.sampling import sample_trajectory
+from lf3pm.validation import RegistrationTarget
+from lf3pm.validation.trajectory_mde import mde_along
 
 PAPER = "paper (its Gobi figure): S = 43.66 guided by q_n against 64.98 by q_min"
 METHODS = ("localization", "lio")
@@ -50,21 +49,32 @@ class GobiSetup:
     solm_res: float = 1.0
     yaw_bins: int = DEFAULTS.solm.yaw_bins
     ray_stride: int = 2
-    margin: float = 15.0           # m of SOLM west of the town centre and each side of the route
-    half_width: float = 30.0       # m of SOLM north and south of the route
-    goal_offset: float = 20.0      # m west of the warehouse centre (its west face is 12 m west)
-    mde_every: float = 1.0         # s between MDE poses
+    margin: float = 15.0  # m of SOLM west of the town centre and each side of the route
+    half_width: float = 30.0  # m of SOLM north and south of the route
+    goal_offset: float = 20.0  # m west of the warehouse centre (its west face is 12 m west)
+    mde_every: float = 1.0  # s between MDE poses
     mde_trials: int = 5
-    replay_seeds: int = 3          # per plan and method
-    workers: int = 2               # replay processes
+    replay_seeds: int = 3  # per plan and method
+    workers: int = 2  # replay processes
     seed: int = DEFAULTS.gobi.seed
 
 
 FULL = GobiSetup(scene_params={})
 #: A smaller desert (115 x 90 m, warehouse 60 m east, 4 buildings) for the demo.
-REDUCED = GobiSetup(scene_params={"length": 115.0, "width": 90.0, "west": 25.0, "town_radius": 25.0,
-                                  "warehouse_distance": 60.0, "buildings": 4, "stones": 150},
-                    mde_every=2.0, mde_trials=3, replay_seeds=2)
+REDUCED = GobiSetup(
+    scene_params={
+        "length": 115.0,
+        "width": 90.0,
+        "west": 25.0,
+        "town_radius": 25.0,
+        "warehouse_distance": 60.0,
+        "buildings": 4,
+        "stones": 150,
+    },
+    mde_every=2.0,
+    mde_trials=3,
+    replay_seeds=2,
+)
 
 
 def map_case(setup: GobiSetup) -> MapCase:
@@ -73,10 +83,19 @@ def map_case(setup: GobiSetup) -> MapCase:
 
     params = {**scene_defaults("gobi"), **setup.scene_params}
     goal_x = params["warehouse_distance"] - setup.goal_offset
-    return MapCase("gobi", "scene:gobi", "mid70", "se2", setup.solm_res, yaw_bins=setup.yaw_bins,
-                   yaw_reuse=True, ray_stride=setup.ray_stride, scene_params=dict(setup.scene_params),
-                   scene_seed=setup.seed,
-                   bounds=(-setup.margin, -setup.half_width, goal_x + setup.margin, setup.half_width))
+    return MapCase(
+        "gobi",
+        "scene:gobi",
+        "mid70",
+        "se2",
+        setup.solm_res,
+        yaw_bins=setup.yaw_bins,
+        yaw_reuse=True,
+        ray_stride=setup.ray_stride,
+        scene_params=dict(setup.scene_params),
+        scene_seed=setup.seed,
+        bounds=(-setup.margin, -setup.half_width, goal_x + setup.margin, setup.half_width),
+    )
 
 
 def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
@@ -108,24 +127,47 @@ def run(out: Path, setup: GobiSetup = FULL, *, progress=None) -> dict:
         write_plan(plan.trajectory, csv, out / "replays", f"{g.name}_")
         samples = plan.trajectory.sample(100.0)
         z = _ground_under(ground, solm, samples["x"], samples["y"]) + solm.grid_spec.height
-        times, poses = sample_trajectory(samples["t"], samples["x"], samples["y"], samples["yaw"],
-                                         every=setup.mde_every, z=z)
+        times, poses = sample_trajectory(
+            samples["t"], samples["x"], samples["y"], samples["yaw"], every=setup.mde_every, z=z
+        )
         along = mde_along(world, poses, mid70, trials=setup.mde_trials, seed=setup.seed, target=target)
-        results[g.name] = {**plan.summary(), "guidance": asdict(g), "S": along.s, "mde_poses": len(poses),
-                           "mde_refused": len(along.refused), "mde": _finite_list(along.mde),
-                           "mde_times": times.tolist()}
-        tasks += [ReplayTask(case, str(csv), method, seed, replay_json(out / "replays", f"{g.name}_", method, seed))
-                  for method in METHODS for seed in range(setup.replay_seeds)]
+        results[g.name] = {
+            **plan.summary(),
+            "guidance": asdict(g),
+            "S": along.s,
+            "mde_poses": len(poses),
+            "mde_refused": len(along.refused),
+            "mde": _finite_list(along.mde),
+            "mde_times": times.tolist(),
+        }
+        tasks += [
+            ReplayTask(case, str(csv), method, seed, replay_json(out / "replays", f"{g.name}_", method, seed))
+            for method in METHODS
+            for seed in range(setup.replay_seeds)
+        ]
         step("planning and MDE along the plans", len(guidance))
     run_replays(tasks, setup.workers, step)
     for name, result in results.items():
         for method in METHODS:
             runs = [load_replay(replay_json(out / "replays", f"{name}_", method, s)) for s in range(setup.replay_seeds)]
-            result[method] = {**replay_summary(runs), "times": runs[0]["times_every_second"],
-                              "errors": runs[0]["errors_every_second"]}
-    summary = {"experiment": "gobi", "setup": asdict(setup), "start": start, "goal": goal, "sensor": "mid70",
-               "robot": robot.model_dump(), "map_points": world.size, "map_sha256": world.sha256, "paper": PAPER,
-               "results": results, "finding": _finding(results)}
+            result[method] = {
+                **replay_summary(runs),
+                "times": runs[0]["times_every_second"],
+                "errors": runs[0]["errors_every_second"],
+            }
+    summary = {
+        "experiment": "gobi",
+        "setup": asdict(setup),
+        "start": start,
+        "goal": goal,
+        "sensor": "mid70",
+        "robot": robot.model_dump(),
+        "map_points": world.size,
+        "map_sha256": world.sha256,
+        "paper": PAPER,
+        "results": results,
+        "finding": _finding(results),
+    }
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())
     with atomic_write(out / "gobi.md") as fp:
@@ -146,34 +188,54 @@ def _finite_list(values) -> list:
 
 
 def _finding(results: dict) -> dict:
-    lowest = {key: min(results, key=lambda m: results[m][key] if key == "S" else results[m][key]["ape"])
-              for key in ("S",) + METHODS}
-    return {"S_lowest": lowest["S"], "localization_lowest": lowest["localization"], "lio_lowest": lowest["lio"],
-            "default_below_none": {key: (results["default"]["S"] < results["none"]["S"]) if key == "S" else
-                                   (results["default"][key]["ape"] < results["none"][key]["ape"])
-                                   for key in ("S",) + METHODS}}
+    lowest = {
+        key: min(results, key=lambda m: results[m][key] if key == "S" else results[m][key]["ape"])
+        for key in ("S",) + METHODS
+    }
+    return {
+        "S_lowest": lowest["S"],
+        "localization_lowest": lowest["localization"],
+        "lio_lowest": lowest["lio"],
+        "default_below_none": {
+            key: (results["default"]["S"] < results["none"]["S"])
+            if key == "S"
+            else (results["default"][key]["ape"] < results["none"][key]["ape"])
+            for key in ("S",) + METHODS
+        },
+    }
 
 
 def _table(summary: dict) -> str:
     seeds = summary["setup"]["replay_seeds"]
-    lines = ["# Gobi experiment (Mid-70, omnidirectional robot)", "",
-             f"Start {summary['start']} (town square), goal {summary['goal']} (west of the warehouse). "
-             f"{summary['paper']}. APE: rmse of the translation error, median over {seeds} seed(s).", "",
-             "| guidance | length (m) | duration (s) | S (sum of MDE) | MDE poses | localization APE (m) "
-             "| degenerate scans | LIO APE (m) | LIO rests steady |", "|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "# Gobi experiment (Mid-70, omnidirectional robot)",
+        "",
+        f"Start {summary['start']} (town square), goal {summary['goal']} (west of the warehouse). "
+        f"{summary['paper']}. APE: rmse of the translation error, median over {seeds} seed(s).",
+        "",
+        "| guidance | length (m) | duration (s) | S (sum of MDE) | MDE poses | localization APE (m) "
+        "| degenerate scans | LIO APE (m) | LIO rests steady |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for name, r in summary["results"].items():
         loc, lio = r["localization"], r["lio"]
         steady = lio.get("rest_steady_per_seed")
         rests = "n/a" if steady is None else f"{sum(steady)} of {len(steady)}"
-        lines.append(f"| {name} | {r['trajectory_length_m']:.1f} | {r['duration_s']:.1f} | {r['S']:.4g} | "
-                     f"{r['mde_poses'] - r['mde_refused']} | {loc['ape']:.3g} | "
-                     f"{100 * loc['degenerate_share']:.0f} % | {lio['ape']:.3g} | {rests} |")
+        lines.append(
+            f"| {name} | {r['trajectory_length_m']:.1f} | {r['duration_s']:.1f} | {r['S']:.4g} | "
+            f"{r['mde_poses'] - r['mde_refused']} | {loc['ape']:.3g} | "
+            f"{100 * loc['degenerate_share']:.0f} % | {lio['ape']:.3g} | {rests} |"
+        )
     f = summary["finding"]
     below = ", ".join(f"{k}: {'yes' if v else 'no'}" for k, v in f["default_below_none"].items())
-    lines += ["", f"Lowest S: {f['S_lowest']}; lowest localization APE: {f['localization_lowest']}; lowest LIO "
-                  f"APE: {f['lio_lowest']}. Default guidance below none by {below}. LIO rests steady: seeds on "
-                  "which the odometry held still while the sensor stood at the start before the plan (docs/replay.md, "
-                  "\"What the rest reports\"); an unsteady one enters the plan moving.", ""]
+    lines += [
+        "",
+        f"Lowest S: {f['S_lowest']}; lowest localization APE: {f['localization_lowest']}; lowest LIO "
+        f"APE: {f['lio_lowest']}. Default guidance below none by {below}. LIO rests steady: seeds on "
+        "which the odometry held still while the sensor stood at the start before the plan (docs/replay.md, "
+        '"What the rest reports"); an unsteady one enters the plan moving.',
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -183,15 +245,24 @@ def _figures(out: Path, solm: Solm, world, plans: dict, results: dict) -> None:
     from lf3pm.planner.figures import COLOURS, plans_figure
     from lf3pm.solm.figures import save_figure
 
-    plans_figure(solm, plans, out / "trajectories.png", map_points=world.points,
-                 labels={m: f"{m}: localization APE {100 * results[m]['localization']['ape']:.1f} cm, "
-                            f"LIO {results[m]['lio']['ape']:.2f} m" for m in plans},
-                 title="Trajectories over the Mid-70 SOLM (q_n, min over yaw); dotted: grid paths")
+    plans_figure(
+        solm,
+        plans,
+        out / "trajectories.png",
+        map_points=world.points,
+        labels={
+            m: f"{m}: localization APE {100 * results[m]['localization']['ape']:.1f} cm, "
+            f"LIO {results[m]['lio']['ape']:.2f} m"
+            for m in plans
+        },
+        title="Trajectories over the Mid-70 SOLM (q_n, min over yaw); dotted: grid paths",
+    )
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), dpi=110, sharex=True)
     for name, r in results.items():
         colour = "k" if name == "none" else COLOURS[name]
-        axes[0].plot(r["mde_times"], [np.nan if v is None else v for v in r["mde"]], "o-", ms=3, color=colour,
-                     label=name)
+        axes[0].plot(
+            r["mde_times"], [np.nan if v is None else v for v in r["mde"]], "o-", ms=3, color=colour, label=name
+        )
         for ax, method in zip(axes[1:], METHODS):
             ax.plot(r[method]["times"], r[method]["errors"], color=colour, label=name)
     axes[0].set_yscale("log")

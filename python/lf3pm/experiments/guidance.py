@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from lf3pm.errors import Lf3pmError
 from lf3pm.config import COST_CHANNELS, DEFAULTS
+from lf3pm.errors import Lf3pmError
 
 
 @dataclass(frozen=True)
@@ -38,5 +38,9 @@ def parse_guidance(text: str) -> Guidance:
 
 UNGUIDED = Guidance("none", "none", 1.0, 0.0)
 #: The guidance compared with ``none``: each SOLM channel as it is, then the shipped default.
-GUIDANCE = (Guidance("q_n", "q_n"), Guidance("q_min", "q_min"), Guidance("step_norm", "step_norm"),
-            Guidance("default", DEFAULTS.guidance.metric, DEFAULTS.guidance.power, DEFAULTS.guidance.weight))
+GUIDANCE = (
+    Guidance("q_n", "q_n"),
+    Guidance("q_min", "q_min"),
+    Guidance("step_norm", "step_norm"),
+    Guidance("default", DEFAULTS.guidance.metric, DEFAULTS.guidance.power, DEFAULTS.guidance.weight),
+)

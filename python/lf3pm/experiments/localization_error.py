@@ -47,8 +47,11 @@ def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: f
             continue
     q = np.asarray(values, float)
     finite = np.isfinite(q)
-    return {"q_n_mean": float(np.mean(q[finite])) if finite.any() else math.nan,
-            "degenerate_share": float(np.mean(~finite)) if len(q) else math.nan, "poses": int(len(q))}
+    return {
+        "q_n_mean": float(np.mean(q[finite])) if finite.any() else math.nan,
+        "degenerate_share": float(np.mean(~finite)) if len(q) else math.nan,
+        "poses": int(len(q)),
+    }
 
 
 def localization_error_fit(out: Path, cases, records: list, *, seeds: int, pair_seed: int, step=None) -> dict:
@@ -56,8 +59,7 @@ def localization_error_fit(out: Path, cases, records: list, *, seeds: int, pair_
     summaries), written to DIR/localization_error.json."""
     by_name = {case.name: case for case in cases}
     maps, q_n, ape, sensors, worlds = [], [], [], set(), {}
-    plans = [(pair, name, plan) for pair in records for name, plan in pair["plans"].items()
-             if "localization" in plan]
+    plans = [(pair, name, plan) for pair in records for name, plan in pair["plans"].items() if "localization" in plan]
     if step is not None:
         step("q_n along the plans (localization-error fit)", len(plans), 0, restart=True)
     for pair, name, plan in plans:
@@ -82,12 +84,16 @@ def localization_error_fit(out: Path, cases, records: list, *, seeds: int, pair_
             q_n.append(predictor["q_n_mean"])
             ape.append(plan["localization"]["ape"])
             sensors.add(case.sensor)
-    provenance = {"command": f"lf3pm experiment benefit (seeds={seeds}, pair_seed={pair_seed})",
-                  "sensors": sorted(sensors), "maps": sorted(set(maps)), "w1": MetricConfig().w1,
-                  "predictor": f"time mean of q_n at {FIT_RATE:g} Hz along a trajectory (lf3pm.evaluate "
-                               "defaults), plans with a degenerate pose left out",
-                  "error": "APE rmse of map localization (docs/replay.md: small_gicp from wheel odometry "
-                           "with 2 % scale error and 0.01 rad/sqrt(s) yaw noise), median over seeds"}
+    provenance = {
+        "command": f"lf3pm experiment benefit (seeds={seeds}, pair_seed={pair_seed})",
+        "sensors": sorted(sensors),
+        "maps": sorted(set(maps)),
+        "w1": MetricConfig().w1,
+        "predictor": f"time mean of q_n at {FIT_RATE:g} Hz along a trajectory (lf3pm.evaluate "
+        "defaults), plans with a degenerate pose left out",
+        "error": "APE rmse of map localization (docs/replay.md: small_gicp from wheel odometry "
+        "with 2 % scale error and 0.01 rad/sqrt(s) yaw noise), median over seeds",
+    }
     if len(ape) < MIN_PLANS:  # a quick run: nothing to fit
         fit = {"predictor": "q_n", "samples": len(ape), "provenance": provenance}
     else:

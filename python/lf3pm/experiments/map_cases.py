@@ -72,6 +72,5 @@ def build_case_solm(case: MapCase, path: Path, world=None) -> Path:
     grid = make_grid(world, case.space, case.res, bounds=case.bounds, yaw_bins=case.yaw_bins)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    build_solm(world, get_sensor(case.sensor), grid, path, seed=0, yaw_reuse=case.yaw_reuse,
-               ray_stride=case.ray_stride)
+    build_solm(world, get_sensor(case.sensor), grid, path, seed=0, yaw_reuse=case.yaw_reuse, ray_stride=case.ray_stride)
     return path

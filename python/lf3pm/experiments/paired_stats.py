@@ -69,9 +69,19 @@ def worse_beyond_noise(guided_seeds, unguided_seeds, margin: float = 0.0) -> flo
     return float(np.mean(flags)) if flags else math.nan
 
 
-def compare(guided, unguided, *, guided_length=None, unguided_length=None, guided_duration=None,
-            unguided_duration=None, guided_seeds=None, unguided_seeds=None, failure: float = FAILURE_APE,
-            seed: int = 0) -> dict:
+def compare(
+    guided,
+    unguided,
+    *,
+    guided_length=None,
+    unguided_length=None,
+    guided_duration=None,
+    unguided_duration=None,
+    guided_seeds=None,
+    unguided_seeds=None,
+    failure: float = FAILURE_APE,
+    seed: int = 0,
+) -> dict:
     """The paired comparison of the module docstring. Errors must be positive and finite;
     ``*_seeds``: each pair's per-seed errors (for the share worse beyond noise)."""
     a, b = np.asarray(guided, float), np.asarray(unguided, float)
@@ -80,17 +90,23 @@ def compare(guided, unguided, *, guided_length=None, unguided_length=None, guide
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and np.all(a > 0) and np.all(b > 0)):
         raise Lf3pmError("paired errors must be positive and finite")
     ratios = a / b
-    out = {"pairs": int(a.size), "median_ratio": float(np.median(ratios)) if a.size else math.nan,
-           "median_ratio_ci95": median_ratio_ci(ratios, seed=seed), "wilcoxon_p": wilcoxon_p(a, b),
-           "share_worse": float(np.mean(ratios > 1.0)) if a.size else math.nan,
-           "share_worse_beyond_noise": (worse_beyond_noise(guided_seeds, unguided_seeds)
-                                        if guided_seeds is not None else math.nan),
-           "share_worse_beyond_noise_and_margin": (worse_beyond_noise(guided_seeds, unguided_seeds, WORSE_MARGIN)
-                                                   if guided_seeds is not None else math.nan),
-           "failure_rate_guided": float(np.mean(a > failure)) if a.size else math.nan,
-           "failure_rate_unguided": float(np.mean(b > failure)) if a.size else math.nan,
-           "median_error_guided": float(np.median(a)) if a.size else math.nan,
-           "median_error_unguided": float(np.median(b)) if a.size else math.nan}
+    out = {
+        "pairs": int(a.size),
+        "median_ratio": float(np.median(ratios)) if a.size else math.nan,
+        "median_ratio_ci95": median_ratio_ci(ratios, seed=seed),
+        "wilcoxon_p": wilcoxon_p(a, b),
+        "share_worse": float(np.mean(ratios > 1.0)) if a.size else math.nan,
+        "share_worse_beyond_noise": (
+            worse_beyond_noise(guided_seeds, unguided_seeds) if guided_seeds is not None else math.nan
+        ),
+        "share_worse_beyond_noise_and_margin": (
+            worse_beyond_noise(guided_seeds, unguided_seeds, WORSE_MARGIN) if guided_seeds is not None else math.nan
+        ),
+        "failure_rate_guided": float(np.mean(a > failure)) if a.size else math.nan,
+        "failure_rate_unguided": float(np.mean(b > failure)) if a.size else math.nan,
+        "median_error_guided": float(np.median(a)) if a.size else math.nan,
+        "median_error_unguided": float(np.median(b)) if a.size else math.nan,
+    }
     for name, x, y in (("length", guided_length, unguided_length), ("duration", guided_duration, unguided_duration)):
         if x is not None:
             out[f"median_{name}_overhead"] = float(np.median(np.asarray(x, float) / np.asarray(y, float) - 1.0))

@@ -64,7 +64,9 @@ def run_replays(tasks: list, workers: int, step) -> None:
     step(label, total, advance=1, restart=False) as they end. A LIO replay saved
     before replays recorded their rest gets it added (rest_task)."""
     todo = [(replay_task, t) for t in tasks if not t.path.exists()]
-    todo += [(rest_task, t) for t in tasks if t.method == "lio" and t.path.exists() and "rest" not in load_replay(t.path)]
+    todo += [
+        (rest_task, t) for t in tasks if t.method == "lio" and t.path.exists() and "rest" not in load_replay(t.path)
+    ]
     label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
     step(label, len(todo), 0, restart=True)
     if not todo:
@@ -76,8 +78,9 @@ def run_replays(tasks: list, workers: int, step) -> None:
         return
     # Spawned workers start with Python's warning format (file:line, source line): the
     # study's own is one line (lf3pm.errors.one_line_warning).
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
-                             initializer=_one_line_warnings) as pool:
+    with ProcessPoolExecutor(
+        max_workers=workers, mp_context=get_context("spawn"), initializer=_one_line_warnings
+    ) as pool:
         for _ in pool.map(_run, todo):
             step(label, len(todo))
 
@@ -105,8 +108,11 @@ def replay_summary(runs: list) -> dict:
     seeds, each seed's, and the median share of degenerate scans; for LIO replays
     whether each seed's rest was steady (replay_result.rest_motion)."""
     apes = [r["ape_rmse"] for r in runs]
-    out = {"ape": float(np.median(apes)), "ape_per_seed": apes,
-           "degenerate_share": float(np.median([r["degenerate_share"] for r in runs]))}
+    out = {
+        "ape": float(np.median(apes)),
+        "ape_per_seed": apes,
+        "degenerate_share": float(np.median([r["degenerate_share"] for r in runs])),
+    }
     if all("rest" in r for r in runs):  # the LIO's: was the odometry still while the sensor was?
         out["rest_steady_per_seed"] = [bool(r["rest"]["steady"]) for r in runs]
     return out
@@ -126,14 +132,19 @@ def replay_task(task) -> None:
     result = replay(world, csv, case.sensor, method, seed, target=target, threads=1, **options)
     errors = np.asarray(result.errors)
     every = max(1, int(round(result.params["rate"])))
-    record = {"ape_rmse": result.ape["rmse"], "ape_median": result.ape["median"], "ape_max": result.ape["max"],
-              "scans": result.scans, "degenerate_share": float(np.mean(result.degenerate)),
-              "seconds": float(sum(result.seconds_per_scan.values()) * result.scans),
-              "times_every_second": (result.times[::every] - result.times[0]).tolist(),
-              "errors_every_second": errors[::every].tolist(),
-              # the paths too, for `lf3pm view --replay`
-              "truth_xyz_every_second": result.truth[::every, :3, 3].tolist(),
-              "estimate_xyz_every_second": result.estimate[::every, :3, 3].tolist()}
+    record = {
+        "ape_rmse": result.ape["rmse"],
+        "ape_median": result.ape["median"],
+        "ape_max": result.ape["max"],
+        "scans": result.scans,
+        "degenerate_share": float(np.mean(result.degenerate)),
+        "seconds": float(sum(result.seconds_per_scan.values()) * result.scans),
+        "times_every_second": (result.times[::every] - result.times[0]).tolist(),
+        "errors_every_second": errors[::every].tolist(),
+        # the paths too, for `lf3pm view --replay`
+        "truth_xyz_every_second": result.truth[::every, :3, 3].tolist(),
+        "estimate_xyz_every_second": result.estimate[::every, :3, 3].tolist(),
+    }
     if result.rest:
         record["rest"] = result.rest
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -16,27 +16,36 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
-from lf3pm.validation import RegistrationTarget, mde
+from lf3pm.config import DEFAULTS
 from lf3pm.experiments.poses import poses_around_reference
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate
 from lf3pm.scenes import build_scene
-from lf3pm.config import DEFAULTS
 from lf3pm.sensors import get_sensor
+from lf3pm.validation import RegistrationTarget, mde
 
 SCENES = ("houses", "house_meadow", "meadow", "wall")
 SENSORS = ("mid70", "vlp16")
 QUANTITIES = ("q_min", "q_n", "q_max", "mde")
 #: The paper's finding (its Table I, Mid-70), stated qualitatively: only q_n
 #: ranks the scenes as MDE does, and q_min cannot separate the first three.
-PAPER_FINDING = ("paper: only q_n ranks the scenes as MDE does "
-                 "(houses < house_meadow < meadow < wall); q_min does not separate "
-                 "houses, house_meadow and meadow")
+PAPER_FINDING = (
+    "paper: only q_n ranks the scenes as MDE does "
+    "(houses < house_meadow < meadow < wall); q_min does not separate "
+    "houses, house_meadow and meadow"
+)
 
 
-def run(out: Path, *, poses: int = DEFAULTS.table1.poses, trials: int = DEFAULTS.table1.trials,
-        sigma_t: float = DEFAULTS.mde.sigma_t, sigma_r_deg: float = DEFAULTS.mde.sigma_r,
-        seed: int = DEFAULTS.table1.seed, progress=None) -> dict:
+def run(
+    out: Path,
+    *,
+    poses: int = DEFAULTS.table1.poses,
+    trials: int = DEFAULTS.table1.trials,
+    sigma_t: float = DEFAULTS.mde.sigma_t,
+    sigma_r_deg: float = DEFAULTS.mde.sigma_r,
+    seed: int = DEFAULTS.table1.seed,
+    progress=None,
+) -> dict:
     """Runs the experiment and writes its files to ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     summary, rows = {}, []
@@ -52,24 +61,49 @@ def run(out: Path, *, poses: int = DEFAULTS.table1.poses, trials: int = DEFAULTS
             records = []
             for i, pose in enumerate(pose_list):
                 res = evaluate(world, pose, sensor, seed=seed + i)
-                err = mde(world, pose, sensor, trials=trials, sigma_t=sigma_t, sigma_r_deg=sigma_r_deg,
-                          seed=seed + i, target=target)
-                records.append({"pose": list(pose), "q_min": res.q_min, "q_n": res.q_n,
-                                "q_max": res.q_max, "m": res.m, "mde": err.mde})
+                err = mde(
+                    world,
+                    pose,
+                    sensor,
+                    trials=trials,
+                    sigma_t=sigma_t,
+                    sigma_r_deg=sigma_r_deg,
+                    seed=seed + i,
+                    target=target,
+                )
+                records.append(
+                    {
+                        "pose": list(pose),
+                        "q_min": res.q_min,
+                        "q_n": res.q_n,
+                        "q_max": res.q_max,
+                        "m": res.m,
+                        "mde": err.mde,
+                    }
+                )
                 if progress:
                     progress(f"{scene_name} / {sensor_name} pose {i + 1}/{poses}", steps)
             means = {q: float(np.mean([r[q] for r in records])) for q in QUANTITIES + ("m",)}
             per_sensor[sensor_name] = {**means, "poses": records}
             rows.append((scene_name, sensor_name, means))
-        summary[scene_name] = {**{q: per_sensor["mid70"][q] for q in QUANTITIES},
-                               "by_sensor": per_sensor,
-                               "params": {"scene_seed": seed, "scene_points": scene.size,
-                                          "map_sha256": world.sha256, "poses": poses,
-                                          "trials": trials, "sigma_t": sigma_t,
-                                          "sigma_r_deg": sigma_r_deg,
-                                          "association": "knn (k=5, 0.1 m, sqrt(5) m)",
-                                          "w1": 0.5, "w2": 0.5, "noise": "each sensor's",
-                                          "quantities": "means over poses"}}
+        summary[scene_name] = {
+            **{q: per_sensor["mid70"][q] for q in QUANTITIES},
+            "by_sensor": per_sensor,
+            "params": {
+                "scene_seed": seed,
+                "scene_points": scene.size,
+                "map_sha256": world.sha256,
+                "poses": poses,
+                "trials": trials,
+                "sigma_t": sigma_t,
+                "sigma_r_deg": sigma_r_deg,
+                "association": "knn (k=5, 0.1 m, sqrt(5) m)",
+                "w1": 0.5,
+                "w2": 0.5,
+                "noise": "each sensor's",
+                "quantities": "means over poses",
+            },
+        }
     with atomic_write(out / "summary.json") as fp:
         fp.write(json.dumps(summary, indent=1).encode())
     table = markdown_table(rows)
@@ -86,8 +120,10 @@ def rank(values: dict) -> str:
 def markdown_table(rows) -> str:
     lines = ["| scene | sensor | q_min | q_n | q_max | MDE | mean m |", "|---|---|---|---|---|---|---|"]
     for scene, sensor, m in rows:
-        lines.append(f"| {scene} | {sensor} | {m['q_min']:.4f} | {m['q_n']:.4f} | {m['q_max']:.4f} | "
-                     f"{m['mde']:.3g} | {m['m']:.0f} |")
+        lines.append(
+            f"| {scene} | {sensor} | {m['q_min']:.4f} | {m['q_n']:.4f} | {m['q_max']:.4f} | "
+            f"{m['mde']:.3g} | {m['m']:.0f} |"
+        )
     lines.append("")
     for sensor in SENSORS:
         for q in QUANTITIES:
@@ -102,6 +138,7 @@ def plot(path: Path, rows) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     from lf3pm.solm.figures import save_figure
 
     fig, axes = plt.subplots(1, len(SENSORS), figsize=(12, 4.5), dpi=110, sharey=True)

@@ -8,8 +8,8 @@ from importlib import import_module
 
 import numpy as np
 
-from lf3pm.errors import MapError
 from lf3pm.atomic import atomic_write
+from lf3pm.errors import MapError
 from lf3pm.io.voxel import check_voxel, voxel_downsample
 
 # suffix -> (module, reader, writer). Modules load on first use: pypcd4, plyfile
@@ -61,8 +61,11 @@ def load_points(path, voxel: float | None = None) -> np.ndarray:
     if kept == 0:
         raise MapError(f"{name}: no finite points (all {total} have a NaN or infinite coordinate)")
     if kept < total:
-        warnings.warn(f"{name}: dropped {total - kept} of {total} points with a NaN or infinite "
-                      f"coordinate", category=UserWarning, stacklevel=2)
+        warnings.warn(
+            f"{name}: dropped {total - kept} of {total} points with a NaN or infinite coordinate",
+            category=UserWarning,
+            stacklevel=2,
+        )
         points = points[finite]
     if voxel is not None:
         points = voxel_downsample(points, voxel)
@@ -87,8 +90,7 @@ def write_points(path, points, encoding: str | None = None) -> None:
         if writer != "write_pcd":
             raise MapError(f"{name}: an encoding can only be chosen for .pcd files")
         if encoding not in PCD_ENCODINGS:
-            raise MapError(f"{name}: unknown PCD encoding {encoding!r}; "
-                           f"use one of {', '.join(PCD_ENCODINGS)}")
+            raise MapError(f"{name}: unknown PCD encoding {encoding!r}; use one of {', '.join(PCD_ENCODINGS)}")
         options["encoding"] = encoding
     points = np.ascontiguousarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3:
@@ -105,7 +107,6 @@ def _format(name: str):
     """The module, reader name and writer name for ``name``'s suffix, or a MapError."""
     suffix = os.path.splitext(name)[1].lower()
     if suffix not in _FORMATS:
-        raise MapError(f"{name}: unknown suffix {suffix or '(none)'}; "
-                       f"supported: {' '.join(SUPPORTED_SUFFIXES)}")
+        raise MapError(f"{name}: unknown suffix {suffix or '(none)'}; supported: {' '.join(SUPPORTED_SUFFIXES)}")
     module, reader, writer = _FORMATS[suffix]
     return import_module(f"lf3pm.io.{module}"), reader, writer

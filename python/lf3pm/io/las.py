@@ -29,8 +29,10 @@ def read_las(path: str) -> np.ndarray:
             data_bytes = os.path.getsize(path) - header.offset_to_point_data
             stored = data_bytes // header.point_format.size
             if stored < header.point_count:
-                raise MapError(f"{path}: truncated LAS file: the header declares "
-                               f"{header.point_count} points, the file holds {max(stored, 0)}")
+                raise MapError(
+                    f"{path}: truncated LAS file: the header declares "
+                    f"{header.point_count} points, the file holds {max(stored, 0)}"
+                )
         # Chunk by chunk into the result: the whole record array beside it cost two to
         # three times the coordinates.
         xyz = np.empty((header.point_count, 3), dtype=np.float64)
@@ -42,8 +44,7 @@ def read_las(path: str) -> np.ndarray:
             xyz[start:end] = stack_xyz(chunk.x, chunk.y, chunk.z)
             start = end
     if start != len(xyz):
-        raise MapError(f"{path}: truncated LAS/LAZ file: the header declares {len(xyz)} points, "
-                       f"the file holds {start}")
+        raise MapError(f"{path}: truncated LAS/LAZ file: the header declares {len(xyz)} points, the file holds {start}")
     return xyz
 
 

@@ -34,9 +34,10 @@ def read_npy(path: str) -> np.ndarray:
     for start in range(0, rows, _CHUNK_ROWS):
         count = min(_CHUNK_ROWS, rows - start)
         with reading(path, ".npy"):
-            part = np.fromfile(path, dtype=dtype, count=count * columns,
-                               offset=offset + start * columns * dtype.itemsize)
-        out[start:start + count] = part.reshape(count, columns)[:, :3]
+            part = np.fromfile(
+                path, dtype=dtype, count=count * columns, offset=offset + start * columns * dtype.itemsize
+            )
+        out[start : start + count] = part.reshape(count, columns)[:, :3]
     return out
 
 
@@ -55,8 +56,10 @@ def read_npz(path: str) -> np.ndarray:
             elif not names:
                 raise MapError(f"{path}: the .npz holds no arrays")
             else:
-                raise MapError(f"{path}: the .npz holds arrays {', '.join(names)}; "
-                               f"expected one named 'points' or exactly one array")
+                raise MapError(
+                    f"{path}: the .npz holds arrays {', '.join(names)}; "
+                    f"expected one named 'points' or exactly one array"
+                )
     return _xyz(path, array)
 
 

@@ -11,7 +11,6 @@ from pypcd4.pypcd4 import MetaData
 from lf3pm.errors import MapError
 from lf3pm.io._common import reading, stack_xyz
 
-
 #: Records of a binary PCD read at a time (pypcd4 reads the whole data section, then
 #: the x, y, z copy doubles it).
 _CHUNK_RECORDS = 1 << 20
@@ -37,8 +36,10 @@ def read_pcd(path: str) -> np.ndarray:
     _check_xyz(path, records.dtype, cloud.metadata)
     # pypcd4 returns whatever records a short binary data section holds.
     if len(records) != cloud.metadata.points:
-        raise MapError(f"{path}: truncated or corrupt PCD file: the header declares "
-                       f"{cloud.metadata.points} points, the data section holds {len(records)}")
+        raise MapError(
+            f"{path}: truncated or corrupt PCD file: the header declares "
+            f"{cloud.metadata.points} points, the data section holds {len(records)}"
+        )
     return stack_xyz(records["x"], records["y"], records["z"])
 
 
@@ -58,8 +59,7 @@ def _header(fp) -> tuple[MetaData, int]:
 def _check_xyz(path: str, dtype: np.dtype, metadata: MetaData) -> None:
     missing = [axis for axis in "xyz" if axis not in (dtype.names or ())]
     if missing:
-        raise MapError(f"{path}: the PCD has no {'/'.join(missing)} field "
-                       f"(fields: {' '.join(metadata.fields)})")
+        raise MapError(f"{path}: the PCD has no {'/'.join(missing)} field (fields: {' '.join(metadata.fields)})")
 
 
 def _read_binary(path: str, metadata: MetaData, offset: int) -> np.ndarray:
@@ -73,10 +73,12 @@ def _read_binary(path: str, metadata: MetaData, offset: int) -> np.ndarray:
         count = min(_CHUNK_RECORDS, total - start)
         records = np.fromfile(path, dtype=dtype, count=count, offset=offset + start * dtype.itemsize)
         if len(records) != count:
-            raise MapError(f"{path}: truncated or corrupt PCD file: the header declares "
-                           f"{total} points, the data section holds {start + len(records)}")
+            raise MapError(
+                f"{path}: truncated or corrupt PCD file: the header declares "
+                f"{total} points, the data section holds {start + len(records)}"
+            )
         for axis, name in enumerate("xyz"):
-            xyz[start:start + count, axis] = records[name]
+            xyz[start : start + count, axis] = records[name]
     return xyz
 
 
@@ -110,8 +112,7 @@ def _check_declared_size(path: str) -> None:
     try:
         sizes = [int(v) for v in fields["SIZE"]]
         counts = [int(v) for v in fields.get("COUNT", ["1"] * len(sizes))]
-        points = int(fields["POINTS"][0]) if "POINTS" in fields else \
-            int(fields["WIDTH"][0]) * int(fields["HEIGHT"][0])
+        points = int(fields["POINTS"][0]) if "POINTS" in fields else int(fields["WIDTH"][0]) * int(fields["HEIGHT"][0])
         encoding = fields["DATA"][0].lower()
     except (KeyError, IndexError, ValueError):
         return
@@ -127,8 +128,10 @@ def _check_declared_size(path: str) -> None:
     else:
         return
     if need > left:
-        raise MapError(f"{path}: truncated or corrupt PCD file: its header declares {points:,} points "
-                       f"({what}), more than the {left:,} bytes after the header can hold")
+        raise MapError(
+            f"{path}: truncated or corrupt PCD file: its header declares {points:,} points "
+            f"({what}), more than the {left:,} bytes after the header can hold"
+        )
 
 
 def write_pcd(fp: BinaryIO, points: np.ndarray, encoding: str = "binary") -> None:

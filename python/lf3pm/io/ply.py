@@ -21,8 +21,7 @@ def read_ply(path: str) -> np.ndarray:
     names = [prop.name for prop in vertex.properties]
     missing = [axis for axis in "xyz" if axis not in names]
     if missing:
-        raise MapError(f"{path}: the PLY vertex has no {'/'.join(missing)} property "
-                       f"(properties: {' '.join(names)})")
+        raise MapError(f"{path}: the PLY vertex has no {'/'.join(missing)} property (properties: {' '.join(names)})")
     return stack_xyz(vertex["x"], vertex["y"], vertex["z"])
 
 

@@ -50,8 +50,7 @@ def voxel_downsample(points, voxel: float) -> np.ndarray:
     if not (np.isfinite(extent).all() and extent.max() <= _MAX_CELLS_PER_AXIS):
         if not np.isfinite(points).all():
             raise MapError("points must be finite to be voxel-downsampled")
-        raise MapError(f"voxel size {size:g} is too small for a cloud this wide "
-                       f"(over 2^53 cells along one axis)")
+        raise MapError(f"voxel size {size:g} is too small for a cloud this wide (over 2^53 cells along one axis)")
     cells -= low
 
     if math.prod(extent.tolist()) < 2.0**63:

@@ -39,7 +39,6 @@ from lf3pm.config import COMPOSITE_CHANNELS, COST_CHANNELS, DEFAULTS
 from lf3pm.errors import Lf3pmError
 
 
-
 @dataclass(frozen=True)
 class CostLayer:
     """``cost``: float64 of the channel's shape, >= 0, NaN where not evaluated;
@@ -53,9 +52,14 @@ class CostLayer:
     cap: float
 
 
-def cost_from_values(values, channel: str = DEFAULTS.guidance.metric, *, degenerate=None,
-                     power: float = DEFAULTS.guidance.power,
-                     cap_percentile: float = 99.0) -> CostLayer:
+def cost_from_values(
+    values,
+    channel: str = DEFAULTS.guidance.metric,
+    *,
+    degenerate=None,
+    power: float = DEFAULTS.guidance.power,
+    cap_percentile: float = 99.0,
+) -> CostLayer:
     """The cost layer of one channel's array (NaN: not evaluated, +inf: degenerate);
     ``degenerate`` optionally flags more cells to cap; ``power``: the exponent applied
     to the normalised values."""
@@ -88,8 +92,13 @@ def cost_from_values(values, channel: str = DEFAULTS.guidance.metric, *, degener
     return CostLayer(channel, cost, np.where(np.isnan(cost), cap, cost), scale, cap)
 
 
-def cost_from_solm(solm, channel: str = DEFAULTS.guidance.metric, *, power: float = DEFAULTS.guidance.power,
-                   cap_percentile: float = 99.0) -> CostLayer:
+def cost_from_solm(
+    solm,
+    channel: str = DEFAULTS.guidance.metric,
+    *,
+    power: float = DEFAULTS.guidance.power,
+    cap_percentile: float = 99.0,
+) -> CostLayer:
     """The cost layer of ``solm``'s ``channel`` (shape (ny, nx) for r2, (yaw_bins,
     ny, nx) for se2), raised to ``power``, with the SOLM's degenerate mask capped."""
     if solm.grid_spec.space not in ("r2", "se2"):
@@ -100,8 +109,9 @@ def cost_from_solm(solm, channel: str = DEFAULTS.guidance.metric, *, power: floa
         raise Lf3pmError(f"unknown cost channel {channel!r}; use one of {', '.join(COST_CHANNELS)}")
     degenerate = np.asarray(solm.channel("degenerate")).astype(bool)
     if channel in COMPOSITE_CHANNELS:
-        values = np.maximum.reduce([relative_to_median(solm.channel(part), part, degenerate)
-                                    for part in COMPOSITE_CHANNELS[channel]])
+        values = np.maximum.reduce(
+            [relative_to_median(solm.channel(part), part, degenerate) for part in COMPOSITE_CHANNELS[channel]]
+        )
     else:
         values = solm.channel(channel)
     return cost_from_values(values, channel, degenerate=degenerate, power=power, cap_percentile=cap_percentile)

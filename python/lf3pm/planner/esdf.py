@@ -88,9 +88,9 @@ _FAR = 1.0e3  # metres: the clamp of +-inf values in grid_field()
 
 UNKNOWN_POLICIES = ("obstacle", "free")
 
-_SUPERSAMPLE = 8             # lattice points per cell and axis (even: centres lie on it)
-_MAX_LATTICE = 1 << 21       # points (~100 bytes each at the peak); fewer per cell, down to 2, beyond
-_BLOCKED_HEADSTART = 1.0     # cells blocked centres start below what they need (step 3)
+_SUPERSAMPLE = 8  # lattice points per cell and axis (even: centres lie on it)
+_MAX_LATTICE = 1 << 21  # points (~100 bytes each at the peak); fewer per cell, down to 2, beyond
+_BLOCKED_HEADSTART = 1.0  # cells blocked centres start below what they need (step 3)
 
 
 class Esdf:
@@ -104,8 +104,18 @@ class Esdf:
     (:meth:`from_solm`), whose values at the centres are then samples of it.
     """
 
-    def __init__(self, values, obstacle, unknown, x0: float, y0: float, res: float,
-                 unknown_policy: str = "obstacle", body_radius: float = 0.0, field=None):
+    def __init__(
+        self,
+        values,
+        obstacle,
+        unknown,
+        x0: float,
+        y0: float,
+        res: float,
+        unknown_policy: str = "obstacle",
+        body_radius: float = 0.0,
+        field=None,
+    ):
         self.body_radius = float(body_radius)
         self.obstacle = np.asarray(obstacle, dtype=bool)
         self.unknown = np.asarray(unknown, dtype=bool)
@@ -117,8 +127,17 @@ class Esdf:
         self.values = np.asarray(values, dtype=np.float64) if field is None else self.distance(*self.centres())[0]
 
     @classmethod
-    def from_mask(cls, mask, x0: float, y0: float, res: float, *, unknown=None,
-                  unknown_policy: str = "obstacle", body_radius: float = 0.0) -> "Esdf":
+    def from_mask(
+        cls,
+        mask,
+        x0: float,
+        y0: float,
+        res: float,
+        *,
+        unknown=None,
+        unknown_policy: str = "obstacle",
+        body_radius: float = 0.0,
+    ) -> Esdf:
         """The field of the (ny, nx) obstacle ``mask`` (True = obstacle), with an
         optional (ny, nx) ``unknown`` mask handled by ``unknown_policy``, for a round
         body of ``body_radius`` (its values are the distance less the radius)."""
@@ -130,8 +149,9 @@ class Esdf:
         if not (body_radius >= 0 and np.isfinite(body_radius)):
             raise Lf3pmError(f"body radius must be a number >= 0 m, got {body_radius}")
         if unknown_policy not in UNKNOWN_POLICIES:
-            raise Lf3pmError(f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, "
-                             f"got {unknown_policy!r}")
+            raise Lf3pmError(
+                f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, got {unknown_policy!r}"
+            )
         unknown = np.zeros_like(mask) if unknown is None else np.asarray(unknown, dtype=bool)
         if unknown.shape != mask.shape:
             raise Lf3pmError(f"unknown mask shape {unknown.shape} differs from obstacle mask {mask.shape}")
@@ -145,7 +165,7 @@ class Esdf:
         return cls(values, mask, unknown, x0, y0, res, unknown_policy, body_radius)
 
     @classmethod
-    def from_solm(cls, solm, *, unknown_policy: str = "obstacle") -> "Esdf":
+    def from_solm(cls, solm, *, unknown_policy: str = "obstacle") -> Esdf:
         """The body's clearance on a SOLM: the field of its occupancy layer (the
         cells, k times finer than the SOLM's, holding a map point in the body's
         height band) and, by ``unknown_policy``, its unknown cells, less its robot
@@ -156,14 +176,21 @@ class Esdf:
             raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {g.space}")
         obstacle, unknown = solm_masks(solm)
         if unknown_policy not in UNKNOWN_POLICIES:
-            raise Lf3pmError(f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, "
-                             f"got {unknown_policy!r}")
+            raise Lf3pmError(
+                f"unknown-cell policy must be one of {', '.join(UNKNOWN_POLICIES)}, got {unknown_policy!r}"
+            )
         occupied, k = solm.occupancy()
         radius = float(solm.attrs["robot_radius"])
-        fine = cls.from_mask(occupied, g.x0, g.y0, g.res / k, unknown=np.kron(unknown, np.ones((k, k), bool)),
-                             unknown_policy=unknown_policy, body_radius=radius)
-        return cls(None, obstacle, unknown, g.x0, g.y0, g.res, unknown_policy, radius,
-                   field=(fine.values, fine.res))
+        fine = cls.from_mask(
+            occupied,
+            g.x0,
+            g.y0,
+            g.res / k,
+            unknown=np.kron(unknown, np.ones((k, k), bool)),
+            unknown_policy=unknown_policy,
+            body_radius=radius,
+        )
+        return cls(None, obstacle, unknown, g.x0, g.y0, g.res, unknown_policy, radius, field=(fine.values, fine.res))
 
     def centres(self) -> tuple[np.ndarray, np.ndarray]:
         """(x, y) of the cells' centres, arrays of shape (ny, nx)."""
@@ -221,10 +248,14 @@ class Esdf:
 
     def clearance_reason(self, clearance: float, r_safe: float) -> str:
         """Why a point whose field reads ``clearance`` is closer than ``r_safe``."""
-        within = (f"the robot radius {self.body_radius:g} m + {r_safe:g} m" if self.body_radius > 0
-                  else f"r_safe {r_safe:g} m")
-        return (f"{max(clearance + self.body_radius, 0.0):.2f} m from an obstacle or unknown ground, "
-                f"closer than {within}")
+        within = (
+            f"the robot radius {self.body_radius:g} m + {r_safe:g} m"
+            if self.body_radius > 0
+            else f"r_safe {r_safe:g} m"
+        )
+        return (
+            f"{max(clearance + self.body_radius, 0.0):.2f} m from an obstacle or unknown ground, closer than {within}"
+        )
 
 
 def solm_masks(solm) -> tuple[np.ndarray, np.ndarray]:
@@ -245,7 +276,7 @@ def _conservative_values(blocked: np.ndarray) -> np.ndarray:
         k -= 2
     lattice, nearest_free = _lattice_distance(blocked, k)
     hull = _Hull(ny, nx, k)
-    exact = lattice[k // 2::k, k // 2::k]
+    exact = lattice[k // 2 :: k, k // 2 :: k]
     on_hull = np.ix_(hull.y.index, hull.x.index)
     s = lattice[on_hull]
     h = 1.0 / k
@@ -275,7 +306,7 @@ def _lattice_distance(blocked: np.ndarray, k: int):
     ny, nx = blocked.shape
     sub = np.pad(np.repeat(np.repeat(blocked, k, axis=0), k, axis=1), 1, mode="edge")
     # the lattice squares around each point (the edge padding repeats in-grid ones)
-    around = [sub[dy:dy + k * ny + 1, dx:dx + k * nx + 1] for dy in (0, 1) for dx in (0, 1)]
+    around = [sub[dy : dy + k * ny + 1, dx : dx + k * nx + 1] for dy in (0, 1) for dx in (0, 1)]
     in_blocked = np.logical_or.reduce(around)
     in_free = ~np.logical_and.reduce(around)
     outside = distance_transform_edt(~in_blocked) / k
@@ -322,7 +353,7 @@ class _HullAxis:
     t: np.ndarray
 
     @classmethod
-    def of(cls, n: int, k: int) -> "_HullAxis":
+    def of(cls, n: int, k: int) -> _HullAxis:
         if n == 1:
             zero = np.zeros(2, dtype=np.int64)
             return cls(n, k, np.full(2, k // 2), zero, zero, np.zeros(2))
@@ -337,7 +368,7 @@ class _HullAxis:
             out = a.max(axis=0, keepdims=True)
         else:
             runs = a[:-1].reshape((self.n - 1, self.k) + a.shape[1:]).max(axis=1)
-            out = np.maximum(runs, a[self.k::self.k])  # each run's closing line
+            out = np.maximum(runs, a[self.k :: self.k])  # each run's closing line
         return np.moveaxis(out, 0, axis)
 
     def centre_max(self, g: np.ndarray, axis: int) -> np.ndarray:
@@ -386,5 +417,5 @@ def _raise_class(correction, need, hull: _Hull, parity, movable) -> np.ndarray:
         least = np.where(weight > 0, (need - others) / weight, -np.inf)
     least = hull.centre_max(hull.cell_max(least))
     selected = np.zeros(correction.shape, dtype=bool)
-    selected[parity[0]::2, parity[1]::2] = True
+    selected[parity[0] :: 2, parity[1] :: 2] = True
     return np.where(selected & movable, np.minimum(correction, least), correction)

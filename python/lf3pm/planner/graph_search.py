@@ -32,6 +32,7 @@ from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.poses import cell_on_grid, format_pose
 
+
 @dataclass(frozen=True)
 class GraphPath:
     """A grid path from start to goal.
@@ -55,9 +56,19 @@ class GraphPath:
     time: float
 
 
-def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float = 1.0,
-                heuristic: bool = True, r_safe: float = 0.0, turn_radius: float = DEFAULTS.guidance.turn_radius,
-                turn_while_moving: bool = True) -> GraphPath:
+def search_path(
+    cost,
+    traversable,
+    grid_geometry,
+    start,
+    goal,
+    *,
+    weight: float = 1.0,
+    heuristic: bool = True,
+    r_safe: float = 0.0,
+    turn_radius: float = DEFAULTS.guidance.turn_radius,
+    turn_while_moving: bool = True,
+) -> GraphPath:
     """Least-cost path from ``start`` to ``goal`` (x, y, yaw), snapped to their cells.
 
     ``cost``: a :class:`CostLayer` (its ``filled`` array is used) or an array of
@@ -87,17 +98,19 @@ def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float 
     bad = mask & ~(np.isfinite(values) & (values >= 0))
     if bad.any():
         k, iy, ix = np.argwhere(bad)[0]
-        raise Lf3pmError(f"cost must be finite and >= 0 on traversable cells; cell ({ix}, {iy}, bin {k}) "
-                         f"holds {values[k, iy, ix]}")
+        raise Lf3pmError(
+            f"cost must be finite and >= 0 on traversable cells; cell ({ix}, {iy}, bin {k}) holds {values[k, iy, ix]}"
+        )
 
     step = 2 * math.pi / layers
     ends = [_locate(name, pose, g, layers, step) for name, pose in (("start", start), ("goal", goal))]
     for (name, pose), (ix, iy, k) in zip((("start", start), ("goal", goal)), ends):
         if not mask[k, iy, ix]:
             reason = esdf.blocked_reason(ix, iy, r_safe) if esdf is not None else None
-            raise Lf3pmError(f"{name} {format_pose(pose)} is "
-                             + (reason or "not traversable (an obstacle, unknown ground, or closer "
-                                          "than r_safe to one)"))
+            raise Lf3pmError(
+                f"{name} {format_pose(pose)} is "
+                + (reason or "not traversable (an obstacle, unknown ground, or closer than r_safe to one)")
+            )
         # The plan ends on the exact pose, not on its cell's centre: it must be clear too.
         if esdf is not None and (clear := float(esdf.distance(pose[0], pose[1])[0])) < r_safe:
             raise Lf3pmError(f"{name} {format_pose(pose)} is {esdf.clearance_reason(clear, r_safe)}")
@@ -106,22 +119,35 @@ def search_path(cost, traversable, grid_geometry, start, goal, *, weight: float 
     flat_mask = np.ascontiguousarray(np.moveaxis(mask, 0, -1), dtype=np.uint8).ravel()
     index = [(iy * nx + ix) * layers + k for ix, iy, k in ends]
     t0 = time.perf_counter()
-    params = core_struct(_core.SearchParams(), weight=float(weight), turn_length=float(turn_radius) * step,
-                         turn_while_moving=bool(turn_while_moving), heuristic=bool(heuristic))
+    params = core_struct(
+        _core.SearchParams(),
+        weight=float(weight),
+        turn_length=float(turn_radius) * step,
+        turn_while_moving=bool(turn_while_moving),
+        heuristic=bool(heuristic),
+    )
     out = _core.grid_search(flat_cost, flat_mask, nx, ny, layers, res, index[0], index[1], params)
     elapsed = time.perf_counter() - t0
     if not out["found"]:
-        raise Lf3pmError(f"goal {format_pose(goal)} is unreachable from start {format_pose(start)}: "
-                         "no traversable path joins them")
+        raise Lf3pmError(
+            f"goal {format_pose(goal)} is unreachable from start {format_pose(start)}: no traversable path joins them"
+        )
     path = np.asarray(out["path"], dtype=np.int64)
     cell, k = np.divmod(path, layers)
     iy, ix = np.divmod(cell, nx)
     cells = np.stack([ix, iy, k], axis=1)
     x = g.x0 + (ix + 0.5) * res
     y = g.y0 + (iy + 0.5) * res
-    return GraphPath(cells, np.stack([x, y, _yaws(x, y, k, step, layers, start, goal)], axis=1),
-                     float(np.hypot(np.diff(x), np.diff(y)).sum()), float(out["cost"]),
-                     int(out["expanded"]), int(out["heap_peak"]), int(out["relaxed_expanded"]), elapsed)
+    return GraphPath(
+        cells,
+        np.stack([x, y, _yaws(x, y, k, step, layers, start, goal)], axis=1),
+        float(np.hypot(np.diff(x), np.diff(y)).sum()),
+        float(out["cost"]),
+        int(out["expanded"]),
+        int(out["heap_peak"]),
+        int(out["relaxed_expanded"]),
+        elapsed,
+    )
 
 
 def _locate(name, pose, g, layers, step):

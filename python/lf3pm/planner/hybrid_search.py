@@ -21,9 +21,9 @@ import numpy as np
 from lf3pm import _core
 from lf3pm.config import core_struct
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid_field import GridField
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
-from lf3pm.grid_field import GridField
 from lf3pm.planner.poses import as_pose, cell_on_grid, format_pose
 
 
@@ -71,12 +71,25 @@ def sample_segments(start, segments, spacing: float = 0.05) -> np.ndarray:
 _DEFAULT = _core.HybridParams()
 
 
-def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: float = _DEFAULT.weight,
-                    clearance: float = _DEFAULT.clearance, yaw_bins: int = _DEFAULT.yaw_bins,
-                    step: float = _DEFAULT.step, sample_step: float = _DEFAULT.sample_step, spacing: float = 0.05,
-                    analytic_every: int = _DEFAULT.analytic_every, max_expansions: int = _DEFAULT.max_expansions,
-                    heuristic: bool = _DEFAULT.heuristic, heuristic_weight: float = _DEFAULT.heuristic_weight,
-                    esdf_field: GridField | None = None) -> HybridPath:
+def search_car_path(
+    cost,
+    esdf: Esdf,
+    start,
+    goal,
+    *,
+    radius: float,
+    weight: float = _DEFAULT.weight,
+    clearance: float = _DEFAULT.clearance,
+    yaw_bins: int = _DEFAULT.yaw_bins,
+    step: float = _DEFAULT.step,
+    sample_step: float = _DEFAULT.sample_step,
+    spacing: float = 0.05,
+    analytic_every: int = _DEFAULT.analytic_every,
+    max_expansions: int = _DEFAULT.max_expansions,
+    heuristic: bool = _DEFAULT.heuristic,
+    heuristic_weight: float = _DEFAULT.heuristic_weight,
+    esdf_field: GridField | None = None,
+) -> HybridPath:
     """Least-cost forward path of a car of turning radius ``radius`` from ``start`` to
     ``goal`` (x, y, yaw), exactly.
 
@@ -116,41 +129,85 @@ def search_car_path(cost, esdf: Esdf, start, goal, *, radius: float, weight: flo
     for name, pose in (("start", start), ("goal", goal)):
         _check_end(name, pose, esdf, esdf_field, clearance)
     t0 = time.perf_counter()
-    params = core_struct(_core.HybridParams(), radius=float(radius), weight=float(weight),
-                         clearance=float(clearance), yaw_bins=int(yaw_bins), step=float(step),
-                         sample_step=float(sample_step), analytic_every=int(analytic_every),
-                         max_expansions=int(max_expansions), heuristic=bool(heuristic),
-                         heuristic_weight=float(heuristic_weight))
+    params = core_struct(
+        _core.HybridParams(),
+        radius=float(radius),
+        weight=float(weight),
+        clearance=float(clearance),
+        yaw_bins=int(yaw_bins),
+        step=float(step),
+        sample_step=float(sample_step),
+        analytic_every=int(analytic_every),
+        max_expansions=int(max_expansions),
+        heuristic=bool(heuristic),
+        heuristic_weight=float(heuristic_weight),
+    )
     cells = esdf.cell_bounds
-    out = _core.hybrid_search(esdf_field._core, None if cells is None else cells._core,
-                              None if cost_field is None else cost_field._core, start, goal, params)
+    out = _core.hybrid_search(
+        esdf_field._core,
+        None if cells is None else cells._core,
+        None if cost_field is None else cost_field._core,
+        start,
+        goal,
+        params,
+    )
     elapsed = time.perf_counter() - t0
     if not out["found"]:
-        raise Lf3pmError(f"no forward path of turning radius {radius:g} m from start {format_pose(start)} to goal "
-                         f"{format_pose(goal)} keeps {clearance:g} m"
-                         + (f" beyond the robot radius {esdf.body_radius:g} m" if esdf.body_radius else "")
-                         + f" from obstacles: {out['reason']}")
+        raise Lf3pmError(
+            f"no forward path of turning radius {radius:g} m from start {format_pose(start)} to goal "
+            f"{format_pose(goal)} keeps {clearance:g} m"
+            + (f" beyond the robot radius {esdf.body_radius:g} m" if esdf.body_radius else "")
+            + f" from obstacles: {out['reason']}"
+        )
     segments = np.asarray(out["segments"], dtype=np.float64).reshape(-1, 2)
     poses = sample_segments(start, segments, spacing)
     # Exact ends: the integration lands on the goal up to round-off.
     poses[-1, :2] = goal[:2]
     poses[-1, 2] = goal[2] + 2 * math.pi * round((poses[-1, 2] - goal[2]) / (2 * math.pi))
-    return HybridPath(poses, segments, float(out["length"]), float(out["cost"]), int(out["expanded"]),
-                      int(out["analytic_tries"]), int(out["relaxed_cells"]), elapsed)
+    return HybridPath(
+        poses,
+        segments,
+        float(out["length"]),
+        float(out["cost"]),
+        int(out["expanded"]),
+        int(out["analytic_tries"]),
+        int(out["relaxed_cells"]),
+        elapsed,
+    )
 
 
-def search_heuristic(cost, esdf: Esdf, poses, goal, *, radius: float, weight: float = _DEFAULT.weight,
-                     clearance: float = _DEFAULT.clearance, yaw_bins: int = _DEFAULT.yaw_bins) -> np.ndarray:
+def search_heuristic(
+    cost,
+    esdf: Esdf,
+    poses,
+    goal,
+    *,
+    radius: float,
+    weight: float = _DEFAULT.weight,
+    clearance: float = _DEFAULT.clearance,
+    yaw_bins: int = _DEFAULT.yaw_bins,
+) -> np.ndarray:
     """:func:`search_car_path`'s heuristic at each of ``poses`` (N, 3) (+inf: pruned), for tests."""
     _radius(radius)
     field = esdf.grid_field()
     cost_field = _cost_field(cost, esdf)
     q = np.ascontiguousarray(np.asarray(poses, dtype=np.float64).reshape(-1, 3))
-    params = core_struct(_core.HybridParams(), radius=float(radius), weight=float(weight),
-                         clearance=float(clearance), yaw_bins=int(yaw_bins))
+    params = core_struct(
+        _core.HybridParams(),
+        radius=float(radius),
+        weight=float(weight),
+        clearance=float(clearance),
+        yaw_bins=int(yaw_bins),
+    )
     cells = esdf.cell_bounds
-    return _core.hybrid_heuristic(field._core, None if cells is None else cells._core,
-                                  None if cost_field is None else cost_field._core, q, as_pose(goal, "goal"), params)
+    return _core.hybrid_heuristic(
+        field._core,
+        None if cells is None else cells._core,
+        None if cost_field is None else cost_field._core,
+        q,
+        as_pose(goal, "goal"),
+        params,
+    )
 
 
 def _cost_field(cost, esdf: Esdf) -> GridField | None:
@@ -162,7 +219,10 @@ def _cost_field(cost, esdf: Esdf) -> GridField | None:
         field = GridField(np.asarray(cost, dtype=np.float64), esdf.x0, esdf.y0, esdf.res)
     if field is not None:
         if field.values.shape[-2:] != (esdf.ny, esdf.nx) or (field.x0, field.y0, field.res) != (
-                esdf.x0, esdf.y0, esdf.res):
+            esdf.x0,
+            esdf.y0,
+            esdf.res,
+        ):
             raise Lf3pmError(f"cost grid {field.values.shape} does not match the ESDF's ({esdf.ny}, {esdf.nx})")
         if np.any(field.values < 0):
             raise Lf3pmError("cost must be >= 0")

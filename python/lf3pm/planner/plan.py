@@ -18,19 +18,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
 from lf3pm.config import COST_CHANNELS, DEFAULTS
+from lf3pm.errors import Lf3pmError
+from lf3pm.grid_field import GridField
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import GraphPath, search_path
-from lf3pm.grid_field import GridField
 from lf3pm.planner.hybrid_search import HybridPath, search_car_path
-from lf3pm.trajectory.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, optimize_trajectory
 from lf3pm.planner.poses import as_pose
-from lf3pm.trajectory.robots import Robot
 from lf3pm.planner.shortcut import shortcut_path
-from lf3pm.trajectory.trajectory import CSV_RATE, Trajectory
 from lf3pm.solm.reader import Solm
+from lf3pm.trajectory.robots import Robot
+from lf3pm.trajectory.trajectory import CSV_RATE, Trajectory
+from lf3pm.trajectory.trajectory_optimizer import ESDF_MARGIN, OptimizeResult, optimize_trajectory
 
 
 @dataclass
@@ -51,13 +51,20 @@ class Plan:
         """Plain numbers for reports: lengths, duration, timings, worst constraint values."""
         samples = self.trajectory.sample(CSV_RATE)
         length = float(np.hypot(np.diff(samples["x"]), np.diff(samples["y"])).sum())
-        return {"metric": self.metric, "robot": self.robot.kind, "path_length_m": self.path.length,
-                "trajectory_length_m": length, "duration_s": float(self.trajectory.duration),
-                "search_s": self.path.time, "optimize_s": self.optimization.wall_time,
-                "iterations": int(self.optimization.iterations),
-                "time_scale": float(self.optimization.time_scale), "limited_by": self.optimization.limited_by,
-                "violations": {k: float(v) for k, v in self.optimization.violations.items()},
-                "warnings": self.warnings()}
+        return {
+            "metric": self.metric,
+            "robot": self.robot.kind,
+            "path_length_m": self.path.length,
+            "trajectory_length_m": length,
+            "duration_s": float(self.trajectory.duration),
+            "search_s": self.path.time,
+            "optimize_s": self.optimization.wall_time,
+            "iterations": int(self.optimization.iterations),
+            "time_scale": float(self.optimization.time_scale),
+            "limited_by": self.optimization.limited_by,
+            "violations": {k: float(v) for k, v in self.optimization.violations.items()},
+            "warnings": self.warnings(),
+        }
 
     def warnings(self) -> list[str]:
         """One line per way the optimised trajectory falls short of what the user asked
@@ -73,8 +80,10 @@ class Plan:
             contact = "it touches the map" if body <= 0.0 else f"the body passes {body:.2f} m from the map"
             out.append(f"the trajectory comes {-clearance:.2f} m inside r_safe ({self.robot.r_safe:.2f} m): {contact}")
         if violations.get("max_turn_excess", 0.0) > 0.0:
-            out.append(f"the car turns tighter than its min_turn_radius ({self.robot.min_turn_radius:.2f} m): "
-                       f"R |omega| exceeds |v| by up to {violations['max_turn_excess']:.3f} m/s")
+            out.append(
+                f"the car turns tighter than its min_turn_radius ({self.robot.min_turn_radius:.2f} m): "
+                f"R |omega| exceeds |v| by up to {violations['max_turn_excess']:.3f} m/s"
+            )
         return out
 
 
@@ -82,6 +91,7 @@ class Plan:
 #: away the field between two samples dips below them by under 1 cm, which the
 #: optimiser's margin covers (0.25 m samples on 1 m cells: up to 3-5 cm).
 CLEARANCE_STEP = 0.1
+
 
 class Planner:
     """Plans on one SOLM: the ESDF and cost layers are computed once and reused
@@ -107,9 +117,19 @@ class Planner:
             self._layers[key] = cost_from_solm(self.solm, metric, power=power)
         return self._layers[key]
 
-    def plan(self, start, goal, *, robot: Robot = Robot(), metric: str = DEFAULTS.guidance.metric,
-             weight: float = DEFAULTS.guidance.weight, power: float = DEFAULTS.guidance.power, rho_T: float = 1.0,
-             heuristic: bool = True, turn_radius: float = DEFAULTS.guidance.turn_radius) -> Plan:
+    def plan(
+        self,
+        start,
+        goal,
+        *,
+        robot: Robot = Robot(),
+        metric: str = DEFAULTS.guidance.metric,
+        weight: float = DEFAULTS.guidance.weight,
+        power: float = DEFAULTS.guidance.power,
+        rho_T: float = 1.0,
+        heuristic: bool = True,
+        turn_radius: float = DEFAULTS.guidance.turn_radius,
+    ) -> Plan:
         """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
         (``none``: shortest and fastest only) raised to ``power``, with trade-off ``weight``
         (lambda). ``turn_radius``: the front end prices a turn of the sensor as the arc a
@@ -121,15 +141,33 @@ class Planner:
         cost = None if metric == "none" else GridField(layer.filled, self.esdf.x0, self.esdf.y0, self.esdf.res)
         piece_length, corners, turn_price = 2.0, False, 0.0
         if robot.kind == "car" and robot.min_turn_radius > 0:
-            path = search_car_path(cost, self.esdf, start, goal, radius=robot.min_turn_radius, weight=weight,
-                                   clearance=robot.r_safe + ESDF_MARGIN, heuristic=heuristic,
-                                   sample_step=self._sample_step, esdf_field=self._esdf_field)
+            path = search_car_path(
+                cost,
+                self.esdf,
+                start,
+                goal,
+                radius=robot.min_turn_radius,
+                weight=weight,
+                clearance=robot.r_safe + ESDF_MARGIN,
+                heuristic=heuristic,
+                sample_step=self._sample_step,
+                esdf_field=self._esdf_field,
+            )
             waypoints = path.poses
             # Pieces of a quarter turn at most, so the spline can follow the path's loops.
             piece_length = min(piece_length, 0.5 * math.pi * robot.min_turn_radius)
         else:
-            path = search_path(layer, self.esdf, self.solm.grid_spec, start, goal, weight=weight,
-                               heuristic=heuristic, r_safe=robot.r_safe, turn_radius=turn_radius)
+            path = search_path(
+                layer,
+                self.esdf,
+                self.solm.grid_spec,
+                start,
+                goal,
+                weight=weight,
+                heuristic=heuristic,
+                r_safe=robot.r_safe,
+                turn_radius=turn_radius,
+            )
             waypoints = np.array(path.poses, dtype=np.float64)
             # The search snaps start and goal to cell centres; the trajectory ends on them exactly.
             waypoints[0], waypoints[-1] = start, goal
@@ -140,14 +178,30 @@ class Planner:
             # an SE(2) SOLM keeps the front end's yaws (the sensor's heading is the plan there);
             # otherwise the yaw is the direction of travel.
             oriented = robot.kind == "omni" and cost is not None and cost.yaw_bins > 1
-            keep = shortcut_path(waypoints, self._esdf_field, robot.r_safe + ESDF_MARGIN, cost, weight,
-                                 step=self._sample_step, yaw="interpolate" if oriented else "travel",
-                                 turn_radius=turn_radius)
+            keep = shortcut_path(
+                waypoints,
+                self._esdf_field,
+                robot.r_safe + ESDF_MARGIN,
+                cost,
+                weight,
+                step=self._sample_step,
+                yaw="interpolate" if oriented else "travel",
+                turn_radius=turn_radius,
+            )
             waypoints, corners = waypoints[keep], True
             # The back end prices the sensor's turns as the front end does (a turn_radius of
             # travel per rad), or it turns where the front end judged turning not to pay.
             turn_price = turn_radius / robot.vmax_lon if oriented else 0.0
-        result = optimize_trajectory(waypoints, cost, self._esdf_field, robot, w_q=weight * rho_T,
-                                     rho_T=rho_T, esdf_margin=ESDF_MARGIN, piece_length=piece_length,
-                                     corners=corners, turn_price=turn_price)
+        result = optimize_trajectory(
+            waypoints,
+            cost,
+            self._esdf_field,
+            robot,
+            w_q=weight * rho_T,
+            rho_T=rho_T,
+            esdf_margin=ESDF_MARGIN,
+            piece_length=piece_length,
+            corners=corners,
+            turn_price=turn_price,
+        )
         return Plan(metric, robot, path, result)

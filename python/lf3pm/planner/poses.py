@@ -26,8 +26,10 @@ def cell_on_grid(grid, name: str, pose) -> tuple[int, int]:
     """:func:`grid_cell` of ``pose``'s x, y, or a one-line error naming ``name`` and the grid's extent."""
     cell = grid_cell(grid, float(pose[0]), float(pose[1]))
     if cell is None:
-        raise Lf3pmError(f"{name} {format_pose(pose)} lies outside the grid x [{grid.x0:.2f}, "
-                         f"{grid.x0 + grid.nx * grid.res:.2f}], y [{grid.y0:.2f}, {grid.y0 + grid.ny * grid.res:.2f}]")
+        raise Lf3pmError(
+            f"{name} {format_pose(pose)} lies outside the grid x [{grid.x0:.2f}, "
+            f"{grid.x0 + grid.nx * grid.res:.2f}], y [{grid.y0:.2f}, {grid.y0 + grid.ny * grid.res:.2f}]"
+        )
     return cell
 
 

@@ -33,9 +33,17 @@ from lf3pm.grid_field import GridField
 YAW_MODES = ("travel", "interpolate")
 
 
-def shortcut_path(points, esdf: GridField, clearance: float, cost: GridField | None = None,
-                  weight: float = 0.0, step: float | None = None, *, yaw: str = "travel",
-                  turn_radius: float = DEFAULTS.guidance.turn_radius) -> np.ndarray:
+def shortcut_path(
+    points,
+    esdf: GridField,
+    clearance: float,
+    cost: GridField | None = None,
+    weight: float = 0.0,
+    step: float | None = None,
+    *,
+    yaw: str = "travel",
+    turn_radius: float = DEFAULTS.guidance.turn_radius,
+) -> np.ndarray:
     """Indices (M,) of the waypoints kept from the path ``points`` (K, 3: x, y, yaw
     unwrapped; K >= 2), first and last included.
 
@@ -52,8 +60,9 @@ def shortcut_path(points, esdf: GridField, clearance: float, cost: GridField | N
     step = esdf.res / 4 if step is None else step
     turn = turn_radius if yaw == "interpolate" else 0.0
     # Cumulative cost along the input path, so any run's cost is a difference.
-    run = np.concatenate([[0.0], np.cumsum([_segment_cost(a, b, cost, weight, step, yaw, turn)
-                                            for a, b in zip(pts[:-1], pts[1:])])])
+    run = np.concatenate(
+        [[0.0], np.cumsum([_segment_cost(a, b, cost, weight, step, yaw, turn) for a, b in zip(pts[:-1], pts[1:])])]
+    )
     out, i = [0], 0
     while i < len(pts) - 1:
         j = i + 1

@@ -45,8 +45,7 @@ class GenZ:
                 self._initial_covariance(dict(values))
                 continue
             if section not in _GENZ_SECTIONS:
-                raise ValueError(f"unknown GenZ-LIO parameter section {section!r}; known: "
-                                 f"{', '.join(_GENZ_SECTIONS)}")
+                raise ValueError(f"unknown GenZ-LIO parameter section {section!r}; known: {', '.join(_GENZ_SECTIONS)}")
             target = getattr(config, section)
             for name, value in dict(values).items():
                 if name.startswith("_") or not hasattr(target, name):
@@ -60,8 +59,9 @@ class GenZ:
         rotation and velocity at its start from the environment when it initialises."""
         unknown = sorted(set(values) - {"pose_variance"})
         if unknown:
-            raise ValueError(f"unknown GenZ-LIO parameter(s) initial_covariance.{', '.join(unknown)}; "
-                             "known: pose_variance")
+            raise ValueError(
+                f"unknown GenZ-LIO parameter(s) initial_covariance.{', '.join(unknown)}; known: pose_variance"
+            )
         variance = float(values.get("pose_variance", 1.0))
         if not variance > 0:
             raise ValueError(f"initial_covariance.pose_variance must be > 0, got {variance}")
@@ -108,8 +108,10 @@ class Dlio:
         self.pipeline = pipelines.DLIO()
         unknown = sorted(set(settings) - set(pipelines.DLIO.default_params()))
         if unknown:
-            raise ValueError(f"unknown DLIO parameter(s) {', '.join(unknown)}; known: "
-                             f"{', '.join(sorted(pipelines.DLIO.default_params()))}")
+            raise ValueError(
+                f"unknown DLIO parameter(s) {', '.join(unknown)}; known: "
+                f"{', '.join(sorted(pipelines.DLIO.default_params()))}"
+            )
         # evalio leaves unset fields uninitialised: every parameter is set.
         self.settings = {**pipelines.DLIO.default_params(), **settings}
         self.pipeline.set_params(self.settings)
@@ -199,13 +201,20 @@ class LioSam:
         known = set(pipelines.LioSAM.default_params())
         unknown = sorted(set(settings) - known)
         if unknown:
-            raise ValueError(f"unknown LIO-SAM parameter(s) {', '.join(unknown)}; known: imu_densities, "
-                             f"{', '.join(sorted(known))}")
+            raise ValueError(
+                f"unknown LIO-SAM parameter(s) {', '.join(unknown)}; known: imu_densities, {', '.join(sorted(known))}"
+            )
         # evalio leaves unset fields uninitialised: every parameter is set.
         self.pipeline.set_params({**pipelines.LioSAM.default_params(), "numberOfCores": int(threads), **settings})
         self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, -9.81]), **noise))
-        self.pipeline.set_lidar_params(types.LidarParams(num_rows=len(lidar["beams"]), num_columns=lidar["columns"],
-                                                         min_range=sensor_range[0], max_range=sensor_range[1]))
+        self.pipeline.set_lidar_params(
+            types.LidarParams(
+                num_rows=len(lidar["beams"]),
+                num_columns=lidar["columns"],
+                min_range=sensor_range[0],
+                max_range=sensor_range[1],
+            )
+        )
         mounting = Rotation.from_rotvec([self.TILT, 0.0, 0.0])  # the IMU's axes in the LiDAR's
         self.lidar_R_imu = mounting.as_matrix()
         qx, qy, qz, qw = mounting.inv().as_quat()  # imu_T_lidar
@@ -232,8 +241,11 @@ class LioSam:
         self.begins.append(begin)
         median = _median_time(begin, data["t"])
         # LIO-SAM drops a scan whose time span the IMU samples do not cover.
-        status = "ok" if self.imu_span is not None and self.imu_span[0] <= begin else \
-            "skipped: no IMU samples before the scan"
+        status = (
+            "ok"
+            if self.imu_span is not None and self.imu_span[0] <= begin
+            else "skipped: no IMU samples before the scan"
+        )
         self.queue.append(_Queued(median, status, True, begin + offsets[-1], _turn(imu, begin, median)))
         return self._report()
 
@@ -313,8 +325,10 @@ def _median_time(begin, nanoseconds):
 def _fields(helpers, dtype):
     """evalio's description of the structured array ``dtype``'s fields."""
     kinds = {"<f8": helpers.DataType.FLOAT64, "<u4": helpers.DataType.UINT32, "|u1": helpers.DataType.UINT8}
-    return [helpers.Field(name=name, datatype=kinds[dtype.fields[name][0].str], offset=dtype.fields[name][1])
-            for name in dtype.names]
+    return [
+        helpers.Field(name=name, datatype=kinds[dtype.fields[name][0].str], offset=dtype.fields[name][1])
+        for name in dtype.names
+    ]
 
 
 #: Added to every time given to evalio, whose stamps are unsigned (a replay's rest
@@ -328,8 +342,15 @@ def _add_imu(pipeline, types, imu):
 
 
 def _measurement(helpers, types, fields, data, begin):
-    meta = helpers.PointCloudMetadata(stamp=types.Stamp.from_sec(EPOCH + begin), width=len(data), height=1,
-                                      point_step=data.itemsize, row_step=data.nbytes, is_bigendian=0, is_dense=1)
+    meta = helpers.PointCloudMetadata(
+        stamp=types.Stamp.from_sec(EPOCH + begin),
+        width=len(data),
+        height=1,
+        point_step=data.itemsize,
+        row_step=data.nbytes,
+        is_bigendian=0,
+        is_dense=1,
+    )
     return helpers.pc2_to_evalio(meta, fields, data.tobytes())
 
 
@@ -348,8 +369,13 @@ def main(reply_fd: int) -> None:
     try:
         backend = BACKENDS[odometry](sensor_range, threads, settings, lidar)
     except ImportError as err:
-        send(("error", f"the {odometry} odometry is not installed ({err}); pip install 'lf3pm[lio]' "
-                       "(wheels for Python 3.8-3.12)"))
+        send(
+            (
+                "error",
+                f"the {odometry} odometry is not installed ({err}); pip install 'lf3pm[lio]' "
+                "(wheels for Python 3.8-3.12)",
+            )
+        )
         return
     except (ValueError, TypeError) as err:
         send(("error", str(err)))

@@ -59,16 +59,31 @@ _NUMPY = {_FLOAT32: "<f4", _UINT8: "u1", _UINT16: "<u2", _UINT32: "<u4"}
 
 
 def point_layout(sensor: Sensor) -> str:
-    """"ouster" for Ouster sensors, else "velodyne" (module docstring)."""
+    """ "ouster" for Ouster sensors, else "velodyne" (module docstring)."""
     return "ouster" if sensor.name.lower().startswith("os") and spinning_rings(sensor) is not None else "velodyne"
 
 
 def _fields(layout: str) -> list[tuple[str, int]]:
     if layout == "ouster":
-        return [("x", _FLOAT32), ("y", _FLOAT32), ("z", _FLOAT32), ("intensity", _FLOAT32), ("t", _UINT32),
-                ("reflectivity", _UINT16), ("ring", _UINT8), ("ambient", _UINT16), ("range", _UINT32)]
-    return [("x", _FLOAT32), ("y", _FLOAT32), ("z", _FLOAT32), ("intensity", _FLOAT32), ("ring", _UINT16),
-            ("time", _FLOAT32)]
+        return [
+            ("x", _FLOAT32),
+            ("y", _FLOAT32),
+            ("z", _FLOAT32),
+            ("intensity", _FLOAT32),
+            ("t", _UINT32),
+            ("reflectivity", _UINT16),
+            ("ring", _UINT8),
+            ("ambient", _UINT16),
+            ("range", _UINT32),
+        ]
+    return [
+        ("x", _FLOAT32),
+        ("y", _FLOAT32),
+        ("z", _FLOAT32),
+        ("intensity", _FLOAT32),
+        ("ring", _UINT16),
+        ("time", _FLOAT32),
+    ]
 
 
 def cloud_dtype(layout: str) -> np.dtype:
@@ -129,34 +144,60 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
         ns, s = stamp(t)
         return ns, T["std_msgs/msg/Header"](stamp=s, frame_id=frame)
 
-    vec = lambda v: T["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))
-    quat_yaw = lambda yaw: T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
+    def vec(v):
+        return T["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+    def quat_yaw(yaw):
+        return T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
+
     identity = T["geometry_msgs/msg/Transform"](translation=vec((0, 0, 0)), rotation=quat_yaw(0.0))
-    latched = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
-                  QosTime(0, 0), QosTime(0, 0), QosLiveliness.AUTOMATIC, QosTime(0, 0), False)
+    latched = Qos(
+        QosHistory.KEEP_LAST,
+        1,
+        QosReliability.RELIABLE,
+        QosDurability.TRANSIENT_LOCAL,
+        QosTime(0, 0),
+        QosTime(0, 0),
+        QosLiveliness.AUTOMATIC,
+        QosTime(0, 0),
+        False,
+    )
     try:
         os.mkdir(workdir)
         writer = Writer(temporary, version=8, storage_plugin=StoragePlugin.SQLITE3)
         writer.open()
         try:
-            conn = {topic: writer.add_connection(topic, kind, typestore=ts,
-                                                 **({"offered_qos_profiles": [latched]} if topic == "/tf_static" else {}))
-                    for topic, kind in (("/points", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu"),
-                                        ("/ground_truth", "nav_msgs/msg/Odometry"), ("/tf", "tf2_msgs/msg/TFMessage"),
-                                        ("/tf_static", "tf2_msgs/msg/TFMessage"))}
+            conn = {
+                topic: writer.add_connection(
+                    topic, kind, typestore=ts, **({"offered_qos_profiles": [latched]} if topic == "/tf_static" else {})
+                )
+                for topic, kind in (
+                    ("/points", "sensor_msgs/msg/PointCloud2"),
+                    ("/imu", "sensor_msgs/msg/Imu"),
+                    ("/ground_truth", "nav_msgs/msg/Odometry"),
+                    ("/tf", "tf2_msgs/msg/TFMessage"),
+                    ("/tf_static", "tf2_msgs/msg/TFMessage"),
+                )
+            }
 
             def put(topic, ns, msg):
                 writer.write(conn[topic], ns, ts.serialize_cdr(msg, msg.__msgtype__))
                 counts[topic] += 1
 
             ns, h = header(earliest, FRAMES["body"])
-            static = [T["geometry_msgs/msg/TransformStamped"](header=h, child_frame_id=FRAMES[c], transform=identity)
-                      for c in ("lidar", "imu")]
+            static = [
+                T["geometry_msgs/msg/TransformStamped"](header=h, child_frame_id=FRAMES[c], transform=identity)
+                for c in ("lidar", "imu")
+            ]
             put("/tf_static", ns, T["tf2_msgs/msg/TFMessage"](transforms=static))
 
-            fields = [T["sensor_msgs/msg/PointField"](name=n, offset=o, datatype=k, count=1)
-                      for (n, k), o in zip(_fields(layout), np.cumsum([0] + [np.dtype(_NUMPY[k]).itemsize
-                                                                            for _, k in _fields(layout)])[:-1].tolist())]
+            fields = [
+                T["sensor_msgs/msg/PointField"](name=n, offset=o, datatype=k, count=1)
+                for (n, k), o in zip(
+                    _fields(layout),
+                    np.cumsum([0] + [np.dtype(_NUMPY[k]).itemsize for _, k in _fields(layout)])[:-1].tolist(),
+                )
+            ]
             dtype = cloud_dtype(layout)
             for k in range(len(scans)):
                 scan = scans[k]
@@ -176,9 +217,16 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
                     record["ring"] = ring
                 _, h = header(begin, FRAMES["lidar"])
                 msg = T["sensor_msgs/msg/PointCloud2"](
-                    header=h, height=1, width=len(record), fields=fields, is_bigendian=False,
-                    point_step=dtype.itemsize, row_step=dtype.itemsize * len(record),
-                    data=np.frombuffer(record.tobytes(), dtype=np.uint8), is_dense=True)
+                    header=h,
+                    height=1,
+                    width=len(record),
+                    fields=fields,
+                    is_bigendian=False,
+                    point_step=dtype.itemsize,
+                    row_step=dtype.itemsize * len(record),
+                    data=np.frombuffer(record.tobytes(), dtype=np.uint8),
+                    is_dense=True,
+                )
                 put("/points", stamp(scan.end)[0], msg)
                 if progress is not None:
                     progress(k + 1, len(scans))
@@ -187,10 +235,19 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
             unknown[0] = -1.0
             for t, a, g in zip(imu_t, np.asarray(imu.accel, float), np.asarray(imu.gyro, float)):
                 ns, h = header(t, FRAMES["imu"])
-                put("/imu", ns, T["sensor_msgs/msg/Imu"](
-                    header=h, orientation=quat_yaw(0.0), orientation_covariance=unknown, angular_velocity=vec(g),
-                    angular_velocity_covariance=np.zeros(9), linear_acceleration=vec(a),
-                    linear_acceleration_covariance=np.zeros(9)))
+                put(
+                    "/imu",
+                    ns,
+                    T["sensor_msgs/msg/Imu"](
+                        header=h,
+                        orientation=quat_yaw(0.0),
+                        orientation_covariance=unknown,
+                        angular_velocity=vec(g),
+                        angular_velocity_covariance=np.zeros(9),
+                        linear_acceleration=vec(a),
+                        linear_acceleration_covariance=np.zeros(9),
+                    ),
+                )
 
             position, velocity = motion.position(truth_times), motion.velocity(truth_times)
             yaw, rate = motion.yaw(truth_times), motion.yaw_rate(truth_times)
@@ -198,17 +255,35 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
                 ns, h = header(t, FRAMES["world"])
                 c, s = math.cos(psi), math.sin(psi)
                 body_v = (c * v[0] + s * v[1], -s * v[0] + c * v[1], v[2])
-                pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](
-                    x=float(p[0]), y=float(p[1]), z=float(p[2])), orientation=quat_yaw(psi))
-                put("/ground_truth", ns, T["nav_msgs/msg/Odometry"](
-                    header=h, child_frame_id=FRAMES["body"],
-                    pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
-                    twist=T["geometry_msgs/msg/TwistWithCovariance"](
-                        twist=T["geometry_msgs/msg/Twist"](linear=vec(body_v), angular=vec((0.0, 0.0, w))),
-                        covariance=np.zeros(36))))
+                pose = T["geometry_msgs/msg/Pose"](
+                    position=T["geometry_msgs/msg/Point"](x=float(p[0]), y=float(p[1]), z=float(p[2])),
+                    orientation=quat_yaw(psi),
+                )
+                put(
+                    "/ground_truth",
+                    ns,
+                    T["nav_msgs/msg/Odometry"](
+                        header=h,
+                        child_frame_id=FRAMES["body"],
+                        pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+                        twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                            twist=T["geometry_msgs/msg/Twist"](linear=vec(body_v), angular=vec((0.0, 0.0, w))),
+                            covariance=np.zeros(36),
+                        ),
+                    ),
+                )
                 moved = T["geometry_msgs/msg/Transform"](translation=vec(p), rotation=quat_yaw(psi))
-                put("/tf", ns, T["tf2_msgs/msg/TFMessage"](transforms=[T["geometry_msgs/msg/TransformStamped"](
-                    header=h, child_frame_id=FRAMES["body"], transform=moved)]))
+                put(
+                    "/tf",
+                    ns,
+                    T["tf2_msgs/msg/TFMessage"](
+                        transforms=[
+                            T["geometry_msgs/msg/TransformStamped"](
+                                header=h, child_frame_id=FRAMES["body"], transform=moved
+                            )
+                        ]
+                    ),
+                )
             writer.set_custom_data("lf3pm_clock_offset_s", repr(float(offset)))
             writer.set_custom_data("lf3pm_point_layout", layout)
         finally:
@@ -217,9 +292,16 @@ def write_bag(path, scans, imu, *, truth_rate: float = TRUTH_RATE, progress=None
     except (OSError, sqlite3.Error, WriterError) as err:
         # sqlite reports a full disk as its own error ("database or disk is full").
         cause = (getattr(err, "strerror", None) or str(err) or err.__class__.__name__).splitlines()[0]
-        raise StorageError(f"{path}: cannot write the bag ({cause}); no bag is kept (its partial folder is "
-                           "removed): free space or fix the storage, then run the replay with --bag again") from None
+        raise StorageError(
+            f"{path}: cannot write the bag ({cause}); no bag is kept (its partial folder is "
+            "removed): free space or fix the storage, then run the replay with --bag again"
+        ) from None
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
-    return {"topics": counts, "clock_offset_s": float(offset), "point_layout": layout, "storage": "sqlite3",
-            "version": 8}
+    return {
+        "topics": counts,
+        "clock_offset_s": float(offset),
+        "point_layout": layout,
+        "storage": "sqlite3",
+        "version": 8,
+    }

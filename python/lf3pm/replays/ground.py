@@ -69,8 +69,7 @@ class SmoothGround:
         """g, g_x, g_y, g_xx, g_xy, g_yy at (x, y)."""
         x, y = np.asarray(x, float), np.asarray(y, float)
         ev = self.spline.ev
-        return (ev(x, y), ev(x, y, dx=1), ev(x, y, dy=1), ev(x, y, dx=2), ev(x, y, dx=1, dy=1),
-                ev(x, y, dy=2))
+        return (ev(x, y), ev(x, y, dx=1), ev(x, y, dy=1), ev(x, y, dx=2), ev(x, y, dx=1, dy=1), ev(x, y, dy=2))
 
     def deviation(self, x, y) -> np.ndarray:
         """g(x, y) minus the column minimum of the cell under each (x, y) (NaN
@@ -83,8 +82,14 @@ class SmoothGround:
         return self.height(x, y) - self.raw[j, i]
 
 
-def smooth_ground(points: np.ndarray, path_xy: np.ndarray, *, cell: float = GROUND_CELL,
-                  smoothing: float = GROUND_SMOOTHING, max_step: float = GROUND_MAX_STEP) -> SmoothGround:
+def smooth_ground(
+    points: np.ndarray,
+    path_xy: np.ndarray,
+    *,
+    cell: float = GROUND_CELL,
+    smoothing: float = GROUND_SMOOTHING,
+    max_step: float = GROUND_MAX_STEP,
+) -> SmoothGround:
     """The smooth ground under ``path_xy`` (N, 2) from the map ``points`` (M, 3).
 
     Raises Lf3pmError for non-positive parameters or when no map point lies
@@ -112,8 +117,10 @@ def smooth_ground(points: np.ndarray, path_xy: np.ndarray, *, cell: float = GROU
 
     # Ground: the columns the path reaches by small steps (4-neighbour graph).
     index = np.arange(nx * ny).reshape(ny, nx)
-    pairs = [(index[:, :-1], index[:, 1:], np.abs(np.diff(filled, axis=1))),
-             (index[:-1, :], index[1:, :], np.abs(np.diff(filled, axis=0)))]
+    pairs = [
+        (index[:, :-1], index[:, 1:], np.abs(np.diff(filled, axis=1))),
+        (index[:-1, :], index[1:, :], np.abs(np.diff(filled, axis=0))),
+    ]
     rows = np.concatenate([a[d <= max_step] for a, _, d in pairs])
     cols = np.concatenate([b[d <= max_step] for _, b, d in pairs])
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(nx * ny, nx * ny))
@@ -126,14 +133,20 @@ def smooth_ground(points: np.ndarray, path_xy: np.ndarray, *, cell: float = GROU
     surface_label = np.bincount(label[on_path]).argmax()
     ground = (label == surface_label).reshape(ny, nx) & known
 
-    surface = gaussian_filter(_nearest_fill(filled, ground, distance_transform_edt), smoothing / cell,
-                              mode="nearest", truncate=3.0)
+    surface = gaussian_filter(
+        _nearest_fill(filled, ground, distance_transform_edt), smoothing / cell, mode="nearest", truncate=3.0
+    )
     xs = x0 + (np.arange(nx) + 0.5) * cell
     ys = y0 + (np.arange(ny) + 0.5) * cell
     spline = RectBivariateSpline(xs, ys, surface.T, kx=3, ky=3, s=0)
-    return SmoothGround(spline=spline, region=(x0, y0, x0 + nx * cell, y0 + ny * cell), cell=float(cell),
-                        smoothing=float(smoothing), max_step=float(max_step),
-                        raw=np.where(ground, raw, np.nan))
+    return SmoothGround(
+        spline=spline,
+        region=(x0, y0, x0 + nx * cell, y0 + ny * cell),
+        cell=float(cell),
+        smoothing=float(smoothing),
+        max_step=float(max_step),
+        raw=np.where(ground, raw, np.nan),
+    )
 
 
 def _nearest_fill(values: np.ndarray, keep: np.ndarray, distance_transform_edt) -> np.ndarray:

@@ -83,9 +83,12 @@ class ImuPreset:
         """The discrete-time standard deviations at ``rate`` Hz: white noise per
         sample (density * sqrt(rate)) and bias step per sample (density / sqrt(rate))."""
         root = math.sqrt(rate)
-        return {"accel_white": self.accel_noise_density * root, "gyro_white": self.gyro_noise_density * root,
-                "accel_bias_step": self.accel_bias_random_walk / root,
-                "gyro_bias_step": self.gyro_bias_random_walk / root}
+        return {
+            "accel_white": self.accel_noise_density * root,
+            "gyro_white": self.gyro_noise_density * root,
+            "accel_bias_step": self.accel_bias_random_walk / root,
+            "gyro_bias_step": self.gyro_bias_random_walk / root,
+        }
 
 
 _TEN_MINUTES = 600.0
@@ -98,8 +101,9 @@ PRESETS = {
         accel_bias_random_walk=0.2e-3 * GRAVITY / math.sqrt(_TEN_MINUTES),
         gyro_bias_random_walk=math.radians(0.015) / math.sqrt(_TEN_MINUTES),
         source="Bosch BMI088 datasheet BST-BMI088-DS001 (typical): accelerometer 175 ug/sqrt(Hz), gyroscope "
-               "0.014 deg/s/sqrt(Hz); bias random walks sized from the offset temperature coefficients "
-               "(0.2 mg/K, 0.015 deg/s/K) as a 1 K change in 10 minutes (assumption)"),
+        "0.014 deg/s/sqrt(Hz); bias random walks sized from the offset temperature coefficients "
+        "(0.2 mg/K, 0.015 deg/s/K) as a 1 K change in 10 minutes (assumption)",
+    ),
 }
 DEFAULT_PRESET = "bmi088"
 
@@ -147,8 +151,14 @@ def sample_times(t0: float, t1: float, rate: float) -> np.ndarray:
     return t0 + np.arange(count) / rate
 
 
-def simulate_imu(motion, *, rate: float = DEFAULTS.replay.imu_rate, preset: str | ImuPreset = DEFAULT_PRESET,
-                 seed: int = DEFAULTS.scan.seed, noise: bool = DEFAULTS.replay.imu_noise) -> ImuSamples:
+def simulate_imu(
+    motion,
+    *,
+    rate: float = DEFAULTS.replay.imu_rate,
+    preset: str | ImuPreset = DEFAULT_PRESET,
+    seed: int = DEFAULTS.scan.seed,
+    noise: bool = DEFAULTS.replay.imu_noise,
+) -> ImuSamples:
     """IMU samples every 1/``rate`` s over [motion.t0, motion.t1] (module
     docstring for the model). ``motion`` needs t0, t1, acceleration(t),
     yaw_rate(t) and pose(t) (lf3pm.validation's Motion). ``noise`` False:
@@ -183,14 +193,22 @@ def simulate_imu(motion, *, rate: float = DEFAULTS.replay.imu_rate, preset: str 
     gyro_bias = np.zeros_like(gyro)
     if noise:
         s = model.sigmas(rate)
-        streams = [np.random.default_rng(child) for child in
-                   np.random.SeedSequence([int(seed), IMU_STREAM]).spawn(4)]
+        streams = [np.random.default_rng(child) for child in np.random.SeedSequence([int(seed), IMU_STREAM]).spawn(4)]
         accel_bias = _random_walk(streams[1], len(t), s["accel_bias_step"])
         gyro_bias = _random_walk(streams[3], len(t), s["gyro_bias_step"])
         accel = accel + accel_bias + s["accel_white"] * streams[0].standard_normal((len(t), 3))
         gyro = gyro + gyro_bias + s["gyro_white"] * streams[2].standard_normal((len(t), 3))
-    return ImuSamples(t=t, accel=accel, gyro=gyro, accel_bias=accel_bias, gyro_bias=gyro_bias,
-                      preset=model, seed=int(seed), rate=rate, noise=bool(noise))
+    return ImuSamples(
+        t=t,
+        accel=accel,
+        gyro=gyro,
+        accel_bias=accel_bias,
+        gyro_bias=gyro_bias,
+        preset=model,
+        seed=int(seed),
+        rate=rate,
+        noise=bool(noise),
+    )
 
 
 def _random_walk(rng: np.random.Generator, count: int, step: float) -> np.ndarray:

@@ -100,10 +100,9 @@ import numpy as np
 
 from lf3pm.config import ReplayConfig
 from lf3pm.errors import Lf3pmError
-from lf3pm.replays.imu import ImuPreset
 from lf3pm.pose import pose_matrix
+from lf3pm.replays.imu import ImuPreset
 from lf3pm.sensors import Sensor, as_sensor, spinning_rings
-
 
 
 @dataclass(frozen=True)
@@ -118,16 +117,20 @@ class Odometry:
 
 
 #: The odometries by the name ``run_lio(odometry=...)`` and ``--odometry`` take.
-ODOMETRIES = {"genz": Odometry("GenZ-LIO", "genz-lio", "0.1.1", "GPL-2.0-only"),
-              "dlio": Odometry("DLIO", "evalio", "0.6.1", "MIT (evalio and DLIO)"),
-              "liosam": Odometry("LIO-SAM", "evalio", "0.6.1", "BSD-3-Clause (LIO-SAM), MIT (evalio)")}
+ODOMETRIES = {
+    "genz": Odometry("GenZ-LIO", "genz-lio", "0.1.1", "GPL-2.0-only"),
+    "dlio": Odometry("DLIO", "evalio", "0.6.1", "MIT (evalio and DLIO)"),
+    "liosam": Odometry("LIO-SAM", "evalio", "0.6.1", "BSD-3-Clause (LIO-SAM), MIT (evalio)"),
+}
 DEFAULT_ODOMETRY = ReplayConfig.model_fields["odometry"].default
 #: The sensors docs/lio.md measured an odometry to lose, by odometry and by whether the
 #: sensor spins (rings of beams; False: a non-repetitive Livox pattern): what was measured
 #: and what to run instead. choose_odometry warns when asked for such a pair.
-LOSES = {("dlio", False): "DLIO loses track of a non-repetitive (Livox) sensor, whose 0.1 s scans cover a "
-                          "part of its pattern (Mid-70: 0.1-3 m APE where GenZ-LIO holds 0.4-4 cm; docs/lio.md, "
-                          "\"Two odometries\"): use odometry genz or auto"}
+LOSES = {
+    ("dlio", False): "DLIO loses track of a non-repetitive (Livox) sensor, whose 0.1 s scans cover a "
+    "part of its pattern (Mid-70: 0.1-3 m APE where GenZ-LIO holds 0.4-4 cm; docs/lio.md, "
+    '"Two odometries"): use odometry genz or auto'
+}
 
 
 def choose_odometry(odometry: str, sensor: Sensor) -> str:
@@ -144,8 +147,9 @@ def choose_odometry(odometry: str, sensor: Sensor) -> str:
     if odometry not in ODOMETRIES:
         raise Lf3pmError(f"unknown odometry {odometry!r}; use one of auto, {', '.join(ODOMETRIES)}")
     if not runs_on(odometry, sensor):
-        raise Lf3pmError(f"{odometry} needs a spinning sensor (rings of beams); the {sensor.name} has none: "
-                         "use genz or dlio")
+        raise Lf3pmError(
+            f"{odometry} needs a spinning sensor (rings of beams); the {sensor.name} has none: use genz or dlio"
+        )
     return odometry
 
 
@@ -156,6 +160,8 @@ RING_ODOMETRIES = ("liosam",)
 def runs_on(odometry: str, sensor: Sensor) -> bool:
     """Whether ``odometry`` (a key of ODOMETRIES) can take ``sensor``'s scans."""
     return odometry not in RING_ODOMETRIES or spinning_rings(sensor) is not None
+
+
 _WORKER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_lio_worker.py")
 #: Factor on the IMU noise variances the filter is told (imu_noise_model). With
 #: the exact ones it trusted the IMU over its biased matches in the open desert
@@ -207,14 +213,21 @@ class LioEstimate:
 
     def to_dict(self) -> dict:
         """JSON-ready summary (no per-scan arrays)."""
-        return {"odometry": self.odometry, "package": self.package, "version": self.version,
-                "scans": len(self.times),
-                "lost": list(self.lost), "seconds_per_scan": self.seconds_per_scan, "params": self.params,
-                "messages": list(self.messages)}
+        return {
+            "odometry": self.odometry,
+            "package": self.package,
+            "version": self.version,
+            "scans": len(self.times),
+            "lost": list(self.lost),
+            "seconds_per_scan": self.seconds_per_scan,
+            "params": self.params,
+            "messages": list(self.messages),
+        }
 
 
-def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = DEFAULT_ODOMETRY, threads: int = 1,
-            **params) -> LioEstimate:
+def run_lio(
+    scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = DEFAULT_ODOMETRY, threads: int = 1, **params
+) -> LioEstimate:
     """The LiDAR-inertial ``odometry`` (a key of ODOMETRIES, or "auto":
     :func:`choose_odometry`) on ``scans`` (each
     with ``end`` s, ``points`` (H, 3) in the sensor frame at their firing times
@@ -253,14 +266,20 @@ def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = D
     with tempfile.TemporaryFile() as log:
         reply_read, reply_write = os.pipe()
         try:
-            child = subprocess.Popen([sys.executable, _WORKER, str(reply_write)], stdin=subprocess.PIPE,
-                                     stdout=log, stderr=subprocess.STDOUT, pass_fds=(reply_write,),
-                                     env=dict(os.environ, OMP_NUM_THREADS=str(threads)))
+            child = subprocess.Popen(
+                [sys.executable, _WORKER, str(reply_write)],
+                stdin=subprocess.PIPE,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                pass_fds=(reply_write,),
+                env=dict(os.environ, OMP_NUM_THREADS=str(threads)),
+            )
         finally:
             os.close(reply_write)
         with os.fdopen(reply_read, "rb") as replies:
-            times, poses, status, seconds, version = _drive(child, replies, log, scans, ends, t, rows, bounds,
-                                                            sensor, threads, odometry, settings)
+            times, poses, status, seconds, version = _drive(
+                child, replies, log, scans, ends, t, rows, bounds, sensor, threads, odometry, settings
+            )
         log.seek(0)
         messages += [line for line in log.read().decode(errors="replace").splitlines() if line.strip()]
 
@@ -271,17 +290,29 @@ def run_lio(scans, imu, sensor: Sensor | str, *, initial_pose, odometry: str = D
     if odometry == "genz":
         if version != GENZ_LF3PM_BUILD:  # PyPI's build ignores the initial covariance it is given
             settings = {**settings, "initial_covariance": {"pose_variance": 1.0}}
-            messages.insert(0, f"lf3pm: genz-lio {version} is not lf3pm's build ({GENZ_LF3PM_BUILD}), so it "
-                               "starts at GenZ-LIO's own initial covariance (1 m, 1 rad): a still narrow-view "
-                               "sensor's estimate slides before it moves (docs/lio.md, 'A still sensor'); "
-                               "`make build` installs lf3pm's (third_party/genz_lio)")
+            messages.insert(
+                0,
+                f"lf3pm: genz-lio {version} is not lf3pm's build ({GENZ_LF3PM_BUILD}), so it "
+                "starts at GenZ-LIO's own initial covariance (1 m, 1 rad): a still narrow-view "
+                "sensor's estimate slides before it moves (docs/lio.md, 'A still sensor'); "
+                "`make build` installs lf3pm's (third_party/genz_lio)",
+            )
             warnings.warn(messages[0], stacklevel=2)
         used |= {"lidar_type": "livox", "overrides": settings}
     else:
         used["settings"] = settings
-    return LioEstimate(times=times, poses=estimate, status=status, lost=lost,
-                       seconds_per_scan=float(np.mean(seconds)), odometry=spec.name, package=spec.package,
-                       version=version, params=used, messages=messages)
+    return LioEstimate(
+        times=times,
+        poses=estimate,
+        status=status,
+        lost=lost,
+        seconds_per_scan=float(np.mean(seconds)),
+        odometry=spec.name,
+        package=spec.package,
+        version=version,
+        params=used,
+        messages=messages,
+    )
 
 
 def _settings(odometry: str, sensor: Sensor, imu, params: dict) -> dict:
@@ -293,8 +324,9 @@ def _settings(odometry: str, sensor: Sensor, imu, params: dict) -> dict:
         return {**LIOSAM_SETTINGS, "imu_densities": imu_densities(imu), **params}
     for section, values in params.items():
         if not isinstance(values, dict):
-            raise Lf3pmError(f"GenZ-LIO settings go by section, e.g. mapping={{'voxel_size': 0.5}}; "
-                             f"got {section}={values!r}")
+            raise Lf3pmError(
+                f"GenZ-LIO settings go by section, e.g. mapping={{'voxel_size': 0.5}}; got {section}={values!r}"
+            )
     overrides = {section: dict(values) for section, values in default_settings(sensor).items()}
     overrides["noise_model"] = imu_noise_model(imu)
     for section, values in params.items():
@@ -350,8 +382,12 @@ def imu_noise_model(imu) -> dict:
     if not isinstance(preset, ImuPreset) or rate is None:
         return {}
     sigma = preset.sigmas(float(rate))
-    exact = {"acc_cov": sigma["accel_white"] ** 2, "gyr_cov": sigma["gyro_white"] ** 2,
-             "b_acc_cov": (sigma["accel_bias_step"] * rate) ** 2, "b_gyr_cov": (sigma["gyro_bias_step"] * rate) ** 2}
+    exact = {
+        "acc_cov": sigma["accel_white"] ** 2,
+        "gyr_cov": sigma["gyro_white"] ** 2,
+        "b_acc_cov": (sigma["accel_bias_step"] * rate) ** 2,
+        "b_gyr_cov": (sigma["gyro_bias_step"] * rate) ** 2,
+    }
     # A noiseless preset says nothing about a real IMU: GenZ-LIO's defaults stay for those terms.
     return {key: NOISE_INFLATION * value for key, value in exact.items() if value > 0}
 
@@ -363,13 +399,18 @@ def imu_densities(imu) -> dict:
     preset = getattr(imu, "preset", None)
     if not isinstance(preset, ImuPreset):
         return {}
-    densities = {"accel": preset.accel_noise_density, "gyro": preset.gyro_noise_density,
-                 "accel_bias": preset.accel_bias_random_walk, "gyro_bias": preset.gyro_bias_random_walk}
+    densities = {
+        "accel": preset.accel_noise_density,
+        "gyro": preset.gyro_noise_density,
+        "accel_bias": preset.accel_bias_random_walk,
+        "gyro_bias": preset.gyro_bias_random_walk,
+    }
     return {key: value for key, value in densities.items() if value > 0}
 
 
 def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, odometry, settings):
     """Streams the scans to the worker and collects its poses and their times."""
+
     def request(message):
         try:
             pickle.dump(message, child.stdin, protocol=pickle.HIGHEST_PROTOCOL)
@@ -393,24 +434,41 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, o
 
     spec = ODOMETRIES[odometry]
     try:
-        request(("config", odometry, (float(sensor.min_range), float(sensor.max_range)), threads, settings,
-                 lidar_geometry(sensor)))
+        request(
+            (
+                "config",
+                odometry,
+                (float(sensor.min_range), float(sensor.max_range)),
+                threads,
+                settings,
+                lidar_geometry(sensor),
+            )
+        )
         _, version = reply("while starting")
         version = version.split()[0]
         if version.split("+")[0] != spec.version:
-            raise Lf3pmError(f"{spec.package} {version} is installed; lf3pm's conventions are checked for "
-                             f"{spec.version}")
+            raise Lf3pmError(
+                f"{spec.package} {version} is installed; lf3pm's conventions are checked for {spec.version}"
+            )
         results, seconds = [], []
         for k, scan in enumerate(scans):
             points, stamps = _scan_arrays(scan, k, ends[k])
             begin = float(stamps[0]) if len(stamps) else float(ends[k])
             lo = bounds[k - 1] if k else 0
-            request(("scan", points, begin, float(ends[k]), stamps - begin,
-                     np.column_stack([t[lo:bounds[k]], rows[lo:bounds[k]]])))
+            request(
+                (
+                    "scan",
+                    points,
+                    begin,
+                    float(ends[k]),
+                    stamps - begin,
+                    np.column_stack([t[lo : bounds[k]], rows[lo : bounds[k]]]),
+                )
+            )
             _, done, spent = reply(f"at scan {k} (ending at {ends[k]:g} s)")
             results += done
             seconds.append(spent)
-        request(("done", np.column_stack([t[bounds[-1]:], rows[bounds[-1]:]])))
+        request(("done", np.column_stack([t[bounds[-1] :], rows[bounds[-1] :]])))
         _, done, spent = reply("after the last scan")
         results += done
         seconds[-1] += spent
@@ -447,8 +505,10 @@ def _imu_rows(imu) -> tuple[np.ndarray, np.ndarray]:
     except (AttributeError, TypeError, ValueError):
         raise Lf3pmError("imu must have t (K,), accel (K, 3) and gyro (K, 3) (lf3pm ImuSamples)") from None
     if t.ndim != 1 or len(t) < 2 or accel.shape != (len(t), 3) or gyro.shape != (len(t), 3):
-        raise Lf3pmError(f"imu needs t (K,), accel (K, 3), gyro (K, 3) with K >= 2, got shapes "
-                         f"{t.shape}, {accel.shape}, {gyro.shape}")
+        raise Lf3pmError(
+            f"imu needs t (K,), accel (K, 3), gyro (K, 3) with K >= 2, got shapes "
+            f"{t.shape}, {accel.shape}, {gyro.shape}"
+        )
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(accel)) and np.all(np.isfinite(gyro))):
         raise Lf3pmError("imu has non-finite values")
     if np.any(np.diff(t) <= 0):
@@ -490,6 +550,8 @@ def _rest_warning(t, rows, end) -> list:
     spread = np.ptp(window[:, :3], axis=0).max()
     rate = np.abs(window[:, 3:]).max()
     if spread > 1.0 or rate > 0.05:
-        return [f"lf3pm: the IMU is not still during the odometry's initialisation (accel spread "
-                f"{spread:.2f} m/s^2, |gyro| up to {rate:.3f} rad/s): its gravity and bias estimates start wrong"]
+        return [
+            f"lf3pm: the IMU is not still during the odometry's initialisation (accel spread "
+            f"{spread:.2f} m/s^2, |gyro| up to {rate:.3f} rad/s): its gravity and bias estimates start wrong"
+        ]
     return []

@@ -50,12 +50,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
-from lf3pm.validation.mde import RegistrationTarget
-from lf3pm.replays.replay_result import Estimate
-from lf3pm.pose import se3_exp, se3_log
 from lf3pm.config import DEFAULTS
+from lf3pm.errors import Lf3pmError
+from lf3pm.pose import se3_exp, se3_log
+from lf3pm.replays.replay_result import Estimate
 from lf3pm.sensors import Sensor
+from lf3pm.validation.mde import RegistrationTarget
 
 #: Scan voxel (m): a few thousand points from a VLP-16 scan, the order FAST-LIO's
 #: 0.5 m ``filter_size_surf`` keeps outdoors, denser for rooms.
@@ -117,8 +117,8 @@ def planar_exp(twist, s) -> tuple[np.ndarray, np.ndarray]:
     phi = np.asarray(s, float) * theta
     small = np.abs(phi) < 1e-9
     safe = np.where(small, 1.0, phi)
-    a = np.where(small, 1.0 - phi**2 / 6.0, np.sin(safe) / safe)        # sin(phi) / phi
-    b = np.where(small, phi / 2.0, (1.0 - np.cos(safe)) / safe)         # (1 - cos(phi)) / phi
+    a = np.where(small, 1.0 - phi**2 / 6.0, np.sin(safe) / safe)  # sin(phi) / phi
+    b = np.where(small, phi / 2.0, (1.0 - np.cos(safe)) / safe)  # (1 - cos(phi)) / phi
     su, sv = np.asarray(s, float) * ux, np.asarray(s, float) * uy
     return phi, np.column_stack([a * su - b * sv, b * su + a * sv])
 
@@ -188,11 +188,22 @@ def degeneracy(H: np.ndarray, points: np.ndarray, sigma: float, bound: float) ->
     return Degeneracy(std=std, vectors=vectors, scale=scale, degenerate=std > bound)
 
 
-def localize(scans, target: RegistrationTarget, sensor: Sensor, *, odometry: WheelOdometry = WheelOdometry(),
-             seed: int = DEFAULTS.scan.seed, scan_voxel: float = SCAN_VOXEL, degenerate_std: float = DEGENERATE_STD,
-             remap: bool = True, max_correspondence_distance: float = MAX_CORRESPONDENCE_DISTANCE,
-             max_iterations: int = MAX_ITERATIONS, min_points: int = MIN_POINTS, threads: int = 1,
-             progress=None) -> Estimate:
+def localize(
+    scans,
+    target: RegistrationTarget,
+    sensor: Sensor,
+    *,
+    odometry: WheelOdometry = WheelOdometry(),
+    seed: int = DEFAULTS.scan.seed,
+    scan_voxel: float = SCAN_VOXEL,
+    degenerate_std: float = DEGENERATE_STD,
+    remap: bool = True,
+    max_correspondence_distance: float = MAX_CORRESPONDENCE_DISTANCE,
+    max_iterations: int = MAX_ITERATIONS,
+    min_points: int = MIN_POINTS,
+    threads: int = 1,
+    progress=None,
+) -> Estimate:
     """Localizes along ``scans`` (a ScanStream: its ``truth`` gives the start and
     the wheel odometry's true increments) on the prepared map ``target``
     (module docstring). ``progress``, if given, is called as progress(done, total).
@@ -231,10 +242,16 @@ def localize(scans, target: RegistrationTarget, sensor: Sensor, *, odometry: Whe
         if source.size() < min_points:
             skipped.append(k)
         else:
-            result = small_gicp.align(target.cloud, source, target.tree, init_T_target_source=prior,
-                                      registration_type="PLANE_ICP",
-                                      max_correspondence_distance=max_correspondence_distance,
-                                      max_iterations=max_iterations, num_threads=int(threads))
+            result = small_gicp.align(
+                target.cloud,
+                source,
+                target.tree,
+                init_T_target_source=prior,
+                registration_type="PLANE_ICP",
+                max_correspondence_distance=max_correspondence_distance,
+                max_iterations=max_iterations,
+                num_threads=int(threads),
+            )
             if result.num_inliers < min_points:
                 skipped.append(k)
             else:
@@ -243,17 +260,22 @@ def localize(scans, target: RegistrationTarget, sensor: Sensor, *, odometry: Whe
                 directions[k], worst[k] = found.count, float(found.std[0])
                 T = np.asarray(result.T_target_source)
                 if remap and found.count:
-                    twist = se3_log(np.linalg.inv(prior) @ T)            # (translation, rotation)
-                    kept = found.remap(np.r_[twist[3:], twist[:3]])      # small_gicp's order
+                    twist = se3_log(np.linalg.inv(prior) @ T)  # (translation, rotation)
+                    kept = found.remap(np.r_[twist[3:], twist[:3]])  # small_gicp's order
                     T = prior @ se3_exp(np.r_[kept[3:], kept[:3]])
                 estimate[k] = T
         seconds += time.perf_counter() - start
         if progress is not None:
             progress(k + 1, count)
-    report = {"registered": count - len(skipped), "converged": converged,
-              "largest_std_m": worst.tolist(), "sigma": sigma}
-    return Estimate(poses=estimate, hits=hits, skipped=skipped, seconds=seconds,
-                    degenerate_directions=directions, report=report)
+    report = {
+        "registered": count - len(skipped),
+        "converged": converged,
+        "largest_std_m": worst.tolist(),
+        "sigma": sigma,
+    }
+    return Estimate(
+        poses=estimate, hits=hits, skipped=skipped, seconds=seconds, degenerate_directions=directions, report=report
+    )
 
 
 def localization_params(odometry: WheelOdometry, **settings) -> dict:

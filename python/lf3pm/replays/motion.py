@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.config import DEFAULT_HEIGHT, MAX_TRAJECTORY_SECONDS
 from lf3pm.errors import Lf3pmError, PoseError
-from lf3pm.replays.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
-from lf3pm.trajectory.sampling import check_trajectory
 from lf3pm.map import Map
 from lf3pm.pose import pose_matrices
-from lf3pm.config import DEFAULT_HEIGHT, MAX_TRAJECTORY_SECONDS
+from lf3pm.replays.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
+from lf3pm.trajectory.sampling import check_trajectory
 
 #: Knots per second of the height polynomial (besides the samples): the CSV's rate.
 Z_KNOT_RATE = 100.0
@@ -72,8 +72,10 @@ class Motion:
     def __init__(self, t, x, y, yaw, vx, vy, omega, ground: SmoothGround, height: float):
         t, _ = check_trajectory(t, np.column_stack([x, y, np.zeros_like(np.asarray(x, float)), yaw]))
         if t[-1] - t[0] > MAX_TRAJECTORY_SECONDS:  # the height's knots every 10 ms would fill memory
-            raise Lf3pmError(f"the trajectory lasts {t[-1] - t[0]:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, "
-                             "the longest lf3pm replays: replay a part of it")
+            raise Lf3pmError(
+                f"the trajectory lasts {t[-1] - t[0]:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, "
+                "the longest lf3pm replays: replay a part of it"
+            )
         channels = [np.asarray(c, dtype=np.float64) for c in (x, y, np.unwrap(np.asarray(yaw, float)))]
         rates = [np.asarray(c, dtype=np.float64) for c in (vx, vy, omega)]
         if any(r.shape != t.shape or not np.all(np.isfinite(r)) for r in rates):
@@ -84,7 +86,7 @@ class Motion:
         self.samples = t
         self.ground = ground
         self.height = float(height)
-        self._polys.insert(2, self._height_poly())   # channels x, y, z, yaw
+        self._polys.insert(2, self._height_poly())  # channels x, y, z, yaw
         self._rates = [poly.derivative(1) for poly in self._polys]
         self._accels = [poly.derivative(2) for poly in self._polys]
 
@@ -100,18 +102,32 @@ class Motion:
         merge = max(1e-9 * max(1.0, self.t1 - self.t0), 64 * np.finfo(float).eps * max(abs(self.t0), abs(self.t1)))
         knots = knots[np.r_[True, np.diff(knots) > merge]]
         knots[-1] = self.t1
-        (x, y), (vx, vy), (ax, ay) = ([p(knots) for p in polys[:2]] for polys in
-                                      (self._polys, [q.derivative(1) for q in self._polys],
-                                       [q.derivative(2) for q in self._polys]))
+        (x, y), (vx, vy), (ax, ay) = (
+            [p(knots) for p in polys[:2]]
+            for polys in (self._polys, [q.derivative(1) for q in self._polys], [q.derivative(2) for q in self._polys])
+        )
         g, gx, gy, gxx, gxy, gyy = self.ground.derivatives(x, y)
         z_rate = gx * vx + gy * vy
         z_accel = gxx * vx * vx + 2.0 * gxy * vx * vy + gyy * vy * vy + gx * ax + gy * ay
         return quintic_hermite(knots, g + self.height, z_rate, z_accel)
 
     @classmethod
-    def from_arrays(cls, t, x, y, yaw, vx=None, vy=None, omega=None, *, map: Map,
-                    height: float = DEFAULT_HEIGHT, ground_cell: float = GROUND_CELL,
-                    ground_smoothing: float = GROUND_SMOOTHING, ground_max_step: float = GROUND_MAX_STEP) -> "Motion":
+    def from_arrays(
+        cls,
+        t,
+        x,
+        y,
+        yaw,
+        vx=None,
+        vy=None,
+        omega=None,
+        *,
+        map: Map,
+        height: float = DEFAULT_HEIGHT,
+        ground_cell: float = GROUND_CELL,
+        ground_smoothing: float = GROUND_SMOOTHING,
+        ground_max_step: float = GROUND_MAX_STEP,
+    ) -> Motion:
         """The motion through the samples (t, x, y, yaw) with rates (vx, vy, omega)
         (default: those of a cubic spline through the samples), the sensor
         ``height`` above the smooth ground of ``map`` (ground.py for the ground
@@ -124,28 +140,32 @@ class Motion:
         outside = np.any((poses[:, :2] < lower[:2]) | (poses[:, :2] > upper[:2]), axis=1)
         if outside.any():
             k = int(np.argmax(outside))
-            raise PoseError(f"the trajectory leaves the map at t = {t[k]:g} s: x, y = "
-                            f"{poses[k, 0]:.3f}, {poses[k, 1]:.3f} outside x [{lower[0]:.2f}, {upper[0]:.2f}], "
-                            f"y [{lower[1]:.2f}, {upper[1]:.2f}]")
+            raise PoseError(
+                f"the trajectory leaves the map at t = {t[k]:g} s: x, y = "
+                f"{poses[k, 0]:.3f}, {poses[k, 1]:.3f} outside x [{lower[0]:.2f}, {upper[0]:.2f}], "
+                f"y [{lower[1]:.2f}, {upper[1]:.2f}]"
+            )
         if vx is None or vy is None or omega is None:
             from scipy.interpolate import CubicSpline
 
             yaw_unwrapped = np.unwrap(poses[:, 3])
             vx, vy, omega = (CubicSpline(t, c)(t, 1) for c in (poses[:, 0], poses[:, 1], yaw_unwrapped))
-        ground = smooth_ground(map.points, poses[:, :2], cell=ground_cell, smoothing=ground_smoothing,
-                               max_step=ground_max_step)
+        ground = smooth_ground(
+            map.points, poses[:, :2], cell=ground_cell, smoothing=ground_smoothing, max_step=ground_max_step
+        )
         return cls(t, poses[:, 0], poses[:, 1], poses[:, 3], vx, vy, omega, ground, height)
 
     @classmethod
-    def from_csv(cls, path, map: Map, height: float = DEFAULT_HEIGHT, **ground) -> "Motion":
+    def from_csv(cls, path, map: Map, height: float = DEFAULT_HEIGHT, **ground) -> Motion:
         """The motion of the CSV ``lf3pm plan`` writes (t,x,y,yaw,vx,vy,omega), as
         :meth:`from_arrays`. Raises Lf3pmError for a file that cannot be read or
         is malformed."""
         from lf3pm.trajectory.trajectory import read_csv
 
         s = read_csv(path)
-        return cls.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map,
-                               height=height, **ground)
+        return cls.from_arrays(
+            s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map, height=height, **ground
+        )
 
     def _clamped(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.atleast_1d(np.asarray(t, dtype=np.float64))
@@ -202,4 +222,3 @@ class RestFirst:
     def __getattr__(self, name):
         # position, velocity, ... clamp to the motion's own span: at rest before it.
         return getattr(self.motion, name)
-

@@ -22,15 +22,21 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
-from lf3pm.replays.replay_result import Estimate, ReplayResult, library_versions
-from lf3pm.scan.scans import ScanStream
-from lf3pm.trajectory.sampling import LinearMotion
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
+from lf3pm.replays.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.scan.scans import ScanStream
 from lf3pm.sensors import Sensor, as_sensor
+from lf3pm.trajectory.sampling import LinearMotion
 
-def kiss_icp_config(sensor: Sensor, *, voxel_size: float = DEFAULTS.kiss_icp.voxel_size, deskew: bool = False,
-                    threads: int = DEFAULTS.scan.threads):
+
+def kiss_icp_config(
+    sensor: Sensor,
+    *,
+    voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
+    deskew: bool = False,
+    threads: int = DEFAULTS.scan.threads,
+):
     """KISS-ICP configuration for ``sensor``: its range limits, ``deskew`` (on
     for motion-distorted scans with per-point timestamps), ``voxel_size`` for
     the local map (KISS-ICP's own choice for outdoor 100 m LiDARs is 1 m;
@@ -38,14 +44,24 @@ def kiss_icp_config(sensor: Sensor, *, voxel_size: float = DEFAULTS.kiss_icp.vox
     from kiss_icp.config import KISSConfig
     from kiss_icp.config.config import DataConfig, MappingConfig, RegistrationConfig
 
-    return KISSConfig(data=DataConfig(max_range=sensor.max_range, min_range=sensor.min_range, deskew=bool(deskew)),
-                      mapping=MappingConfig(voxel_size=float(voxel_size)),
-                      registration=RegistrationConfig(max_num_threads=int(threads)))
+    return KISSConfig(
+        data=DataConfig(max_range=sensor.max_range, min_range=sensor.min_range, deskew=bool(deskew)),
+        mapping=MappingConfig(voxel_size=float(voxel_size)),
+        registration=RegistrationConfig(max_num_threads=int(threads)),
+    )
 
 
-def run_kiss_icp(scans, sensor: Sensor, initial_pose, *, voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
-                 deskew: bool = True, min_points: int = DEFAULTS.kiss_icp.min_points,
-                 threads: int = DEFAULTS.scan.threads, progress=None) -> Estimate:
+def run_kiss_icp(
+    scans,
+    sensor: Sensor,
+    initial_pose,
+    *,
+    voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
+    deskew: bool = True,
+    min_points: int = DEFAULTS.kiss_icp.min_points,
+    threads: int = DEFAULTS.scan.threads,
+    progress=None,
+) -> Estimate:
     """KISS-ICP over ``scans`` (MovingScan objects, e.g. a ScanStream), anchored
     at ``initial_pose`` (4 x 4, the true pose of the first scan). A scan with
     fewer than ``min_points`` hits is not given to KISS-ICP (its estimate stays
@@ -78,11 +94,22 @@ def run_kiss_icp(scans, sensor: Sensor, initial_pose, *, voxel_size: float = DEF
     return Estimate(poses=estimate, hits=hits, skipped=skipped, seconds=seconds)
 
 
-def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = DEFAULTS.sensor, *,
-                    rate: float = DEFAULTS.replay.rate, seed: int = DEFAULTS.scan.seed,
-                    noise: float | None = DEFAULTS.scan.noise, voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
-                    min_points: int = DEFAULTS.kiss_icp.min_points, motion_distortion: bool = True,
-                    deskew: bool | None = None, threads: int = DEFAULTS.scan.threads, progress=None) -> ReplayResult:
+def replay_odometry(
+    map: Map | str,
+    t,
+    poses,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    *,
+    rate: float = DEFAULTS.replay.rate,
+    seed: int = DEFAULTS.scan.seed,
+    noise: float | None = DEFAULTS.scan.noise,
+    voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
+    min_points: int = DEFAULTS.kiss_icp.min_points,
+    motion_distortion: bool = True,
+    deskew: bool | None = None,
+    threads: int = DEFAULTS.scan.threads,
+    progress=None,
+) -> ReplayResult:
     """Replays the trajectory (t (N,), poses (N, 4) of x y z yaw, z absolute,
     interpolated linearly) on ``map`` with simulated ``sensor`` scans at
     ``rate`` Hz through KISS-ICP.
@@ -101,19 +128,46 @@ def replay_odometry(map: Map | str, t, poses, sensor: Sensor | str = DEFAULTS.se
     # The map's x-y box is convex, so checking the given poses covers the interpolated ones.
     for pose in motion.poses:
         map.check_pose(pose_matrix(pose), clearance=0.0)
-    scans = ScanStream(map, motion, sensor, rate=rate, seed=seed, noise=noise,
-                       distortion=motion_distortion, threads=threads)
+    scans = ScanStream(
+        map, motion, sensor, rate=rate, seed=seed, noise=noise, distortion=motion_distortion, threads=threads
+    )
     deskew = bool(motion_distortion) if deskew is None else bool(deskew)
-    run = run_kiss_icp(scans, sensor, scans.truth[0], voxel_size=voxel_size, deskew=deskew,
-                       min_points=min_points, threads=threads, progress=progress)
-    params = {"rate": float(rate), "seed": int(seed), "noise_stream": "scan index", "noise": scans.noise,
-              "min_points": min_points, "motion_distortion": bool(motion_distortion),
-              "kiss_icp": kiss_icp_params(sensor, voxel_size, deskew)}
-    return ReplayResult.from_run(run, method="odometry", sensor=sensor.name, seed=int(seed), scans=scans,
-                                 params=params, map_sha256=map.sha256, versions=library_versions("kiss-icp"))
+    run = run_kiss_icp(
+        scans,
+        sensor,
+        scans.truth[0],
+        voxel_size=voxel_size,
+        deskew=deskew,
+        min_points=min_points,
+        threads=threads,
+        progress=progress,
+    )
+    params = {
+        "rate": float(rate),
+        "seed": int(seed),
+        "noise_stream": "scan index",
+        "noise": scans.noise,
+        "min_points": min_points,
+        "motion_distortion": bool(motion_distortion),
+        "kiss_icp": kiss_icp_params(sensor, voxel_size, deskew),
+    }
+    return ReplayResult.from_run(
+        run,
+        method="odometry",
+        sensor=sensor.name,
+        seed=int(seed),
+        scans=scans,
+        params=params,
+        map_sha256=map.sha256,
+        versions=library_versions("kiss-icp"),
+    )
 
 
 def kiss_icp_params(sensor: Sensor, voxel_size: float, deskew: bool) -> dict:
     """The KISS-ICP settings a replay records."""
-    return {"voxel_size": float(voxel_size), "max_range": sensor.max_range, "min_range": sensor.min_range,
-            "deskew": bool(deskew)}
+    return {
+        "voxel_size": float(voxel_size),
+        "max_range": sensor.max_range,
+        "min_range": sensor.min_range,
+        "deskew": bool(deskew),
+    }

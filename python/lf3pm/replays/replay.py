@@ -19,18 +19,33 @@ import math
 import os
 import time
 
+from lf3pm.config import DEFAULTS, REPLAY_METHODS, ReplayConfig, ScanConfig, validated
 from lf3pm.errors import Lf3pmError
-from lf3pm.replays.localization import (DEGENERATE_STD, MAX_CORRESPONDENCE_DISTANCE, MAX_ITERATIONS,
-                                           MIN_POINTS, SCAN_VOXEL, WheelOdometry, localization_params, localize)
-from lf3pm.validation.mde import RegistrationTarget
+from lf3pm.map import Map, as_map
+from lf3pm.replays.localization import (
+    DEGENERATE_STD,
+    MAX_CORRESPONDENCE_DISTANCE,
+    MAX_ITERATIONS,
+    MIN_POINTS,
+    SCAN_VOXEL,
+    WheelOdometry,
+    localization_params,
+    localize,
+)
 from lf3pm.replays.motion import Motion, RestFirst
 from lf3pm.replays.odometry import kiss_icp_params, run_kiss_icp
-from lf3pm.replays.replay_result import (Estimate, ReplayResult, ReplaySeries, estimate_times, library_versions,
-                                        median_figures, rest_motion)
+from lf3pm.replays.replay_result import (
+    Estimate,
+    ReplayResult,
+    ReplaySeries,
+    estimate_times,
+    library_versions,
+    median_figures,
+    rest_motion,
+)
 from lf3pm.scan.scans import ScanStream
-from lf3pm.map import Map, as_map
 from lf3pm.sensors import Sensor, get_sensor, spinning_rings
-from lf3pm.config import DEFAULTS, REPLAY_METHODS, ReplayConfig, ScanConfig, validated
+from lf3pm.validation.mde import RegistrationTarget
 
 METHODS = REPLAY_METHODS
 
@@ -43,14 +58,28 @@ LIO_REST = 2.0
 
 #: Each method's parameters and defaults (docs/replay.md says why).
 METHOD_PARAMS = {
-    "localization": {"scale_error": WheelOdometry.scale_error, "yaw_noise": WheelOdometry.yaw_noise,
-                     "scan_voxel": SCAN_VOXEL, "degenerate_std": DEGENERATE_STD, "remap": True,
-                     "max_correspondence_distance": MAX_CORRESPONDENCE_DISTANCE,
-                     "max_iterations": MAX_ITERATIONS, "min_points": MIN_POINTS, "registration_threads": 1},
-    "odometry": {"voxel_size": DEFAULTS.kiss_icp.voxel_size, "min_points": DEFAULTS.kiss_icp.min_points,
-                 "deskew": True},
-    "lio": {"imu_rate": DEFAULTS.replay.imu_rate, "imu_preset": None, "imu_noise": DEFAULTS.replay.imu_noise,
-            "rest": LIO_REST},
+    "localization": {
+        "scale_error": WheelOdometry.scale_error,
+        "yaw_noise": WheelOdometry.yaw_noise,
+        "scan_voxel": SCAN_VOXEL,
+        "degenerate_std": DEGENERATE_STD,
+        "remap": True,
+        "max_correspondence_distance": MAX_CORRESPONDENCE_DISTANCE,
+        "max_iterations": MAX_ITERATIONS,
+        "min_points": MIN_POINTS,
+        "registration_threads": 1,
+    },
+    "odometry": {
+        "voxel_size": DEFAULTS.kiss_icp.voxel_size,
+        "min_points": DEFAULTS.kiss_icp.min_points,
+        "deskew": True,
+    },
+    "lio": {
+        "imu_rate": DEFAULTS.replay.imu_rate,
+        "imu_preset": None,
+        "imu_noise": DEFAULTS.replay.imu_noise,
+        "rest": LIO_REST,
+    },
 }
 
 
@@ -66,7 +95,6 @@ def resolve_sensor(sensor: Sensor | str, rate: float) -> Sensor:
     return get_sensor(sensor, integration_time=1.0 / rate)
 
 
-
 def check_method(method: str, params: dict) -> dict:
     """The method's parameters: its defaults updated by ``params``. Raises
     Lf3pmError for an unknown method or parameter."""
@@ -75,16 +103,25 @@ def check_method(method: str, params: dict) -> dict:
     defaults = METHOD_PARAMS[method]
     unknown = sorted(set(params) - set(defaults))
     if unknown and method != "lio":  # the LIO passes the rest to run_lio
-        raise Lf3pmError(f"unknown parameter(s) for {method}: {', '.join(unknown)}; "
-                         f"known: {', '.join(defaults)}")
+        raise Lf3pmError(f"unknown parameter(s) for {method}: {', '.join(unknown)}; known: {', '.join(defaults)}")
     return {**defaults, **params}
 
 
-def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor, method: str = DEFAULTS.replay.method,
-           seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate,
-           height: float = DEFAULTS.replay.height,
-           noise: float | None = DEFAULTS.scan.noise, target: RegistrationTarget | None = None,
-           threads: int = DEFAULTS.scan.threads, progress=None, **params) -> ReplayResult:
+def replay(
+    map: Map | str,
+    motion_or_csv,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    method: str = DEFAULTS.replay.method,
+    seed: int = DEFAULTS.scan.seed,
+    *,
+    rate: float = DEFAULTS.replay.rate,
+    height: float = DEFAULTS.replay.height,
+    noise: float | None = DEFAULTS.scan.noise,
+    target: RegistrationTarget | None = None,
+    threads: int = DEFAULTS.scan.threads,
+    progress=None,
+    **params,
+) -> ReplayResult:
     """Replays a trajectory with ``method`` (module docstring) and scores it.
 
     ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion`, the
@@ -100,42 +137,95 @@ def replay(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor
     Raises Lf3pmError for bad input.
     """
     params = check_method(method, params)
-    map, sensor, motion, scans, first = _stream(map, motion_or_csv, sensor, method, seed, rate, height, noise,
-                                                threads, params)
+    map, sensor, motion, scans, first = _stream(
+        map, motion_or_csv, sensor, method, seed, rate, height, noise, threads, params
+    )
     rate = scans.rate
-    common = {"rate": float(rate), "seed": int(seed), "noise": scans.noise, "noise_stream": "scan index",
-              "height": motion.height, "ground": {"cell": motion.ground.cell,
-                                                  "smoothing": motion.ground.smoothing,
-                                                  "max_step": motion.ground.max_step},
-              "span_s": [motion.t0, motion.t1]}
+    common = {
+        "rate": float(rate),
+        "seed": int(seed),
+        "noise": scans.noise,
+        "noise_stream": "scan index",
+        "height": motion.height,
+        "ground": {
+            "cell": motion.ground.cell,
+            "smoothing": motion.ground.smoothing,
+            "max_step": motion.ground.max_step,
+        },
+        "span_s": [motion.t0, motion.t1],
+    }
     if method == "localization":
         target = RegistrationTarget.for_map(map, target, threads)
         odometry = WheelOdometry(params["scale_error"], params["yaw_noise"])
-        settings = {k: params[k] for k in ("scan_voxel", "degenerate_std", "remap",
-                                           "max_correspondence_distance", "max_iterations", "min_points")}
-        run = localize(scans, target, sensor, odometry=odometry, seed=seed, threads=params["registration_threads"],
-                       progress=progress, **settings)
+        settings = {
+            k: params[k]
+            for k in (
+                "scan_voxel",
+                "degenerate_std",
+                "remap",
+                "max_correspondence_distance",
+                "max_iterations",
+                "min_points",
+            )
+        }
+        run = localize(
+            scans,
+            target,
+            sensor,
+            odometry=odometry,
+            seed=seed,
+            threads=params["registration_threads"],
+            progress=progress,
+            **settings,
+        )
         method_params = localization_params(odometry, **settings)
         versions = library_versions("small_gicp")
     elif method == "odometry":
-        run = run_kiss_icp(scans, sensor, scans.truth[0], voxel_size=params["voxel_size"],
-                           deskew=params["deskew"], min_points=params["min_points"], threads=threads,
-                           progress=progress)
-        method_params = {"min_points": params["min_points"],
-                         "kiss_icp": kiss_icp_params(sensor, params["voxel_size"], params["deskew"])}
+        run = run_kiss_icp(
+            scans,
+            sensor,
+            scans.truth[0],
+            voxel_size=params["voxel_size"],
+            deskew=params["deskew"],
+            min_points=params["min_points"],
+            threads=threads,
+            progress=progress,
+        )
+        method_params = {
+            "min_points": params["min_points"],
+            "kiss_icp": kiss_icp_params(sensor, params["voxel_size"], params["deskew"]),
+        }
         versions = library_versions("kiss-icp")
     else:
         run, method_params, versions = _lio(scans, motion, sensor, seed, params)
-    return ReplayResult.from_run(run, method=method, sensor=sensor.name, seed=int(seed), scans=scans, first=first,
-                                 params={**common, method: method_params}, map_sha256=map.sha256,
-                                 versions=versions)
+    return ReplayResult.from_run(
+        run,
+        method=method,
+        sensor=sensor.name,
+        seed=int(seed),
+        scans=scans,
+        first=first,
+        params={**common, method: method_params},
+        map_sha256=map.sha256,
+        versions=versions,
+    )
 
 
-def replay_seeds(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor,
-                 method: str = DEFAULTS.replay.method, seeds: int = DEFAULTS.replay.seeds,
-                 seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate,
-                 height: float = DEFAULTS.replay.height, noise: float | None = DEFAULTS.scan.noise,
-                 threads: int = DEFAULTS.scan.threads, progress=None, **params) -> ReplaySeries:
+def replay_seeds(
+    map: Map | str,
+    motion_or_csv,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    method: str = DEFAULTS.replay.method,
+    seeds: int = DEFAULTS.replay.seeds,
+    seed: int = DEFAULTS.scan.seed,
+    *,
+    rate: float = DEFAULTS.replay.rate,
+    height: float = DEFAULTS.replay.height,
+    noise: float | None = DEFAULTS.scan.noise,
+    threads: int = DEFAULTS.scan.threads,
+    progress=None,
+    **params,
+) -> ReplaySeries:
     """:func:`replay` on seeds ``seed`` .. ``seed + seeds - 1`` (what ``lf3pm replay
     --seeds`` runs): the map, the motion and the registration target prepared once, and
     the median of each reported figure. ``progress(seed, done, total)`` after each scan."""
@@ -147,15 +237,38 @@ def replay_seeds(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.
     results = []
     for s in range(seed, seed + run.seeds):
         tick = None if progress is None else (lambda done, total, s=s: progress(s, done, total))
-        results.append(replay(map, motion, sensor, method, s, rate=run.rate, height=run.height, noise=noise,
-                              target=target, threads=threads, progress=tick, **params))
+        results.append(
+            replay(
+                map,
+                motion,
+                sensor,
+                method,
+                s,
+                rate=run.rate,
+                height=run.height,
+                noise=noise,
+                target=target,
+                threads=threads,
+                progress=tick,
+                **params,
+            )
+        )
     return ReplaySeries(results=results, median=median_figures(results))
 
 
-def replay_bag(path, map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor, *,
-               seed: int = DEFAULTS.scan.seed, rate: float = DEFAULTS.replay.rate,
-               height: float = DEFAULTS.replay.height, noise: float | None = DEFAULTS.scan.noise,
-               threads: int = DEFAULTS.scan.threads, progress=None) -> dict:
+def replay_bag(
+    path,
+    map: Map | str,
+    motion_or_csv,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    *,
+    seed: int = DEFAULTS.scan.seed,
+    rate: float = DEFAULTS.replay.rate,
+    height: float = DEFAULTS.replay.height,
+    noise: float | None = DEFAULTS.scan.noise,
+    threads: int = DEFAULTS.scan.threads,
+    progress=None,
+) -> dict:
     """Writes the stream a replay of seed ``seed`` simulates (scans, the IMU of the lio
     method, the truth) as a ROS 2 bag at ``path`` (bag.py); returns what write_bag says."""
     from lf3pm.replays.bag import write_bag
@@ -163,8 +276,7 @@ def replay_bag(path, map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAU
     lio_modules("a bag (it carries the simulated IMU)")
     map = as_map(map, threads)
     motion = _motion(motion_or_csv, map, height)
-    scans = ScanStream(map, motion, resolve_sensor(sensor, rate), rate=rate, seed=seed, noise=noise,
-                       threads=threads)
+    scans = ScanStream(map, motion, resolve_sensor(sensor, rate), rate=rate, seed=seed, noise=noise, threads=threads)
     imu = simulated_imu(motion, seed, METHOD_PARAMS["lio"])
     return write_bag(path, scans, imu, progress=progress)
 
@@ -178,17 +290,25 @@ def _motion(source, map: Map, height: float) -> Motion:
         return Motion.from_csv(source, map, height=height)
     trajectory = getattr(source, "trajectory", source)  # a Plan carries its Trajectory
     if not callable(getattr(trajectory, "sample", None)):
-        raise Lf3pmError("replay takes a Motion, a trajectory CSV, a Trajectory or a Plan, got "
-                         f"{type(source).__name__}")
+        raise Lf3pmError(
+            f"replay takes a Motion, a trajectory CSV, a Trajectory or a Plan, got {type(source).__name__}"
+        )
     s = trajectory.sample()  # at the CSV's rate (planner.trajectory.CSV_RATE)
-    return Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map,
-                              height=height)
+    return Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map, height=height)
 
 
-def replay_rest(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.sensor,
-                seed: int = DEFAULTS.scan.seed, *, rate: float = DEFAULTS.replay.rate,
-                height: float = DEFAULTS.replay.height, noise: float | None = DEFAULTS.scan.noise,
-                threads: int = DEFAULTS.scan.threads, **params) -> dict:
+def replay_rest(
+    map: Map | str,
+    motion_or_csv,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    seed: int = DEFAULTS.scan.seed,
+    *,
+    rate: float = DEFAULTS.replay.rate,
+    height: float = DEFAULTS.replay.height,
+    noise: float | None = DEFAULTS.scan.noise,
+    threads: int = DEFAULTS.scan.threads,
+    **params,
+) -> dict:
     """What the LIO does while the sensor stands still before the trajectory: the
     ``rest`` that :func:`replay` with method lio and the same arguments reports,
     for the cost of the rest alone (the same scans, IMU samples and estimates: the
@@ -197,8 +317,9 @@ def replay_rest(map: Map | str, motion_or_csv, sensor: Sensor | str = DEFAULTS.s
     params = check_method("lio", params)
     if not params["rest"] > 0:
         raise Lf3pmError("replay_rest needs a rest before the trajectory (rest > 0 s)")
-    _, sensor, motion, scans, first = _stream(map, motion_or_csv, sensor, "lio", seed, rate, height, noise,
-                                              threads, params, rest_only=True)
+    _, sensor, motion, scans, first = _stream(
+        map, motion_or_csv, sensor, "lio", seed, rate, height, noise, threads, params, rest_only=True
+    )
     run, _, _ = _lio(scans, motion, sensor, seed, params)
     times, truth = estimate_times(run, scans)
     return rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1])
@@ -253,8 +374,14 @@ def _lio(scans: ScanStream, motion: Motion, sensor: Sensor, seed: int, params: d
     seconds = time.perf_counter() - start - (scans.seconds - simulated_before)
     report = {k: v for k, v in _fields(out).items() if k not in ("times", "poses")}
     name = str(report.get("package", "lio"))
-    run = Estimate(poses=out.poses, hits=scans.hits.copy(), skipped=list(report.pop("skipped", [])),
-                   seconds=seconds, report=report, times=getattr(out, "times", None))
+    run = Estimate(
+        poses=out.poses,
+        hits=scans.hits.copy(),
+        skipped=list(report.pop("skipped", [])),
+        seconds=seconds,
+        report=report,
+        times=getattr(out, "times", None),
+    )
     method_params = {"imu": {k: params[k] for k in METHOD_PARAMS["lio"]}, "options": extra}
     return run, method_params, {**library_versions(), name: report.get("version")}
 

@@ -59,8 +59,7 @@ def replay_figure(results: list, path, *, map_points: np.ndarray | None = None, 
     if map_points is not None and len(map_points):
         extent, occupied, known = _obstacles(map_points, lo, hi)
         image = np.where(occupied, 0.25, np.where(known, 0.93, 1.0))
-        right.imshow(image, origin="lower", extent=extent, cmap="gray", vmin=0.0, vmax=1.0,
-                     interpolation="nearest")
+        right.imshow(image, origin="lower", extent=extent, cmap="gray", vmin=0.0, vmax=1.0, interpolation="nearest")
     right.plot(truth[:, 0], truth[:, 1], "-", color="k", lw=2.2, label="truth")
     for r, e, colour in zip(results, estimates, colours):
         right.plot(e[:, 0], e[:, 1], "-", color=colour, lw=1.0, label=f"estimate, seed {r.seed}")

@@ -86,19 +86,28 @@ class ReplayResult:
     rest: dict = field(default_factory=dict)
 
     @classmethod
-    def evaluate(cls, *, times, truth, estimate, degenerate_directions=None, **fields) -> "ReplayResult":
+    def evaluate(cls, *, times, truth, estimate, degenerate_directions=None, **fields) -> ReplayResult:
         """The result with its metrics computed from ``truth`` and ``estimate``."""
         truth, estimate = np.asarray(truth, float), np.asarray(estimate, float)
-        directions = (np.zeros(len(truth), np.int8) if degenerate_directions is None
-                      else np.asarray(degenerate_directions, np.int8))
-        return cls(times=np.asarray(times, float), truth=truth, estimate=estimate,
-                   degenerate_directions=directions, ape=ape_translation(truth, estimate),
-                   ape_aligned=ape_translation(truth, estimate, align=True),
-                   rpe_frame=rpe(truth, estimate, delta=1, unit="frames"),
-                   rpe_metre=rpe(truth, estimate, delta=1.0, unit="m"), **fields)
+        directions = (
+            np.zeros(len(truth), np.int8)
+            if degenerate_directions is None
+            else np.asarray(degenerate_directions, np.int8)
+        )
+        return cls(
+            times=np.asarray(times, float),
+            truth=truth,
+            estimate=estimate,
+            degenerate_directions=directions,
+            ape=ape_translation(truth, estimate),
+            ape_aligned=ape_translation(truth, estimate, align=True),
+            rpe_frame=rpe(truth, estimate, delta=1, unit="frames"),
+            rpe_metre=rpe(truth, estimate, delta=1.0, unit="m"),
+            **fields,
+        )
 
     @classmethod
-    def from_run(cls, run: Estimate, *, scans, first: int = 0, **fields) -> "ReplayResult":
+    def from_run(cls, run: Estimate, *, scans, first: int = 0, **fields) -> ReplayResult:
         """The result of ``run`` on the ScanStream ``scans`` (its times, truth and
         simulation time), scored from scan ``first`` on (earlier scans: a rest before the
         trajectory, for the estimator to initialise), the estimate re-anchored there to
@@ -112,11 +121,18 @@ class ReplayResult:
         if first:
             rest = rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1])
             estimate = truth[first] @ np.linalg.inv(estimate[0]) @ estimate
-        return cls.evaluate(times=times[keep], truth=truth[keep], estimate=estimate,
-                            hits=run.hits[keep], skipped=[k - first for k in run.skipped if k >= first],
-                            degenerate_directions=None if directions is None else directions[keep],
-                            seconds_per_scan={"simulate": scans.seconds / count, "estimate": run.seconds / count},
-                            report=dict(run.report), rest=rest, **fields)
+        return cls.evaluate(
+            times=times[keep],
+            truth=truth[keep],
+            estimate=estimate,
+            hits=run.hits[keep],
+            skipped=[k - first for k in run.skipped if k >= first],
+            degenerate_directions=None if directions is None else directions[keep],
+            seconds_per_scan={"simulate": scans.seconds / count, "estimate": run.seconds / count},
+            report=dict(run.report),
+            rest=rest,
+            **fields,
+        )
 
     @property
     def scans(self) -> int:
@@ -136,16 +152,26 @@ class ReplayResult:
         """JSON-ready summary (NaN as None, per-pose error lists dropped); with
         ``trajectories`` also the times, the x y z of truth and estimate and the
         per-scan errors."""
-        out = {"method": self.method, "sensor": self.sensor, "seed": self.seed, "scans": self.scans,
-               "skipped": [int(k) for k in self.skipped],
-               "degenerate_scans": int(np.count_nonzero(self.degenerate)),
-               "degenerate_directions": self.degenerate_directions.tolist(),
-               "ape": _clean(self.ape), "ape_aligned": _clean(self.ape_aligned),
-               "rpe_frame": _clean(self.rpe_frame), "rpe_metre": _clean(self.rpe_metre),
-               "seconds_per_scan": _clean(self.seconds_per_scan),
-               "scans_per_second": _clean(self.scans_per_second), "params": _clean(self.params),
-               "map_sha256": self.map_sha256, "versions": dict(self.versions), "report": _clean(self.report),
-               "rest": _clean(self.rest)}
+        out = {
+            "method": self.method,
+            "sensor": self.sensor,
+            "seed": self.seed,
+            "scans": self.scans,
+            "skipped": [int(k) for k in self.skipped],
+            "degenerate_scans": int(np.count_nonzero(self.degenerate)),
+            "degenerate_directions": self.degenerate_directions.tolist(),
+            "ape": _clean(self.ape),
+            "ape_aligned": _clean(self.ape_aligned),
+            "rpe_frame": _clean(self.rpe_frame),
+            "rpe_metre": _clean(self.rpe_metre),
+            "seconds_per_scan": _clean(self.seconds_per_scan),
+            "scans_per_second": _clean(self.scans_per_second),
+            "params": _clean(self.params),
+            "map_sha256": self.map_sha256,
+            "versions": dict(self.versions),
+            "report": _clean(self.report),
+            "rest": _clean(self.rest),
+        }
         if trajectories:
             out["times"] = self.times.tolist()
             out["truth_xyz"] = self.truth[:, :3, 3].tolist()
@@ -157,9 +183,15 @@ class ReplayResult:
     def scans_per_second(self) -> dict:
         """Throughput: scans per second of simulation, of estimation and of both."""
         s = self.seconds_per_scan
-        inverse = lambda x: 1.0 / x if x > 0 else math.inf
-        return {"simulate": inverse(s["simulate"]), "estimate": inverse(s["estimate"]),
-                "total": inverse(s["simulate"] + s["estimate"])}
+
+        def inverse(x):
+            return 1.0 / x if x > 0 else math.inf
+
+        return {
+            "simulate": inverse(s["simulate"]),
+            "estimate": inverse(s["estimate"]),
+            "total": inverse(s["simulate"] + s["estimate"]),
+        }
 
 
 def estimate_times(run: Estimate, scans) -> tuple[np.ndarray, np.ndarray]:
@@ -194,8 +226,12 @@ def rest_motion(times, truth, poses) -> dict:
     back = int(np.searchsorted(times, times[-1] - REST_WINDOW - 1e-9))
     span = times[-1] - times[back]
     speed = float(np.linalg.norm(estimate[-1, :3, 3] - estimate[back, :3, 3]) / span) if span > 0 else 0.0
-    return {"seconds": float(times[-1] - times[0]), "drift_m": float(drift.max()), "speed_mps": speed,
-            "steady": bool(speed <= REST_SPEED_LIMIT)}
+    return {
+        "seconds": float(times[-1] - times[0]),
+        "drift_m": float(drift.max()),
+        "speed_mps": speed,
+        "steady": bool(speed <= REST_SPEED_LIMIT),
+    }
 
 
 def _clean(value):
@@ -216,14 +252,17 @@ def _clean(value):
 
 #: (key, table header, value) of each figure a replay reports per seed: the CLI's table
 #: and JSON, and lf3pm.replay_seeds's medians.
-FIGURES = (("ape_rmse", "APE", lambda r: r.ape["rmse"]), ("ape_max", "APE max", lambda r: r.ape["max"]),
-           ("ape_aligned_rmse", "aligned", lambda r: r.ape_aligned["rmse"]),
-           ("rpe_scan_rmse", "RPE scan", lambda r: r.rpe_frame["translation"]["rmse"]),
-           ("rpe_scan_deg_rmse", "RPE deg", lambda r: r.rpe_frame["rotation_deg"]["rmse"]),
-           ("rpe_metre_rmse", "RPE 1 m", lambda r: r.rpe_metre["translation"]["rmse"]),
-           ("degenerate_scans", "degen", lambda r: int(r.degenerate.sum())),
-           ("skipped_scans", "skip", lambda r: len(r.skipped)),
-           ("scans_per_second", "scans/s", lambda r: r.scans_per_second["total"]))
+FIGURES = (
+    ("ape_rmse", "APE", lambda r: r.ape["rmse"]),
+    ("ape_max", "APE max", lambda r: r.ape["max"]),
+    ("ape_aligned_rmse", "aligned", lambda r: r.ape_aligned["rmse"]),
+    ("rpe_scan_rmse", "RPE scan", lambda r: r.rpe_frame["translation"]["rmse"]),
+    ("rpe_scan_deg_rmse", "RPE deg", lambda r: r.rpe_frame["rotation_deg"]["rmse"]),
+    ("rpe_metre_rmse", "RPE 1 m", lambda r: r.rpe_metre["translation"]["rmse"]),
+    ("degenerate_scans", "degen", lambda r: int(r.degenerate.sum())),
+    ("skipped_scans", "skip", lambda r: len(r.skipped)),
+    ("scans_per_second", "scans/s", lambda r: r.scans_per_second["total"]),
+)
 #: The FIGURES in metres.
 METRE_FIGURES = {"ape_rmse", "ape_max", "ape_aligned_rmse", "rpe_scan_rmse", "rpe_metre_rmse"}
 
@@ -249,6 +288,8 @@ class ReplaySeries:
     def to_dict(self, trajectories: bool = False) -> dict:
         """JSON-ready: each run's :meth:`ReplayResult.to_dict` (with ``trajectories`` its
         times, true and estimated positions and errors too) and the medians."""
-        return {"seeds": [r.seed for r in self.results],
-                "runs": [r.to_dict(trajectories) for r in self.results], "median": self.median}
-
+        return {
+            "seeds": [r.seed for r in self.results],
+            "runs": [r.to_dict(trajectories) for r in self.results],
+            "median": self.median,
+        }

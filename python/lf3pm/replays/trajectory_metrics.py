@@ -35,16 +35,23 @@ def error_stats(errors) -> dict:
     e = np.asarray(errors, dtype=np.float64)
     if e.size == 0:
         return {k: math.nan for k in ("rmse", "mean", "median", "max", "min", "std")} | {"count": 0}
-    return {"rmse": float(np.sqrt(np.mean(e * e))), "mean": float(np.mean(e)),
-            "median": float(np.median(e)), "max": float(np.max(e)), "min": float(np.min(e)),
-            "std": float(np.std(e)), "count": int(e.size)}
+    return {
+        "rmse": float(np.sqrt(np.mean(e * e))),
+        "mean": float(np.mean(e)),
+        "median": float(np.median(e)),
+        "max": float(np.max(e)),
+        "min": float(np.min(e)),
+        "std": float(np.std(e)),
+        "count": int(e.size),
+    }
 
 
 def _statistics(metric) -> dict:
     """evo's statistics of a processed metric, as floats, with the count."""
     stats = metric.get_all_statistics()
     return {k: float(stats[k]) for k in ("rmse", "mean", "median", "max", "min", "std")} | {
-        "count": int(len(metric.error))}
+        "count": int(len(metric.error))
+    }
 
 
 def _trajectories(reference, estimate):
@@ -53,15 +60,16 @@ def _trajectories(reference, estimate):
     ref = np.asarray(reference, dtype=np.float64)
     est = np.asarray(estimate, dtype=np.float64)
     if ref.ndim != 3 or ref.shape[1:] != (4, 4) or ref.shape != est.shape:
-        raise Lf3pmError(f"trajectories must be two (N, 4, 4) arrays of equal N, "
-                         f"got {ref.shape} and {est.shape}")
+        raise Lf3pmError(f"trajectories must be two (N, 4, 4) arrays of equal N, got {ref.shape} and {est.shape}")
     if len(ref) < 2:
         raise Lf3pmError(f"trajectory metrics need at least 2 poses, got {len(ref)}")
     if not (np.all(np.isfinite(ref)) and np.all(np.isfinite(est))):
         raise Lf3pmError("trajectory metrics need finite poses")
     stamps = np.arange(len(ref), dtype=np.float64)
-    return (PoseTrajectory3D(poses_se3=list(ref), timestamps=stamps),
-            PoseTrajectory3D(poses_se3=list(est), timestamps=stamps))
+    return (
+        PoseTrajectory3D(poses_se3=list(ref), timestamps=stamps),
+        PoseTrajectory3D(poses_se3=list(est), timestamps=stamps),
+    )
 
 
 def ape_translation(reference, estimate, *, align: bool = False) -> dict:
@@ -79,13 +87,22 @@ def ape_translation(reference, estimate, *, align: bool = False) -> dict:
         except geometry.GeometryException:
             # Reference positions on a line (or a point): the alignment is not unique
             # and evo refuses it; there is no aligned figure to report.
-            return {**error_stats([]), "aligned": True, "alignment": None, "errors": [],
-                    "note": "no unique SE(3) alignment: the reference positions lie on a line"}
+            return {
+                **error_stats([]),
+                "aligned": True,
+                "alignment": None,
+                "errors": [],
+                "note": "no unique SE(3) alignment: the reference positions lie on a line",
+            }
         T[:3, :3], T[:3, 3] = rotation, translation
     ape = metrics.APE(metrics.PoseRelation.translation_part)
     ape.process_data((ref, est))
-    return {**_statistics(ape), "aligned": bool(align), "alignment": T.tolist(),
-            "errors": [float(e) for e in ape.error]}
+    return {
+        **_statistics(ape),
+        "aligned": bool(align),
+        "alignment": T.tolist(),
+        "errors": [float(e) for e in ape.error],
+    }
 
 
 def rpe(reference, estimate, *, delta: float = 1, unit: str = "frames") -> dict:
@@ -106,10 +123,11 @@ def rpe(reference, estimate, *, delta: float = 1, unit: str = "frames") -> dict:
         raise Lf3pmError(f"RPE delta unit must be 'frames' or 'm', got {unit!r}")
     ref, est = _trajectories(reference, estimate)
     out = {"delta": delta, "unit": unit}
-    for key, relation in (("translation", metrics.PoseRelation.translation_part),
-                          ("rotation_deg", metrics.PoseRelation.rotation_angle_deg)):
-        metric = metrics.RPE(relation, delta=delta, delta_unit=evo_unit, all_pairs=False,
-                             pairs_from_reference=True)
+    for key, relation in (
+        ("translation", metrics.PoseRelation.translation_part),
+        ("rotation_deg", metrics.PoseRelation.rotation_angle_deg),
+    ):
+        metric = metrics.RPE(relation, delta=delta, delta_unit=evo_unit, all_pairs=False, pairs_from_reference=True)
         try:
             metric.process_data((ref, est))
         except filters.FilterException:
@@ -134,10 +152,15 @@ def time_offset(times, estimate, truth_at) -> dict:
     t = np.asarray(times, dtype=np.float64)
     q = np.asarray(estimate, dtype=np.float64)[:, :3, 3]
     if t.ndim != 1 or len(t) < 2 or q.shape != (len(t), 3):
-        raise Lf3pmError(f"time_offset needs times (n,) and poses (n, 4, 4), n >= 2; got {t.shape} and "
-                         f"{np.shape(estimate)}")
-    rmse = np.array([math.sqrt(np.mean(np.sum((q - np.asarray(truth_at(t + tau))[:, :3, 3]) ** 2, axis=1)))
-                     for tau in TIME_SHIFTS])
+        raise Lf3pmError(
+            f"time_offset needs times (n,) and poses (n, 4, 4), n >= 2; got {t.shape} and {np.shape(estimate)}"
+        )
+    rmse = np.array(
+        [math.sqrt(np.mean(np.sum((q - np.asarray(truth_at(t + tau))[:, :3, 3]) ** 2, axis=1))) for tau in TIME_SHIFTS]
+    )
     best = int(np.argmin(rmse))
-    return {"offset": float(TIME_SHIFTS[best]), "rmse": float(rmse[best]),
-            "rmse_at_zero": float(rmse[np.flatnonzero(TIME_SHIFTS == 0)[0]])}
+    return {
+        "offset": float(TIME_SHIFTS[best]),
+        "rmse": float(rmse[best]),
+        "rmse_at_zero": float(rmse[np.flatnonzero(TIME_SHIFTS == 0)[0]]),
+    }

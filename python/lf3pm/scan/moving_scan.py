@@ -68,9 +68,20 @@ def firing_fractions(count: int) -> np.ndarray:
     return np.arange(1, count + 1, dtype=np.float64) / count
 
 
-def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: float, directions,
-                         min_range: float, max_range: float, *, noise: float = 0.0, seed: int = DEFAULTS.scan.seed,
-                         stream: int = 0, threads: int = DEFAULTS.scan.threads) -> MovingScan:
+def simulate_moving_scan(
+    index: _core.MapIndex,
+    motion,
+    end: float,
+    period: float,
+    directions,
+    min_range: float,
+    max_range: float,
+    *,
+    noise: float = 0.0,
+    seed: int = DEFAULTS.scan.seed,
+    stream: int = 0,
+    threads: int = DEFAULTS.scan.threads,
+) -> MovingScan:
     """The scan whose rays (``directions`` (K, 3), emission order) fire over
     (end - period, end] while the sensor follows ``motion`` (anything with
     ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:
@@ -83,12 +94,21 @@ def simulate_moving_scan(index: _core.MapIndex, motion, end: float, period: floa
     directions = np.ascontiguousarray(directions, dtype=np.float64)
     fractions = firing_fractions(len(directions))
     ray_poses = np.ascontiguousarray(motion.pose(end - (1.0 - fractions) * period))
-    scan = _core.simulate_moving_scan(index, ray_poses, directions,
-                                      scan_params(min_range, max_range, noise=noise, seed=seed, stream=stream,
-                                                  threads=threads))
+    scan = _core.simulate_moving_scan(
+        index,
+        ray_poses,
+        directions,
+        scan_params(min_range, max_range, noise=noise, seed=seed, stream=stream, threads=threads),
+    )
     reference = ray_poses[-1]  # the last ray fires at the reference time
     world = scan["world_points"]
-    return MovingScan(end=float(end), period=float(period), points=scan["sensor_points"],
-                      timestamps=fractions[scan["ray"]], reference=reference,
-                      reference_points=(world - reference[:3, 3]) @ reference[:3, :3],
-                      world_points=world, ray=scan["ray"])
+    return MovingScan(
+        end=float(end),
+        period=float(period),
+        points=scan["sensor_points"],
+        timestamps=fractions[scan["ray"]],
+        reference=reference,
+        reference_points=(world - reference[:3, 3]) @ reference[:3, :3],
+        world_points=world,
+        ray=scan["ray"],
+    )

@@ -28,14 +28,27 @@ class SimulatedScan:
         return len(self.ray)
 
 
-def simulate_scan(map: Map, pose: np.ndarray, directions: np.ndarray, min_range: float, max_range: float, *,
-                  noise: float = 0.0, seed: int = DEFAULTS.scan.seed, stream: int = 0,
-                  scan_voxel: float = DEFAULTS.scan.scan_voxel, threads: int = DEFAULTS.scan.threads) -> SimulatedScan:
+def simulate_scan(
+    map: Map,
+    pose: np.ndarray,
+    directions: np.ndarray,
+    min_range: float,
+    max_range: float,
+    *,
+    noise: float = 0.0,
+    seed: int = DEFAULTS.scan.seed,
+    stream: int = 0,
+    scan_voxel: float = DEFAULTS.scan.scan_voxel,
+    threads: int = DEFAULTS.scan.threads,
+) -> SimulatedScan:
     """The scan of rays ``directions`` (N, 3, sensor frame) from the 4 x 4 sensor-to-world
     ``pose``; range noise sigma ``noise`` from noise stream (``seed``, ``stream``, ray)."""
-    raw = _core.simulate_scan(map.index, np.ascontiguousarray(pose, dtype=np.float64),
-                              np.ascontiguousarray(directions, dtype=np.float64),
-                              scan_params(min_range, max_range, noise=noise, seed=seed, stream=stream,
-                                          scan_voxel=scan_voxel, threads=threads))
+    raw = _core.simulate_scan(
+        map.index,
+        np.ascontiguousarray(pose, dtype=np.float64),
+        np.ascontiguousarray(directions, dtype=np.float64),
+        scan_params(
+            min_range, max_range, noise=noise, seed=seed, stream=stream, scan_voxel=scan_voxel, threads=threads
+        ),
+    )
     return SimulatedScan(**raw)
-

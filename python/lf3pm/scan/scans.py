@@ -18,11 +18,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from lf3pm.errors import Lf3pmError
-from lf3pm.scan.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
-from lf3pm.map import Map
-from lf3pm.scan.scan_simulator import simulate_scan
 from lf3pm.config import DEFAULTS
+from lf3pm.errors import Lf3pmError
+from lf3pm.map import Map
+from lf3pm.scan.moving_scan import MovingScan, firing_fractions, simulate_moving_scan
+from lf3pm.scan.scan_simulator import simulate_scan
 from lf3pm.sensors import Sensor
 
 #: Most scans one replay simulates: beyond this a typo in a rate or a time
@@ -39,9 +39,18 @@ class ScanStream(Sequence):
     scan's end, ``times`` (M,) the ends; ``seconds`` the simulation time so far
     and ``hits`` (M,) the returns of each scan simulated so far (-1: not yet)."""
 
-    def __init__(self, map: Map, motion, sensor: Sensor, *, rate: float = DEFAULTS.replay.rate,
-                 seed: int = DEFAULTS.scan.seed, noise: float | None = DEFAULTS.scan.noise, distortion: bool = True,
-                 threads: int = DEFAULTS.scan.threads):
+    def __init__(
+        self,
+        map: Map,
+        motion,
+        sensor: Sensor,
+        *,
+        rate: float = DEFAULTS.replay.rate,
+        seed: int = DEFAULTS.scan.seed,
+        noise: float | None = DEFAULTS.scan.noise,
+        distortion: bool = True,
+        threads: int = DEFAULTS.scan.threads,
+    ):
         if not (math.isfinite(rate) and rate > 0):
             raise Lf3pmError(f"the scan rate must be > 0 Hz, got {rate}")
         self.noise = sensor.range_noise_sigma if noise is None else float(noise)
@@ -74,16 +83,41 @@ class ScanStream(Sequence):
         s = self.sensor
         directions = s.scan_directions(k)
         if self.distortion:
-            scan = simulate_moving_scan(self.map.index, self.motion, self.times[k], self.period, directions,
-                                        s.min_range, s.max_range, noise=self.noise, seed=self.seed, stream=k,
-                                        threads=self.threads)
+            scan = simulate_moving_scan(
+                self.map.index,
+                self.motion,
+                self.times[k],
+                self.period,
+                directions,
+                s.min_range,
+                s.max_range,
+                noise=self.noise,
+                seed=self.seed,
+                stream=k,
+                threads=self.threads,
+            )
         else:
-            raw = simulate_scan(self.map, self.truth[k], directions, s.min_range, s.max_range, noise=self.noise,
-                                seed=self.seed, stream=k, threads=self.threads)
-            scan = MovingScan(end=float(self.times[k]), period=self.period, points=raw.sensor_points,
-                              timestamps=firing_fractions(len(directions))[raw.ray],
-                              reference=self.truth[k], reference_points=raw.sensor_points,
-                              world_points=raw.world_points, ray=raw.ray)
+            raw = simulate_scan(
+                self.map,
+                self.truth[k],
+                directions,
+                s.min_range,
+                s.max_range,
+                noise=self.noise,
+                seed=self.seed,
+                stream=k,
+                threads=self.threads,
+            )
+            scan = MovingScan(
+                end=float(self.times[k]),
+                period=self.period,
+                points=raw.sensor_points,
+                timestamps=firing_fractions(len(directions))[raw.ray],
+                reference=self.truth[k],
+                reference_points=raw.sensor_points,
+                world_points=raw.world_points,
+                ray=raw.ray,
+            )
         self.seconds += time.perf_counter() - start
         self.hits[k] = len(scan.points)
         return scan

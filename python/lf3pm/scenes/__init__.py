@@ -25,8 +25,7 @@ _MODULES = (houses, house_meadow, meadow, wall, gobi, boxes, tunnel, orientation
 #: Scene name -> builder ``build(seed=0, **params) -> Scene``.
 SCENES = {module.NAME: module.build for module in _MODULES}
 
-__all__ = ["SCENES", "Scene", "Zone", "build_scene", "describe_scenes", "scene_defaults", "scene_names",
-           "scene_zones"]
+__all__ = ["SCENES", "Scene", "Zone", "build_scene", "describe_scenes", "scene_defaults", "scene_names", "scene_zones"]
 
 
 def scene_names() -> list[str]:

@@ -18,24 +18,25 @@ from lf3pm.scenes.geometry import box, rectangle, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "boxes"
-DESCRIPTION = ("Lab room 12 x 8 x 3 m (walls, floor, ceiling, a door) with 12 boxes of five sizes "
-               "(0.3-1.2 m, some stacked); surfaces 5 cm; ~0.14 M points by default.")
+DESCRIPTION = (
+    "Lab room 12 x 8 x 3 m (walls, floor, ceiling, a door) with 12 boxes of five sizes "
+    "(0.3-1.2 m, some stacked); surfaces 5 cm; ~0.14 M points by default."
+)
 DEFAULTS = {
-    "room_length": 12.0,        # m, along x
-    "room_width": 8.0,          # m, along y
-    "room_height": 3.0,         # m
+    "room_length": 12.0,  # m, along x
+    "room_width": 8.0,  # m, along y
+    "room_height": 3.0,  # m
     "boxes": 12,
-    "stack_fraction": 0.25,     # share of the boxes with a smaller box on top
+    "stack_fraction": 0.25,  # share of the boxes with a smaller box on top
     "ceiling": True,
-    "spacing": 0.05,            # m
-    "jitter": 0.0025,           # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 1.2,         # m
+    "spacing": 0.05,  # m
+    "jitter": 0.0025,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 1.2,  # m
 }
 
 #: Box sizes (length, width, height), m: a shoebox, moving boxes, a crate, a tall box.
-_SIZES = np.array([[0.4, 0.3, 0.3], [0.6, 0.4, 0.4], [0.8, 0.6, 0.6], [1.2, 0.8, 0.8],
-                   [0.5, 0.5, 1.2]])
+_SIZES = np.array([[0.4, 0.3, 0.3], [0.6, 0.4, 0.4], [0.8, 0.6, 0.6], [1.2, 0.8, 0.8], [0.5, 0.5, 1.2]])
 
 
 def zones(params: dict) -> dict:
@@ -43,8 +44,7 @@ def zones(params: dict) -> dict:
     clear of the walls (boxes may stand in them: a study keeps the traversable cells)."""
     L, W = params["room_length"], params["room_width"]
     x0, x1, y0, y1 = -L / 3, 2 * L / 3, -W / 2, W / 2
-    return {"start": Zone(x0 + 0.7, y0 + 0.7, x0 + 2.2, y1 - 0.7),
-            "goal": Zone(x1 - 2.2, y0 + 0.7, x1 - 0.7, y1 - 0.7)}
+    return {"start": Zone(x0 + 0.7, y0 + 0.7, x0 + 2.2, y1 - 0.7), "goal": Zone(x1 - 2.2, y0 + 0.7, x1 - 0.7, y1 - 0.7)}
 
 
 def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
@@ -55,8 +55,7 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     require(L >= 3.0 and W >= 3.0, NAME, "the room must be at least 3 x 3 m")
     require(H > 2.5, NAME, "room_height must exceed 2.5 m (the free band)")
     require(p["spacing"] > 0, NAME, "spacing must be > 0")
-    require(W / 2 > p["free_radius"] and L / 3 > p["free_radius"], NAME,
-            "free_radius does not fit in the room")
+    require(W / 2 > p["free_radius"] and L / 3 > p["free_radius"], NAME, "free_radius does not fit in the room")
     rng = np.random.default_rng(seed)
     s, j = p["spacing"], p["jitter"]
     x0, x1, y0, y1 = -L / 3, 2 * L / 3, -W / 2, W / 2
@@ -87,8 +86,7 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
             if clear_of_pose and clear_of_boxes:
                 break
         else:
-            require(False, NAME, f"cannot place {p['boxes']} boxes in the room; "
-                                 "use fewer boxes or a larger room")
+            require(False, NAME, f"cannot place {p['boxes']} boxes in the room; use fewer boxes or a larger room")
         yaw = rng.uniform(0.0, math.pi)
         placed.append((x, y, radius))
         parts.append(box(rng, (x, y, 0.0), size, yaw, s, j))

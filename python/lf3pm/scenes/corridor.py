@@ -26,24 +26,26 @@ from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, rectangl
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "corridor"
-DESCRIPTION = ("Degenerate along x: a 40 m corridor (smooth walls, floor, ceiling) beside a suite of 8 "
-               "furnished rooms joined by doorways, between two bare courtyards; walls 5 cm, ground 10 cm; "
-               "~0.44 M points by default.")
+DESCRIPTION = (
+    "Degenerate along x: a 40 m corridor (smooth walls, floor, ceiling) beside a suite of 8 "
+    "furnished rooms joined by doorways, between two bare courtyards; walls 5 cm, ground 10 cm; "
+    "~0.44 M points by default."
+)
 DEFAULTS = {
-    "length": 40.0,             # m, the building along x, centred on the origin
-    "width": 2.4,               # m, the corridor's inside, y from -width/2 to width/2
-    "height": 2.7,              # m, walls and ceilings
-    "mouth_length": 1.5,        # m the corridor sticks out of the building's end walls
-    "rooms": 8,                 # in the suite, equal lengths along x
-    "room_depth": 5.0,          # m, across y
-    "doorway": 2.0,             # m wide, 2.1 m high, in every partition and end wall of the suite
-    "furniture": 3,             # pieces per room
-    "courtyard_depth": 12.0,    # m of bare ground beyond each end wall
-    "wall_spacing": 0.05,       # m
-    "ground_spacing": 0.10,     # m
-    "jitter": 0.0025,           # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 1.0,         # m
+    "length": 40.0,  # m, the building along x, centred on the origin
+    "width": 2.4,  # m, the corridor's inside, y from -width/2 to width/2
+    "height": 2.7,  # m, walls and ceilings
+    "mouth_length": 1.5,  # m the corridor sticks out of the building's end walls
+    "rooms": 8,  # in the suite, equal lengths along x
+    "room_depth": 5.0,  # m, across y
+    "doorway": 2.0,  # m wide, 2.1 m high, in every partition and end wall of the suite
+    "furniture": 3,  # pieces per room
+    "courtyard_depth": 12.0,  # m of bare ground beyond each end wall
+    "wall_spacing": 0.05,  # m
+    "ground_spacing": 0.10,  # m
+    "jitter": 0.0025,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 1.0,  # m
 }
 
 #: Thickness of the wall between the corridor and the rooms (m).
@@ -61,8 +63,7 @@ def zones(params: dict) -> dict:
     out from the end walls, in front of the corridor's mouths (within half its width of
     its axis), so that the shortest way between them is the corridor."""
     half, w = params["length"] / 2, params["width"]
-    return {"start": Zone(-half - 9.0, -w / 2, -half - 5.0, w / 2),
-            "goal": Zone(half + 5.0, -w / 2, half + 9.0, w / 2)}
+    return {"start": Zone(-half - 9.0, -w / 2, -half - 5.0, w / 2), "goal": Zone(half + 5.0, -w / 2, half + 9.0, w / 2)}
 
 
 def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
@@ -83,18 +84,22 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     rng = np.random.default_rng(seed)
     s, j = p["wall_spacing"], p["jitter"]
     ex, ey = np.eye(3)[:2]
-    room_lo = w / 2 + SEPARATING_WALL   # y of the rooms' corridor-side wall
+    room_lo = w / 2 + SEPARATING_WALL  # y of the rooms' corridor-side wall
     room_hi = room_lo + p["room_depth"]
 
     # The corridor: sheets ending in free edges beyond the end walls (see tunnel.py).
     tube = half + p["mouth_length"]
-    parts = [wall(rng, (-tube, -w / 2), (tube, -w / 2), 0.0, h, s, j),
-             wall(rng, (-tube, w / 2), (tube, w / 2), 0.0, h, s, j),
-             rectangle(rng, (-tube, -w / 2, h), ex, ey, 2 * tube, w, s, j)]
+    parts = [
+        wall(rng, (-tube, -w / 2), (tube, -w / 2), 0.0, h, s, j),
+        wall(rng, (-tube, w / 2), (tube, w / 2), 0.0, h, s, j),
+        rectangle(rng, (-tube, -w / 2, h), ex, ey, 2 * tube, w, s, j),
+    ]
     # The suite: its two long walls, a ceiling, partitions and end walls with doorways.
-    parts += [wall(rng, (-half, room_lo), (half, room_lo), 0.0, h, s, j),
-              wall(rng, (-half, room_hi), (half, room_hi), 0.0, h, s, j),
-              rectangle(rng, (-half, room_lo, h), ex, ey, 2 * half, p["room_depth"], s, j)]
+    parts += [
+        wall(rng, (-half, room_lo), (half, room_lo), 0.0, h, s, j),
+        wall(rng, (-half, room_hi), (half, room_hi), 0.0, h, s, j),
+        rectangle(rng, (-half, room_lo, h), ex, ey, 2 * half, p["room_depth"], s, j),
+    ]
     room_length = p["length"] / p["rooms"]
     doorways = []
     for k in range(p["rooms"] + 1):
@@ -104,7 +109,7 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
         door = Opening(u0, 0.0, u0 + p["doorway"], DOOR_HEIGHT, 0.0)
         parts.append(wall(rng, (x, room_lo), (x, room_hi), 0.0, h, s, j, [door]))
     for k in range(p["rooms"]):
-        parts += _furniture(rng, p, -half + k * room_length, room_length, room_lo, room_hi, doorways[k:k + 2])
+        parts += _furniture(rng, p, -half + k * room_length, room_length, room_lo, room_hi, doorways[k : k + 2])
     # The building's end walls beside the corridor's mouths, facing the courtyards.
     y_lo, y_hi = -w / 2 - COURTYARD_MARGIN, room_hi + COURTYARD_MARGIN
     for x in (-half, half):
@@ -117,14 +122,23 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
         rooms = (y > room_lo) & (y < room_hi)
         return courtyard | corridor | rooms
 
-    parts.append(heightfield_points(rng, Heightfield.flat(), (-half - p["courtyard_depth"],
-                                                              half + p["courtyard_depth"]),
-                                    (y_lo, y_hi), p["ground_spacing"], j, keep=on_ground))
+    parts.append(
+        heightfield_points(
+            rng,
+            Heightfield.flat(),
+            (-half - p["courtyard_depth"], half + p["courtyard_depth"]),
+            (y_lo, y_hi),
+            p["ground_spacing"],
+            j,
+            keep=on_ground,
+        )
+    )
     return finish(NAME, DESCRIPTION, seed, p, stack(parts), zones=zones(p))
 
 
-def _furniture(rng: np.random.Generator, p: dict, x0: float, length: float, y_lo: float, y_hi: float,
-               doorways: list) -> list:
+def _furniture(
+    rng: np.random.Generator, p: dict, x0: float, length: float, y_lo: float, y_hi: float, doorways: list
+) -> list:
     """``furniture`` pieces against the long walls of the room from ``x0`` to ``x0 + length``,
     clear of each other and 0.6 m (a robot's radius and clearance) clear of the band between its two doorways
     (``doorways``: the (y0, y1) spans of the doorways at its west and east ends), so the
@@ -138,7 +152,7 @@ def _furniture(rng: np.random.Generator, p: dict, x0: float, length: float, y_lo
         inward = 1.0 if y_wall == y_lo else -1.0
         depth_span = sorted((y_wall, y_wall + inward * (size[1] + 0.05)))
         if depth_span[1] > path_lo and depth_span[0] < path_hi:
-            continue   # it would block the way between the doorways
+            continue  # it would block the way between the doorways
         for _attempt in range(50):
             x = rng.uniform(x0 + 0.3 + size[0] / 2, x0 + length - 0.3 - size[0] / 2)
             span = (x - size[0] / 2 - 0.2, x + size[0] / 2 + 0.2)

@@ -25,21 +25,23 @@ from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, place, s
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "field"
-DESCRIPTION = ("Structure on one edge: a row of low buildings and containers 18 m to the side of "
-               "a 100 m field of bare flat ground, ending 20 m before its east end; walls 5 cm, ground "
-               "10 cm; ~0.83 M points by default.")
+DESCRIPTION = (
+    "Structure on one edge: a row of low buildings and containers 18 m to the side of "
+    "a 100 m field of bare flat ground, ending 20 m before its east end; walls 5 cm, ground "
+    "10 cm; ~0.83 M points by default."
+)
 DEFAULTS = {
-    "field_length": 100.0,      # m along x, centred on x = 0
-    "field_width": 44.0,        # m of ground along y, from -field_width/2 to field_width/2
-    "edge_offset": 18.0,        # m, the x axis to the row's fronts (at y = edge_offset)
-    "edge_end": 20.0,           # m, x where the row ends (it starts at the field's west end)
-    "building_height": 5.0,     # m, mean (each one 0.75-1.25 times)
-    "containers": 5,            # standing in front of the row
-    "wall_spacing": 0.05,       # m
-    "ground_spacing": 0.10,     # m
-    "jitter": 0.0025,           # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 3.0,         # m
+    "field_length": 100.0,  # m along x, centred on x = 0
+    "field_width": 44.0,  # m of ground along y, from -field_width/2 to field_width/2
+    "edge_offset": 18.0,  # m, the x axis to the row's fronts (at y = edge_offset)
+    "edge_end": 20.0,  # m, x where the row ends (it starts at the field's west end)
+    "building_height": 5.0,  # m, mean (each one 0.75-1.25 times)
+    "containers": 5,  # standing in front of the row
+    "wall_spacing": 0.05,  # m
+    "ground_spacing": 0.10,  # m
+    "jitter": 0.0025,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 3.0,  # m
 }
 
 #: Building widths along the row and depths (m), and the gaps between them (m).
@@ -63,10 +65,16 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     p = resolve_params(NAME, DEFAULTS, params)
     half, edge = p["field_length"] / 2, p["edge_offset"]
     require(p["field_length"] >= 60.0, NAME, "field_length must be >= 60 m")
-    require(12.0 <= edge <= p["field_width"] / 2 - 2.0, NAME,
-            "edge_offset must be >= 12 m (clear of the zones) and the fronts 2 m inside the field")
-    require(-half + 20.0 <= p["edge_end"] <= half - 14.0, NAME,
-            "edge_end must lie at least 20 m from the field's west end and before the goal zone")
+    require(
+        12.0 <= edge <= p["field_width"] / 2 - 2.0,
+        NAME,
+        "edge_offset must be >= 12 m (clear of the zones) and the fronts 2 m inside the field",
+    )
+    require(
+        -half + 20.0 <= p["edge_end"] <= half - 14.0,
+        NAME,
+        "edge_end must lie at least 20 m from the field's west end and before the goal zone",
+    )
     require(2.5 <= p["building_height"] <= 20.0, NAME, "building_height must be 2.5-20 m")
     require(p["wall_spacing"] > 0 and p["ground_spacing"] > 0, NAME, "spacings must be > 0")
     rng = np.random.default_rng(seed)
@@ -92,19 +100,33 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
             inside |= (px > x0) & (px < x1) & (py > edge)
         return ~inside
 
-    parts.append(heightfield_points(rng, Heightfield.flat(), (-half, half), (-half_w, half_w),
-                                    p["ground_spacing"], j, keep=on_ground))
+    parts.append(
+        heightfield_points(
+            rng, Heightfield.flat(), (-half, half), (-half_w, half_w), p["ground_spacing"], j, keep=on_ground
+        )
+    )
     return finish(NAME, DESCRIPTION, seed, p, stack(parts), zones=zones(p))
 
 
-def _building(rng: np.random.Generator, centre, width: float, depth: float, height: float, s: float,
-              j: float) -> np.ndarray:
+def _building(
+    rng: np.random.Generator, centre, width: float, depth: float, height: float, s: float, j: float
+) -> np.ndarray:
     """Four walls (front facing -y) with a door and recessed windows, no roof (a ground
     sensor does not see it and a roof would put SOLM cells on it)."""
     storeys = max(1, int(height // 2.8))
-    parts = [wall(rng, start, end, 0.0, height, s, j,
-                  facade_openings(rng, length, storeys, door=side == 0, recess_fraction=0.7))
-             for side, start, end, length in footprint_sides(width, depth)]
+    parts = [
+        wall(
+            rng,
+            start,
+            end,
+            0.0,
+            height,
+            s,
+            j,
+            facade_openings(rng, length, storeys, door=side == 0, recess_fraction=0.7),
+        )
+        for side, start, end, length in footprint_sides(width, depth)
+    ]
     return place(stack(parts), 0.0, centre)
 
 
@@ -123,6 +145,7 @@ def _containers(rng: np.random.Generator, p: dict) -> list:
             require(False, NAME, f"cannot place {p['containers']} containers in front of the row; use fewer")
         taken.append(x)
         y = p["edge_offset"] - rng.uniform(1.0, 3.0) - width / 2
-        parts.append(box(rng, (x, y, 0.0), (length, width, height), rng.uniform(-0.17, 0.17),
-                         p["wall_spacing"], p["jitter"]))
+        parts.append(
+            box(rng, (x, y, 0.0), (length, width, height), rng.uniform(-0.17, 0.17), p["wall_spacing"], p["jitter"])
+        )
     return parts

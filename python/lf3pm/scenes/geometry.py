@@ -60,8 +60,18 @@ def random_unit_vectors(rng: np.random.Generator, count: int) -> np.ndarray:
     return unit(rng.normal(size=(count, 3)))
 
 
-def rectangle(rng: np.random.Generator, origin, u, v, size_u: float, size_v: float, spacing: float,
-              jitter: float = JITTER, holes=(), keep=None) -> np.ndarray:
+def rectangle(
+    rng: np.random.Generator,
+    origin,
+    u,
+    v,
+    size_u: float,
+    size_v: float,
+    spacing: float,
+    jitter: float = JITTER,
+    holes=(),
+    keep=None,
+) -> np.ndarray:
     """Samples the rectangle ``origin + a u + b v``, 0 <= a <= size_u, 0 <= b <= size_v.
 
     ``u`` and ``v`` are orthonormal. Samples sit at the centres of a grid of
@@ -93,12 +103,19 @@ def rectangle(rng: np.random.Generator, origin, u, v, size_u: float, size_v: flo
     else:
         off = np.zeros(n)
     normal = np.cross(u, v)
-    return (np.asarray(origin, dtype=float) + aa[:, None] * u + bb[:, None] * v
-            + off[:, None] * normal)
+    return np.asarray(origin, dtype=float) + aa[:, None] * u + bb[:, None] * v + off[:, None] * normal
 
 
-def box(rng: np.random.Generator, center, size, yaw: float, spacing: float, jitter: float = JITTER,
-        top: bool = True, bottom: bool = False) -> np.ndarray:
+def box(
+    rng: np.random.Generator,
+    center,
+    size,
+    yaw: float,
+    spacing: float,
+    jitter: float = JITTER,
+    top: bool = True,
+    bottom: bool = False,
+) -> np.ndarray:
     """Samples the faces of a box standing on its base.
 
     ``center`` = (x, y, z of the base), ``size`` = (length along the box's x,
@@ -142,12 +159,13 @@ class Heightfield:
     pads: tuple = ()
 
     @classmethod
-    def flat(cls) -> "Heightfield":
+    def flat(cls) -> Heightfield:
         return cls()
 
     @classmethod
-    def random(cls, rng: np.random.Generator, amplitude: float, wavelengths: tuple[float, float],
-               waves: int = 12) -> "Heightfield":
+    def random(
+        cls, rng: np.random.Generator, amplitude: float, wavelengths: tuple[float, float], waves: int = 12
+    ) -> Heightfield:
         """Random smooth terrain: ``waves`` plane waves with wavelengths log-uniform in
         ``wavelengths`` (m), scaled so that the height has standard deviation
         ``amplitude / sqrt(2)`` (that of one sine of that amplitude).
@@ -160,22 +178,30 @@ class Heightfield:
         amp *= amplitude / math.sqrt(np.sum(amp**2))
         return cls(k, amp, rng.uniform(0.0, 2.0 * math.pi, waves))
 
-    def plus(self, other: "Heightfield") -> "Heightfield":
+    def plus(self, other: Heightfield) -> Heightfield:
         """The sum of two wave sets (pads and offset of ``self``)."""
-        return Heightfield(np.vstack([self.wave_vectors, other.wave_vectors]),
-                           np.concatenate([self.amplitudes, other.amplitudes]),
-                           np.concatenate([self.phases, other.phases]), self.offset, self.pads)
+        return Heightfield(
+            np.vstack([self.wave_vectors, other.wave_vectors]),
+            np.concatenate([self.amplitudes, other.amplitudes]),
+            np.concatenate([self.phases, other.phases]),
+            self.offset,
+            self.pads,
+        )
 
-    def with_pad(self, x: float, y: float, radius: float, blend: float,
-                 level: float | None = None) -> "Heightfield":
+    def with_pad(self, x: float, y: float, radius: float, blend: float, level: float | None = None) -> Heightfield:
         """Level terrain within ``radius`` of (x, y) at ``level`` (default: the height
         there), blending back to the terrain over the next ``blend`` metres."""
         if level is None:
             level = float(self(np.array([x]), np.array([y]))[0])
-        return Heightfield(self.wave_vectors, self.amplitudes, self.phases, self.offset,
-                           self.pads + ((float(x), float(y), float(radius), float(blend), level),))
+        return Heightfield(
+            self.wave_vectors,
+            self.amplitudes,
+            self.phases,
+            self.offset,
+            self.pads + ((float(x), float(y), float(radius), float(blend), level),),
+        )
 
-    def shifted_to_zero_at(self, x: float, y: float) -> "Heightfield":
+    def shifted_to_zero_at(self, x: float, y: float) -> Heightfield:
         """The same terrain moved vertically so that h(x, y) = 0."""
         h = float(self(np.array([x]), np.array([y]))[0])
         pads = tuple((px, py, r, b, lv - h) for px, py, r, b, lv in self.pads)
@@ -193,8 +219,9 @@ class Heightfield:
         return h
 
 
-def heightfield_points(rng: np.random.Generator, terrain: Heightfield, x_range, y_range,
-                       spacing: float, jitter: float = JITTER, keep=None) -> np.ndarray:
+def heightfield_points(
+    rng: np.random.Generator, terrain: Heightfield, x_range, y_range, spacing: float, jitter: float = JITTER, keep=None
+) -> np.ndarray:
     """Samples the terrain over x_range x y_range on a jittered grid of ``spacing``.
 
     ``keep(x, y) -> bool array`` drops samples (under a building, say).
@@ -224,8 +251,7 @@ def _direction(theta, phi):
     return np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1)
 
 
-def blades(rng: np.random.Generator, base, length, width, tilt, azimuth, bend,
-           spacing: float = 0.01) -> np.ndarray:
+def blades(rng: np.random.Generator, base, length, width, tilt, azimuth, bend, spacing: float = 0.01) -> np.ndarray:
     """Samples grass blades (or thin stems): narrow bent strips, one row of parameters each.
 
     base: (B, 3) foot points; length, width (m); tilt: polar angle of the foot's
@@ -235,8 +261,9 @@ def blades(rng: np.random.Generator, base, length, width, tilt, azimuth, bend,
     so any few neighbours span a plane: the blade's own, twisted at random.
     """
     base = np.asarray(base, dtype=float).reshape(-1, 3)
-    length, width, tilt, azimuth, bend = (np.broadcast_to(np.asarray(a, dtype=float), (len(base),))
-                                          for a in (length, width, tilt, azimuth, bend))
+    length, width, tilt, azimuth, bend = (
+        np.broadcast_to(np.asarray(a, dtype=float), (len(base),)) for a in (length, width, tilt, azimuth, bend)
+    )
     if len(base) == 0:
         return EMPTY
     counts = np.maximum(3, np.round(length / spacing).astype(np.int64))
@@ -257,8 +284,9 @@ def blades(rng: np.random.Generator, base, length, width, tilt, azimuth, bend,
     return centre + offset[:, None] * across
 
 
-def leaves(rng: np.random.Generator, centre, normal, semi_major, semi_minor,
-           spacing: float = 0.01, cup: float = 0.25) -> np.ndarray:
+def leaves(
+    rng: np.random.Generator, centre, normal, semi_major, semi_minor, spacing: float = 0.01, cup: float = 0.25
+) -> np.ndarray:
     """Samples leaves: small ellipses, one row of parameters each.
 
     centre (L, 3), normal (L, 3) (need not be unit), semi-axes (m). Samples
@@ -278,8 +306,10 @@ def leaves(rng: np.random.Generator, centre, normal, semi_major, semi_minor,
     e1 = unit(np.cross(normal, helper))
     e2 = np.cross(normal, e1)
     turn = rng.uniform(0.0, 2.0 * math.pi, nl)
-    e1, e2 = (np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2,
-              -np.sin(turn)[:, None] * e1 + np.cos(turn)[:, None] * e2)
+    e1, e2 = (
+        np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2,
+        -np.sin(turn)[:, None] * e1 + np.cos(turn)[:, None] * e2,
+    )
     counts = np.maximum(4, np.round(math.pi * a * b / spacing**2).astype(np.int64))
     leaf = np.repeat(np.arange(nl), counts)
     first = np.cumsum(counts) - counts
@@ -287,9 +317,12 @@ def leaves(rng: np.random.Generator, centre, normal, semi_major, semi_minor,
     r = np.sqrt((k + 0.5) / counts[leaf])
     t = k * _GOLDEN_ANGLE
     curl = rng.uniform(-cup, cup, nl)[leaf] * a[leaf]
-    return (centre[leaf] + (a[leaf] * r * np.cos(t))[:, None] * e1[leaf]
-            + (b[leaf] * r * np.sin(t))[:, None] * e2[leaf]
-            + (curl * r * r)[:, None] * normal[leaf])
+    return (
+        centre[leaf]
+        + (a[leaf] * r * np.cos(t))[:, None] * e1[leaf]
+        + (b[leaf] * r * np.sin(t))[:, None] * e2[leaf]
+        + (curl * r * r)[:, None] * normal[leaf]
+    )
 
 
 def fibonacci_sphere(count: int) -> np.ndarray:
@@ -316,8 +349,9 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
     return q
 
 
-def stone(rng: np.random.Generator, centre, radii, spacing: float = 0.04,
-          roughness: float = 0.12, yaw: float | None = None) -> np.ndarray:
+def stone(
+    rng: np.random.Generator, centre, radii, spacing: float = 0.04, roughness: float = 0.12, yaw: float | None = None
+) -> np.ndarray:
     """Samples a stone: an ellipsoid surface with smooth random bumps.
 
     ``radii`` are the semi-axes, turned by ``yaw`` about +z (a stone lying on
@@ -338,8 +372,15 @@ def stone(rng: np.random.Generator, centre, radii, spacing: float = 0.04,
     return local @ rotation.T + np.asarray(centre, dtype=float)
 
 
-def bush(rng: np.random.Generator, centre, radii, leaves_per_m2: float = 120.0,
-         leaf_size=(0.015, 0.04), spacing: float = 0.01, branches: int = 6) -> np.ndarray:
+def bush(
+    rng: np.random.Generator,
+    centre,
+    radii,
+    leaves_per_m2: float = 120.0,
+    leaf_size=(0.015, 0.04),
+    spacing: float = 0.01,
+    branches: int = 6,
+) -> np.ndarray:
     """Samples a bush: leaves filling the outer shell of an ellipsoidal canopy, and branches.
 
     centre: the canopy's centre; radii (rx, ry, rz). Leaves sit mostly near the
@@ -367,6 +408,7 @@ def bush(rng: np.random.Generator, centre, radii, leaves_per_m2: float = 120.0,
         length = np.linalg.norm(delta, axis=1)
         tilt = libm.arccos(delta[:, 2] / length)
         azimuth = libm.atan2(delta[:, 1], delta[:, 0])
-        parts.append(blades(rng, feet, length, rng.uniform(0.008, 0.02, branches), tilt, azimuth,
-                            0.0, spacing=2 * spacing))
+        parts.append(
+            blades(rng, feet, length, rng.uniform(0.008, 0.02, branches), tilt, azimuth, 0.0, spacing=2 * spacing)
+        )
     return stack(parts)

@@ -17,34 +17,36 @@ import math
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm import libm
+from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.scenes.buildings import Opening, flat_building, house
 from lf3pm.scenes.geometry import Heightfield, heightfield_points, stack, stone
 from lf3pm.scenes.scene import Scene, check_seed, finish, require, resolve_params
 from lf3pm.scenes.vegetation import bushes, grass_tufts, weeds
 
 NAME = "gobi"
-DESCRIPTION = ("Gobi desert 220 x 120 m, uneven (+-1.5 m), a town of 6 buildings around the origin, "
-               "a warehouse 110 m east, 400 stones, weeds and bushes by some stones; ground 12 cm, "
-               "walls and stones 4-5 cm; ~3.2 M points by default.")
+DESCRIPTION = (
+    "Gobi desert 220 x 120 m, uneven (+-1.5 m), a town of 6 buildings around the origin, "
+    "a warehouse 110 m east, 400 stones, weeds and bushes by some stones; ground 12 cm, "
+    "walls and stones 4-5 cm; ~3.2 M points by default."
+)
 DEFAULTS = {
-    "length": 220.0,            # m along x
-    "width": 120.0,             # m along y
-    "west": 60.0,               # m of desert west of the origin
-    "relief": 1.5,              # m, amplitude of the terrain
-    "buildings": 6,             # 1..8 in the town
-    "town_radius": 40.0,        # m, level pad of the town
+    "length": 220.0,  # m along x
+    "width": 120.0,  # m along y
+    "west": 60.0,  # m of desert west of the origin
+    "relief": 1.5,  # m, amplitude of the terrain
+    "buildings": 6,  # 1..8 in the town
+    "town_radius": 40.0,  # m, level pad of the town
     "warehouse_distance": 110.0,  # m from the origin to the warehouse's centre
     "stones": 400,
     "vegetated_fraction": 0.35,  # share of the stones with plants around them
-    "ground_spacing": 0.12,     # m
-    "wall_spacing": 0.05,       # m
-    "roof_spacing": 0.10,       # m, flat roofs (invisible from the ground)
-    "stone_spacing": 0.04,      # m
-    "jitter": 0.0025,           # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 3.0,         # m
+    "ground_spacing": 0.12,  # m
+    "wall_spacing": 0.05,  # m
+    "roof_spacing": 0.10,  # m, flat roofs (invisible from the ground)
+    "stone_spacing": 0.04,  # m
+    "jitter": 0.0025,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 3.0,  # m
 }
 
 #: Warehouse footprint and height (m).
@@ -61,22 +63,33 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     reach = math.hypot(wl, wd) / 2
     require(1 <= p["buildings"] <= 8, NAME, f"buildings must be 1..8, got {p['buildings']}")
     require(p["town_radius"] >= 25.0, NAME, "town_radius must be >= 25 m")
-    require(p["warehouse_distance"] >= p["town_radius"] + reach + 10.0, NAME,
-            "warehouse_distance is too small: the warehouse would stand in the town")
-    require(x_range[1] >= p["warehouse_distance"] + reach + 5.0 and y_range[1] >= reach + 20.0, NAME,
-            "the desert is too small for the warehouse (raise length or width)")
-    require(p["west"] >= p["town_radius"] and y_range[1] >= p["town_radius"], NAME,
-            "the desert is too small for the town (raise west or width)")
-    require(min(p["ground_spacing"], p["wall_spacing"], p["roof_spacing"], p["stone_spacing"]) > 0,
-            NAME, "spacings must be > 0")
+    require(
+        p["warehouse_distance"] >= p["town_radius"] + reach + 10.0,
+        NAME,
+        "warehouse_distance is too small: the warehouse would stand in the town",
+    )
+    require(
+        x_range[1] >= p["warehouse_distance"] + reach + 5.0 and y_range[1] >= reach + 20.0,
+        NAME,
+        "the desert is too small for the warehouse (raise length or width)",
+    )
+    require(
+        p["west"] >= p["town_radius"] and y_range[1] >= p["town_radius"],
+        NAME,
+        "the desert is too small for the town (raise west or width)",
+    )
+    require(
+        min(p["ground_spacing"], p["wall_spacing"], p["roof_spacing"], p["stone_spacing"]) > 0,
+        NAME,
+        "spacings must be > 0",
+    )
     rng = np.random.default_rng(seed)
     s, j = p["wall_spacing"], p["jitter"]
 
     # Warehouse position first: the terrain gets a pad there.
     wx = p["warehouse_distance"]
     wy = rng.uniform(-0.5, 0.5) * max(0.0, y_range[1] - reach - 20.0)
-    terrain = Heightfield.random(rng, p["relief"], (25.0, 150.0)).plus(
-        Heightfield.random(rng, 0.05, (1.5, 6.0)))
+    terrain = Heightfield.random(rng, p["relief"], (25.0, 150.0)).plus(Heightfield.random(rng, 0.05, (1.5, 6.0)))
     terrain = terrain.with_pad(0.0, 0.0, p["town_radius"], 25.0)
     terrain = terrain.with_pad(wx, wy, reach + 5.0, 20.0).shifted_to_zero_at(0.0, 0.0)
     warehouse_level = float(terrain(np.array([wx]), np.array([wy]))[0])
@@ -97,32 +110,75 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
             if all(math.hypot(x - ox, y - oy) > radius + orad + 4.0 for ox, oy, orad in obstacles):
                 break
         else:
-            require(False, NAME, f"cannot place {p['buildings']} buildings in the town; "
-                                 "use fewer or a larger town_radius")
+            require(
+                False, NAME, f"cannot place {p['buildings']} buildings in the town; use fewer or a larger town_radius"
+            )
         obstacles.append((x, y, radius))
         yaw = angle - math.pi / 2 + rng.normal(0.0, 0.15)
         storeys = int(rng.integers(1, 3))
         if rng.random() < 0.3:
-            parts.append(house(rng, (x, y, 0.0), yaw, width, depth, storeys,
-                               math.radians(rng.uniform(20.0, 30.0)), s, j, recess_fraction=0.3))
+            parts.append(
+                house(
+                    rng,
+                    (x, y, 0.0),
+                    yaw,
+                    width,
+                    depth,
+                    storeys,
+                    math.radians(rng.uniform(20.0, 30.0)),
+                    s,
+                    j,
+                    recess_fraction=0.3,
+                )
+            )
         else:
-            parts.append(flat_building(rng, (x, y, 0.0), yaw, width, depth, storeys * 2.8 + 0.6, s, j,
-                                       storeys=storeys, recess_fraction=0.3,
-                                       roof_spacing=p["roof_spacing"]))
+            parts.append(
+                flat_building(
+                    rng,
+                    (x, y, 0.0),
+                    yaw,
+                    width,
+                    depth,
+                    storeys * 2.8 + 0.6,
+                    s,
+                    j,
+                    storeys=storeys,
+                    recess_fraction=0.3,
+                    roof_spacing=p["roof_spacing"],
+                )
+            )
     # The warehouse: two closed roller doors (recessed 20 cm) and a door, windows high up.
-    doors = [Opening(6.0, 0.0, 10.5, 5.0, 0.2), Opening(wl - 10.5, 0.0, wl - 6.0, 5.0, 0.2),
-             Opening(wl / 2 - 0.5, 0.0, wl / 2 + 0.5, 2.1, 0.0)]
-    parts.append(flat_building(rng, (wx, wy, warehouse_level), math.atan2(wy, wx) - math.pi / 2,
-                               wl, wd, wh, s, j, storeys=1, recess_fraction=0.0,
-                               roof_spacing=p["roof_spacing"], doors=doors, window_pitch=6.0,
-                               window_sill=6.0))
+    doors = [
+        Opening(6.0, 0.0, 10.5, 5.0, 0.2),
+        Opening(wl - 10.5, 0.0, wl - 6.0, 5.0, 0.2),
+        Opening(wl / 2 - 0.5, 0.0, wl / 2 + 0.5, 2.1, 0.0),
+    ]
+    parts.append(
+        flat_building(
+            rng,
+            (wx, wy, warehouse_level),
+            math.atan2(wy, wx) - math.pi / 2,
+            wl,
+            wd,
+            wh,
+            s,
+            j,
+            storeys=1,
+            recess_fraction=0.0,
+            roof_spacing=p["roof_spacing"],
+            doors=doors,
+            window_pitch=6.0,
+            window_sill=6.0,
+        )
+    )
     parts.append(stones_and_plants(rng, terrain, p, x_range, y_range, obstacles))
     parts.append(heightfield_points(rng, terrain, x_range, y_range, p["ground_spacing"], 0.01))
     return finish(NAME, DESCRIPTION, seed, p, stack(parts))
 
 
-def stones_and_plants(rng: np.random.Generator, terrain: Heightfield, p: dict, x_range, y_range,
-                      obstacles) -> np.ndarray:
+def stones_and_plants(
+    rng: np.random.Generator, terrain: Heightfield, p: dict, x_range, y_range, obstacles
+) -> np.ndarray:
     """The stones, strewn uniformly off the buildings and the free radius, partly buried,
     and the plants around a fraction of them."""
     count = p["stones"]
@@ -156,5 +212,11 @@ def stones_and_plants(rng: np.random.Generator, terrain: Heightfield, p: dict, x
     tufts = around(6.0, 0.05, 1.2)
     weed_xy = around(2.5, 0.05, 0.9)
     bush_xy = around(0.3, 0.6, 1.2)
-    return stack([points, grass_tufts(rng, terrain, tufts, blades_per_tuft=7.0, height=(0.05, 0.25)),
-                  weeds(rng, terrain, weed_xy), bushes(rng, terrain, bush_xy, radius=(0.3, 0.7))])
+    return stack(
+        [
+            points,
+            grass_tufts(rng, terrain, tufts, blades_per_tuft=7.0, height=(0.05, 0.25)),
+            weeds(rng, terrain, weed_xy),
+            bushes(rng, terrain, bush_xy, radius=(0.3, 0.7)),
+        ]
+    )

@@ -22,26 +22,28 @@ from lf3pm.scenes.scene import Scene, check_seed, finish, mow, require, resolve_
 from lf3pm.scenes.vegetation import BUSH_REACH, bushes, meadow_cover
 
 NAME = "house_meadow"
-DESCRIPTION = ("One two-storey house on a 44 x 44 m meadow (grass tufts, weeds, bushes), its front "
-               "wall 4 m from the origin; walls 5 cm, ground 10 cm, blades and leaves "
-               "1.2-1.5 cm; ~1.8 M points by default.")
+DESCRIPTION = (
+    "One two-storey house on a 44 x 44 m meadow (grass tufts, weeds, bushes), its front "
+    "wall 4 m from the origin; walls 5 cm, ground 10 cm, blades and leaves "
+    "1.2-1.5 cm; ~1.8 M points by default."
+)
 DEFAULTS = {
-    "extent": 22.0,             # m, half-width of the square
-    "house_distance": 4.0,      # m from the origin to the front wall (at y = house_distance)
-    "house_width": 11.0,        # m, along x
-    "house_depth": 8.0,         # m, along y
+    "extent": 22.0,  # m, half-width of the square
+    "house_distance": 4.0,  # m from the origin to the front wall (at y = house_distance)
+    "house_width": 11.0,  # m, along x
+    "house_depth": 8.0,  # m, along y
     "storeys": 2,
-    "relief": 0.25,             # m, amplitude of the meadow's undulation
-    "ground_spacing": 0.10,     # m
-    "wall_spacing": 0.05,       # m
-    "jitter": 0.0025,           # m
+    "relief": 0.25,  # m, amplitude of the meadow's undulation
+    "ground_spacing": 0.10,  # m
+    "wall_spacing": 0.05,  # m
+    "jitter": 0.0025,  # m
     "tufts_per_m2": 6.0,
     "blades_per_tuft": 9.0,
     "weeds_per_m2": 0.3,
     "bushes_per_100m2": 1.5,
-    "mowed_height": 0.15,       # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 2.5,         # m
+    "mowed_height": 0.15,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 2.5,  # m
 }
 
 
@@ -77,17 +79,32 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
         return keep(x, y) & ~in_house(x, y, BUSH_REACH + 0.4) & (np.hypot(x, y) > r + BUSH_REACH)
 
     e = (-p["extent"], p["extent"])
-    cover = meadow_cover(rng, terrain, e, e, keep, p["tufts_per_m2"], p["blades_per_tuft"],
-                         p["weeds_per_m2"], p["bushes_per_100m2"], bush_keep=bush_keep)
+    cover = meadow_cover(
+        rng,
+        terrain,
+        e,
+        e,
+        keep,
+        p["tufts_per_m2"],
+        p["blades_per_tuft"],
+        p["weeds_per_m2"],
+        p["bushes_per_100m2"],
+        bush_keep=bush_keep,
+    )
     # A few bushes planted along the back and the sides of the house.
-    beside = np.array([[rng.uniform(-w / 2, w / 2), cy + d / 2 + 1.6],
-                       [rng.uniform(-w / 2, w / 2), cy + d / 2 + 1.6],
-                       [-w / 2 - 1.6, cy + rng.uniform(-d / 2, d / 2)],
-                       [w / 2 + 1.6, cy + rng.uniform(-d / 2, d / 2)]])
+    beside = np.array(
+        [
+            [rng.uniform(-w / 2, w / 2), cy + d / 2 + 1.6],
+            [rng.uniform(-w / 2, w / 2), cy + d / 2 + 1.6],
+            [-w / 2 - 1.6, cy + rng.uniform(-d / 2, d / 2)],
+            [w / 2 + 1.6, cy + rng.uniform(-d / 2, d / 2)],
+        ]
+    )
     cover = stack([cover, bushes(rng, terrain, beside, radius=(0.4, 0.8))])
     cover = mow(cover, 0.0, 0.0, r + 0.6, terrain, p["mowed_height"])
     pitch = math.radians(rng.uniform(30.0, 40.0))
-    building = house(rng, (0.0, cy, base), 0.0, w, d, p["storeys"], pitch, p["wall_spacing"],
-                     p["jitter"], door_x=door_x)  # front wall at y = dist, facing the origin
+    building = house(
+        rng, (0.0, cy, base), 0.0, w, d, p["storeys"], pitch, p["wall_spacing"], p["jitter"], door_x=door_x
+    )  # front wall at y = dist, facing the origin
     ground = heightfield_points(rng, terrain, e, e, p["ground_spacing"], 0.01)
     return finish(NAME, DESCRIPTION, seed, p, stack([ground, cover, building]))

@@ -21,24 +21,26 @@ from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, stack
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "orientation"
-DESCRIPTION = ("Structure on one side: a 44 m two-storey building front (recessed windows, bays, "
-               "parked cars) 8 m behind the origin, bare flat ground 50 m out in front, nothing "
-               "else; walls 5 cm, ground 10 cm; ~0.64 M points by default.")
+DESCRIPTION = (
+    "Structure on one side: a 44 m two-storey building front (recessed windows, bays, "
+    "parked cars) 8 m behind the origin, bare flat ground 50 m out in front, nothing "
+    "else; walls 5 cm, ground 10 cm; ~0.64 M points by default."
+)
 DEFAULTS = {
-    "facade_distance": 8.0,     # m from the origin back to the building front (at x = -facade_distance)
-    "facade_length": 44.0,      # m, along y, centred on y = 0
-    "facade_height": 6.5,       # m (two storeys)
-    "building_depth": 10.0,     # m, behind the front
-    "bays": 2,                  # bays projecting from the front
-    "bay_depth": 1.5,           # m
-    "cars": 4,                  # parked along the front
-    "open_length": 50.0,        # m of ground in front of the origin (x up to open_length)
-    "ground_width": 50.0,       # m, along y, centred on y = 0
-    "wall_spacing": 0.05,       # m
-    "ground_spacing": 0.10,     # m
-    "jitter": 0.0025,           # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 3.0,         # m
+    "facade_distance": 8.0,  # m from the origin back to the building front (at x = -facade_distance)
+    "facade_length": 44.0,  # m, along y, centred on y = 0
+    "facade_height": 6.5,  # m (two storeys)
+    "building_depth": 10.0,  # m, behind the front
+    "bays": 2,  # bays projecting from the front
+    "bay_depth": 1.5,  # m
+    "cars": 4,  # parked along the front
+    "open_length": 50.0,  # m of ground in front of the origin (x up to open_length)
+    "ground_width": 50.0,  # m, along y, centred on y = 0
+    "wall_spacing": 0.05,  # m
+    "ground_spacing": 0.10,  # m
+    "jitter": 0.0025,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 3.0,  # m
 }
 
 #: Half the width of the entrance's recess and of the strip kept clear of cars before it (m).
@@ -67,8 +69,11 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     require(0.3 <= bay <= 3.0, NAME, "bay_depth must be 0.3-3 m")
     require(p["bays"] <= 4, NAME, "bays must be 0-4")
     # Cars (1.9 m wide) stand 1.2 m in front of the bays; they and the front must clear the free radius.
-    require(p["facade_distance"] - bay - 3.1 >= p["free_radius"], NAME,
-            "facade_distance is too small: the cars would stand within free_radius of the origin")
+    require(
+        p["facade_distance"] - bay - 3.1 >= p["free_radius"],
+        NAME,
+        "facade_distance is too small: the cars would stand within free_radius of the origin",
+    )
     require(p["open_length"] >= 36.0, NAME, "open_length must be >= 36 m (the goal zone ends at 34 m)")
     require(p["ground_width"] >= 16.0, NAME, "ground_width must be >= 16 m (the goal zone is 16 m wide)")
     require(p["wall_spacing"] > 0 and p["ground_spacing"] > 0, NAME, "spacings must be > 0")
@@ -80,8 +85,11 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     parts = [_front(rng, p, bays, storeys)]
     # The building's sides and back, plain: only their corners are ever in view.
     back = xf - p["building_depth"]
-    for start, end in (((xf, length / 2), (back, length / 2)), ((back, length / 2), (back, -length / 2)),
-                       ((back, -length / 2), (xf, -length / 2))):
+    for start, end in (
+        ((xf, length / 2), (back, length / 2)),
+        ((back, length / 2), (back, -length / 2)),
+        ((back, -length / 2), (xf, -length / 2)),
+    ):
         parts.append(wall(rng, start, end, 0.0, height, s, j))
     parts += _cars(rng, p, xf + bay + 1.2)
 
@@ -92,8 +100,11 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
         return ~inside_bay
 
     half_w = p["ground_width"] / 2
-    parts.append(heightfield_points(rng, Heightfield.flat(), (xf, p["open_length"]), (-half_w, half_w),
-                                    p["ground_spacing"], j, keep=on_ground))
+    parts.append(
+        heightfield_points(
+            rng, Heightfield.flat(), (xf, p["open_length"]), (-half_w, half_w), p["ground_spacing"], j, keep=on_ground
+        )
+    )
     return finish(NAME, DESCRIPTION, seed, p, stack(parts), zones=zones(p))
 
 
@@ -125,15 +136,16 @@ def _front(rng: np.random.Generator, p: dict, bays: list, storeys: int) -> np.nd
     edges = [-half] + [y for span in bays for y in span] + [half]
     for k in range(len(edges) - 1):
         y0, y1 = edges[k], edges[k + 1]
-        x = xf + bay if k % 2 else xf   # odd segments are the bays' fronts
+        x = xf + bay if k % 2 else xf  # odd segments are the bays' fronts
         openings = facade_openings(rng, y1 - y0, storeys, door=False, recess_fraction=1.0)
-        if y0 < 0.0 < y1 and x == xf:   # the entrance, set 0.4 m into the front
+        if y0 < 0.0 < y1 and x == xf:  # the entrance, set 0.4 m into the front
             entrance = Opening(-y0 - ENTRANCE_HALF, 0.0, -y0 + ENTRANCE_HALF, 2.4, 0.4)
-            openings = [o for o in openings if o.u1 < entrance.u0 - 0.3 or o.u0 > entrance.u1 + 0.3
-                        or o.v0 > entrance.v1 + 0.3]   # no ground-floor window over the entrance
+            openings = [
+                o for o in openings if o.u1 < entrance.u0 - 0.3 or o.u0 > entrance.u1 + 0.3 or o.v0 > entrance.v1 + 0.3
+            ]  # no ground-floor window over the entrance
             openings.append(entrance)
         parts.append(wall(rng, (x, y0), (x, y1), 0.0, height, s, j, openings))
-    for y0, y1 in bays:   # the bays' sides
+    for y0, y1 in bays:  # the bays' sides
         parts.append(wall(rng, (xf, y0), (xf + bay, y0), 0.0, height, s, j))
         parts.append(wall(rng, (xf + bay, y1), (xf, y1), 0.0, height, s, j))
     return stack(parts)
@@ -152,6 +164,6 @@ def _cars(rng: np.random.Generator, p: dict, x_back: float) -> list:
     for k in sorted(rng.choice(len(slots), size=p["cars"], replace=False)):
         size = np.array([rng.uniform(4.2, 4.8), rng.uniform(1.7, 1.9), rng.uniform(1.4, 1.6)])
         y = slots[k] + rng.uniform(-0.2, 0.2)
-        yaw = np.pi / 2 + rng.uniform(-0.05, 0.05)   # the car's length along y
+        yaw = np.pi / 2 + rng.uniform(-0.05, 0.05)  # the car's length along y
         parts.append(box(rng, (x_back + size[1] / 2, y, 0.0), size, yaw, p["wall_spacing"], p["jitter"]))
     return parts

@@ -28,8 +28,12 @@ class Zone(NamedTuple):
 
     def contains(self, x, y):
         """Whether (x, y) lies in the zone (arrays broadcast)."""
-        return ((np.asarray(x) >= self.xmin) & (np.asarray(x) <= self.xmax)
-                & (np.asarray(y) >= self.ymin) & (np.asarray(y) <= self.ymax))
+        return (
+            (np.asarray(x) >= self.xmin)
+            & (np.asarray(x) <= self.xmax)
+            & (np.asarray(y) >= self.ymin)
+            & (np.asarray(y) <= self.ymax)
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,8 +81,9 @@ def resolve_params(scene: str, defaults: dict, given: dict) -> dict:
     integers stay integers >= 0, numbers are finite and >= 0, flags are bools."""
     unknown = sorted(set(given) - set(defaults))
     if unknown:
-        raise Lf3pmError(f"scene {scene!r} has no parameter {unknown[0]!r}; "
-                         f"its parameters: {', '.join(sorted(defaults))}")
+        raise Lf3pmError(
+            f"scene {scene!r} has no parameter {unknown[0]!r}; its parameters: {', '.join(sorted(defaults))}"
+        )
     params = dict(defaults)
     for key, value in given.items():
         default = defaults[key]
@@ -86,16 +91,19 @@ def resolve_params(scene: str, defaults: dict, given: dict) -> dict:
             ok = isinstance(value, (bool, np.bool_))
             value = bool(value) if ok else value
         elif isinstance(default, numbers.Integral):
-            ok = (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= 0)
+            ok = isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= 0
             value = int(value) if ok else value
         else:
-            ok = (isinstance(value, numbers.Real) and not isinstance(value, bool)
-                  and math.isfinite(value) and value >= 0)
+            ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value) and value >= 0
             value = float(value) if ok else value
         if not ok:
-            kind = ("true or false" if isinstance(default, bool) else
-                    "an integer >= 0" if isinstance(default, numbers.Integral) else
-                    "a finite number >= 0")
+            kind = (
+                "true or false"
+                if isinstance(default, bool)
+                else "an integer >= 0"
+                if isinstance(default, numbers.Integral)
+                else "a finite number >= 0"
+            )
             raise Lf3pmError(f"scene {scene!r}: parameter {key!r} must be {kind}, got {value!r}")
         params[key] = value
     return params
@@ -107,8 +115,7 @@ def require(condition: bool, scene: str, message: str) -> None:
         raise Lf3pmError(f"scene {scene!r}: {message}")
 
 
-def free_band_violations(points: np.ndarray, x: float, y: float, ground_z: float,
-                         radius: float) -> np.ndarray:
+def free_band_violations(points: np.ndarray, x: float, y: float, ground_z: float, radius: float) -> np.ndarray:
     """The points within ``radius`` (horizontally) of (x, y) between
     ground_z + FREE_BAND_LOW and ground_z + FREE_BAND_HIGH."""
     near = np.hypot(points[:, 0] - x, points[:, 1] - y) < radius
@@ -124,8 +131,15 @@ def mow(points: np.ndarray, x: float, y: float, radius: float, ground, height: f
     return points[~(near & high)]
 
 
-def finish(name: str, description: str, seed: int, params: dict, points: np.ndarray,
-           ground_z: float = 0.0, zones: dict | None = None) -> Scene:
+def finish(
+    name: str,
+    description: str,
+    seed: int,
+    params: dict,
+    points: np.ndarray,
+    ground_z: float = 0.0,
+    zones: dict | None = None,
+) -> Scene:
     """Packs the points into a Scene, after checking that the reference pose is free."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     require(params["sensor_height"] > 0, name, "sensor_height must be > 0")
@@ -133,10 +147,22 @@ def finish(name: str, description: str, seed: int, params: dict, points: np.ndar
     bad = free_band_violations(points, 0.0, 0.0, ground_z, radius)
     if len(bad):
         closest = float(np.hypot(bad[:, 0], bad[:, 1]).min())
-        require(False, name, f"free_radius {radius:g} m is too large: {len(bad)} points of the scene "
-                             f"lie within it (the closest {closest:.2f} m from the origin)")
+        require(
+            False,
+            name,
+            f"free_radius {radius:g} m is too large: {len(bad)} points of the scene "
+            f"lie within it (the closest {closest:.2f} m from the origin)",
+        )
     points.setflags(write=False)
     pose = (0.0, 0.0, float(ground_z + params["sensor_height"]), 0.0)
     zones = {key: Zone(*map(float, rect)) for key, rect in (zones or {}).items()}
-    return Scene(name=name, points=points, reference_pose=pose, free_radius=float(radius),
-                 description=description, seed=seed, params=dict(params), zones=zones)
+    return Scene(
+        name=name,
+        points=points,
+        reference_pose=pose,
+        free_radius=float(radius),
+        description=description,
+        seed=seed,
+        params=dict(params),
+        zones=zones,
+    )

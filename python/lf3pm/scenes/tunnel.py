@@ -29,26 +29,28 @@ from lf3pm.scenes.geometry import Heightfield, box, heightfield_points, rectangl
 from lf3pm.scenes.scene import Scene, Zone, check_seed, finish, require, resolve_params
 
 NAME = "tunnel"
-DESCRIPTION = ("Degenerate along x: a 60 m tunnel (smooth walls, floor, ceiling) and, 8 m beside it, "
-               "an open lane with pilasters, niches, pillars and crates, between two bare plazas; "
-               "walls 5 cm, ground 10 cm; ~0.62 M points by default.")
+DESCRIPTION = (
+    "Degenerate along x: a 60 m tunnel (smooth walls, floor, ceiling) and, 8 m beside it, "
+    "an open lane with pilasters, niches, pillars and crates, between two bare plazas; "
+    "walls 5 cm, ground 10 cm; ~0.62 M points by default."
+)
 DEFAULTS = {
-    "length": 60.0,             # m, tunnel and lane along x, centred on the origin
-    "width": 4.0,               # m, the tunnel's inside, y from -width/2 to width/2
-    "height": 3.0,              # m, walls (and the ceiling) of the tunnel and the lane
+    "length": 60.0,  # m, tunnel and lane along x, centred on the origin
+    "width": 4.0,  # m, the tunnel's inside, y from -width/2 to width/2
+    "height": 3.0,  # m, walls (and the ceiling) of the tunnel and the lane
     "ceiling": True,
-    "mouth_length": 2.0,        # m the tunnel sticks out of the portal walls into each plaza
-    "detour_offset": 8.0,       # m, tunnel axis to the lane's centre line
-    "detour_width": 7.0,        # m, the lane between its walls
-    "plaza_depth": 12.0,        # m of bare ground beyond each portal
-    "pillars": 16,              # in two rows along the lane
-    "crates": 10,               # along the lane's walls
-    "feature_pitch": 4.0,       # m, mean spacing of pilasters, niches and openings along a lane wall
-    "wall_spacing": 0.05,       # m
-    "ground_spacing": 0.10,     # m
-    "jitter": 0.0025,           # m
-    "sensor_height": 1.0,       # m
-    "free_radius": 1.5,         # m
+    "mouth_length": 2.0,  # m the tunnel sticks out of the portal walls into each plaza
+    "detour_offset": 8.0,  # m, tunnel axis to the lane's centre line
+    "detour_width": 7.0,  # m, the lane between its walls
+    "plaza_depth": 12.0,  # m of bare ground beyond each portal
+    "pillars": 16,  # in two rows along the lane
+    "crates": 10,  # along the lane's walls
+    "feature_pitch": 4.0,  # m, mean spacing of pilasters, niches and openings along a lane wall
+    "wall_spacing": 0.05,  # m
+    "ground_spacing": 0.10,  # m
+    "jitter": 0.0025,  # m
+    "sensor_height": 1.0,  # m
+    "free_radius": 1.5,  # m
 }
 
 #: m of plaza ground beyond the tunnel's and the lane's outer walls, across y.
@@ -65,8 +67,7 @@ def zones(params: dict) -> dict:
     tunnel's west mouth, ``goal`` in front of its east mouth, 6-10 m out, within
     1.5 m of the axis."""
     half = params["length"] / 2
-    return {"start": Zone(-half - 10.0, -1.5, -half - 6.0, 1.5),
-            "goal": Zone(half + 6.0, -1.5, half + 10.0, 1.5)}
+    return {"start": Zone(-half - 10.0, -1.5, -half - 6.0, 1.5), "goal": Zone(half + 6.0, -1.5, half + 10.0, 1.5)}
 
 
 def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
@@ -74,16 +75,21 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     seed = check_seed(seed)
     p = resolve_params(NAME, DEFAULTS, params)
     half, w, h = p["length"] / 2, p["width"], p["height"]
-    lane_in = p["detour_offset"] - p["detour_width"] / 2   # y of the lane's inner wall
+    lane_in = p["detour_offset"] - p["detour_width"] / 2  # y of the lane's inner wall
     lane_out = p["detour_offset"] + p["detour_width"] / 2
     require(p["length"] >= 20.0, NAME, "length must be >= 20 m")
-    require(w >= 2.0 and p["free_radius"] < w / 2, NAME,
-            "width must be >= 2 m and exceed twice free_radius")
+    require(w >= 2.0 and p["free_radius"] < w / 2, NAME, "width must be >= 2 m and exceed twice free_radius")
     require(h > 2.5, NAME, "height must exceed 2.5 m (the free band)")
-    require(p["detour_width"] >= 6.5, NAME,
-            "detour_width must be >= 6.5 m (crates, pillars and a clear lane 2.5 m wide between them)")
-    require(lane_in >= w / 2 + 1.0, NAME,
-            "detour_offset is too small: the block between the tunnel and the lane must be >= 1 m thick")
+    require(
+        p["detour_width"] >= 6.5,
+        NAME,
+        "detour_width must be >= 6.5 m (crates, pillars and a clear lane 2.5 m wide between them)",
+    )
+    require(
+        lane_in >= w / 2 + 1.0,
+        NAME,
+        "detour_offset is too small: the block between the tunnel and the lane must be >= 1 m thick",
+    )
     require(p["plaza_depth"] >= 11.0, NAME, "plaza_depth must be >= 11 m (the zones lie 6-10 m out)")
     require(p["mouth_length"] <= 4.0, NAME, "mouth_length must be <= 4 m (the zones start 6 m out)")
     require(p["feature_pitch"] >= 1.5, NAME, "feature_pitch must be >= 1.5 m")
@@ -95,8 +101,10 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     # The tunnel: sheets that end in free edges beyond the portals, so that no surface
     # facing along the axis meets a mouth's rim, where rays from inside graze it.
     tube = half + p["mouth_length"]
-    parts = [wall(rng, (-tube, -w / 2), (tube, -w / 2), 0.0, h, s, j),
-             wall(rng, (-tube, w / 2), (tube, w / 2), 0.0, h, s, j)]
+    parts = [
+        wall(rng, (-tube, -w / 2), (tube, -w / 2), 0.0, h, s, j),
+        wall(rng, (-tube, w / 2), (tube, w / 2), 0.0, h, s, j),
+    ]
     if p["ceiling"]:
         parts.append(rectangle(rng, (-tube, -w / 2, h), ex, ey, 2 * tube, w, s, j))
     # Portal walls at x = -+length/2 across the plazas' width, facing them; the lane opens
@@ -122,13 +130,22 @@ def build(seed: int = CONFIG.scene.seed, **params) -> Scene:
     parts += _crates(rng, p, half, lane_walls)
 
     def on_ground(x, y):
-        plaza = (np.abs(x) >= half)
+        plaza = np.abs(x) >= half
         tunnel = np.abs(y) < w / 2
         lane = (y > lane_in) & (y < lane_out)
         return plaza | tunnel | lane
 
-    parts.append(heightfield_points(rng, Heightfield.flat(), (-half - p["plaza_depth"], half + p["plaza_depth"]),
-                                    (y_lo, y_hi), p["ground_spacing"], j, keep=on_ground))
+    parts.append(
+        heightfield_points(
+            rng,
+            Heightfield.flat(),
+            (-half - p["plaza_depth"], half + p["plaza_depth"]),
+            (y_lo, y_hi),
+            p["ground_spacing"],
+            j,
+            keep=on_ground,
+        )
+    )
     return finish(NAME, DESCRIPTION, seed, p, stack(parts), zones=zones(p))
 
 
@@ -145,7 +162,7 @@ def _wall_features(rng: np.random.Generator, p: dict, outer: bool):
         width = 0.4 if kind == "pilaster" else rng.uniform(1.0, 2.0)
         if u + width > length - 1.0:
             break
-        if kind == "pilaster":   # a slot in the wall that the pilaster's back face fills
+        if kind == "pilaster":  # a slot in the wall that the pilaster's back face fills
             openings.append(Opening(u, 0.0, u + width, p["height"], 0.0))
             pilasters.append((u, u + width))
         elif kind == "niche":
@@ -169,9 +186,16 @@ def _pillars(rng: np.random.Generator, p: dict, half: float) -> list:
         slack = span - count * 3.0
         xs = -half + 2.0 + np.sort(rng.uniform(0.0, slack, count)) + 3.0 * np.arange(count) + 1.5
         for x in xs:
-            parts.append(box(rng, (x, p["detour_offset"] + side * PILLAR_ROW, 0.0),
-                             (PILLAR, PILLAR, p["height"]), rng.choice([0.0, math.pi / 4]),
-                             p["wall_spacing"], p["jitter"]))
+            parts.append(
+                box(
+                    rng,
+                    (x, p["detour_offset"] + side * PILLAR_ROW, 0.0),
+                    (PILLAR, PILLAR, p["height"]),
+                    rng.choice([0.0, math.pi / 4]),
+                    p["wall_spacing"],
+                    p["jitter"],
+                )
+            )
     return parts
 
 

@@ -31,8 +31,14 @@ def scatter(rng: np.random.Generator, count: int, x_range, y_range, keep=None) -
     return xy
 
 
-def grass_tufts(rng: np.random.Generator, terrain: Heightfield, xy, blades_per_tuft: float = 9.0,
-                height=(0.06, 0.30), spacing: float = BLADE_SPACING) -> np.ndarray:
+def grass_tufts(
+    rng: np.random.Generator,
+    terrain: Heightfield,
+    xy,
+    blades_per_tuft: float = 9.0,
+    height=(0.06, 0.30),
+    spacing: float = BLADE_SPACING,
+) -> np.ndarray:
     """Tufts of grass at the positions ``xy``: a Poisson number of blades each,
     rising from within 4 cm of the tuft's centre, splayed outwards (0-55 degrees
     from vertical) and drooping, as long as the tuft is high (heights uniform
@@ -57,8 +63,7 @@ def grass_tufts(rng: np.random.Generator, terrain: Heightfield, xy, blades_per_t
     return blades(rng, base, length, width, tilt, azimuth, bend, spacing)
 
 
-def weeds(rng: np.random.Generator, terrain: Heightfield, xy,
-          spacing: float = LEAF_SPACING) -> np.ndarray:
+def weeds(rng: np.random.Generator, terrain: Heightfield, xy, spacing: float = LEAF_SPACING) -> np.ndarray:
     """Weeds at the positions ``xy``, half of them rosettes (5-9 broad leaves
     lying 10-50 degrees off the ground) and half tall weeds (a stem 25-80 cm
     with 3-8 leaves in random orientations along it)."""
@@ -78,8 +83,7 @@ def weeds(rng: np.random.Generator, terrain: Heightfield, xy,
     out = np.column_stack([np.cos(heading) * np.cos(lift), np.sin(heading) * np.cos(lift), np.sin(lift)])
     centre = np.column_stack([rxy[w], rz[w] + 0.01]) + out * size[:, None]
     side = np.column_stack([-np.sin(heading), np.cos(heading), np.zeros(w.size)])
-    parts.append(leaves(rng, centre, np.cross(out, side), size, size * rng.uniform(0.3, 0.6, w.size),
-                        spacing))
+    parts.append(leaves(rng, centre, np.cross(out, side), size, size * rng.uniform(0.3, 0.6, w.size), spacing))
     # Tall weeds: a stem and leaves along it.
     txy, tz = xy[~rosette], ground[~rosette]
     m = len(txy)
@@ -88,23 +92,34 @@ def weeds(rng: np.random.Generator, terrain: Heightfield, xy,
         tilt = np.radians(rng.uniform(0.0, 15.0, m))
         azimuth = rng.uniform(0.0, 2.0 * math.pi, m)
         base = np.column_stack([txy, tz - 0.01])
-        parts.append(blades(rng, base, length, rng.uniform(0.003, 0.007, m), tilt, azimuth,
-                            np.radians(rng.uniform(0.0, 20.0, m)), BLADE_SPACING))
+        parts.append(
+            blades(
+                rng,
+                base,
+                length,
+                rng.uniform(0.003, 0.007, m),
+                tilt,
+                azimuth,
+                np.radians(rng.uniform(0.0, 20.0, m)),
+                BLADE_SPACING,
+            )
+        )
         counts = rng.integers(3, 9, m)
         s = np.repeat(np.arange(m), counts)
         frac = rng.uniform(0.2, 1.0, s.size)
-        axis = np.column_stack([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth),
-                                np.cos(tilt)])
+        axis = np.column_stack([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), np.cos(tilt)])
         size = rng.uniform(0.02, 0.06, s.size)
         direction = unit(rng.normal(size=(s.size, 3)) * [1.0, 1.0, 0.4])
         centre = base[s] + (frac * length[s])[:, None] * axis[s] + direction * size[:, None]
-        parts.append(leaves(rng, centre, rng.normal(size=(s.size, 3)), size,
-                            size * rng.uniform(0.3, 0.6, s.size), spacing))
+        parts.append(
+            leaves(rng, centre, rng.normal(size=(s.size, 3)), size, size * rng.uniform(0.3, 0.6, s.size), spacing)
+        )
     return stack(parts)
 
 
-def bushes(rng: np.random.Generator, terrain: Heightfield, xy, radius=(0.3, 0.9),
-           spacing: float = LEAF_SPACING) -> np.ndarray:
+def bushes(
+    rng: np.random.Generator, terrain: Heightfield, xy, radius=(0.3, 0.9), spacing: float = LEAF_SPACING
+) -> np.ndarray:
     """Bushes at the positions ``xy``: canopies ``radius`` wide (uniform in the
     range), 0.6-1.2 times as high as wide, resting on the ground."""
     xy = np.asarray(xy, dtype=float).reshape(-1, 2)
@@ -120,9 +135,18 @@ def bushes(rng: np.random.Generator, terrain: Heightfield, xy, radius=(0.3, 0.9)
     return points[points[:, 2] > terrain(points[:, 0], points[:, 1]) - 0.02]
 
 
-def meadow_cover(rng: np.random.Generator, terrain: Heightfield, x_range, y_range, keep=None,
-                 tufts_per_m2: float = 6.0, blades_per_tuft: float = 9.0, weeds_per_m2: float = 0.3,
-                 bushes_per_100m2: float = 1.5, bush_keep=None) -> np.ndarray:
+def meadow_cover(
+    rng: np.random.Generator,
+    terrain: Heightfield,
+    x_range,
+    y_range,
+    keep=None,
+    tufts_per_m2: float = 6.0,
+    blades_per_tuft: float = 9.0,
+    weeds_per_m2: float = 0.3,
+    bushes_per_100m2: float = 1.5,
+    bush_keep=None,
+) -> np.ndarray:
     """Grass tufts, weeds and bushes scattered uniformly over the rectangle.
 
     ``keep(x, y) -> bool array`` says where vegetation may grow; bushes also
@@ -131,8 +155,7 @@ def meadow_cover(rng: np.random.Generator, terrain: Heightfield, x_range, y_rang
     area = (x_range[1] - x_range[0]) * (y_range[1] - y_range[0])
     tufts = scatter(rng, rng.poisson(tufts_per_m2 * area), x_range, y_range, keep)
     weed_xy = scatter(rng, rng.poisson(weeds_per_m2 * area), x_range, y_range, keep)
-    bush_xy = scatter(rng, rng.poisson(bushes_per_100m2 * area / 100.0), x_range, y_range,
-                      bush_keep or keep)
-    return stack([grass_tufts(rng, terrain, tufts, blades_per_tuft),
-                  weeds(rng, terrain, weed_xy),
-                  bushes(rng, terrain, bush_xy)])
+    bush_xy = scatter(rng, rng.poisson(bushes_per_100m2 * area / 100.0), x_range, y_range, bush_keep or keep)
+    return stack(
+        [grass_tufts(rng, terrain, tufts, blades_per_tuft), weeds(rng, terrain, weed_xy), bushes(rng, terrain, bush_xy)]
+    )

@@ -77,8 +77,17 @@ from ._model import Sensor, spinning_rings
 from ._presets import DEFAULT_INTEGRATION_TIME, PRESET_NAMES, find_preset, presets
 from ._yaml import load_sensor_yaml
 
-__all__ = ["Sensor", "SensorError", "as_sensor", "get_sensor", "list_sensors", "load_sensor_yaml", "PRESET_NAMES",
-           "spinning_rings", "DEFAULT_INTEGRATION_TIME"]
+__all__ = [
+    "Sensor",
+    "SensorError",
+    "as_sensor",
+    "get_sensor",
+    "list_sensors",
+    "load_sensor_yaml",
+    "PRESET_NAMES",
+    "spinning_rings",
+    "DEFAULT_INTEGRATION_TIME",
+]
 
 
 def _known() -> str:
@@ -100,11 +109,9 @@ def get_sensor(name_or_path, *, integration_time: float | None = None) -> Sensor
     if preset is not None:
         return _built_preset(preset.name, integration_time)
     text = name_or_path.strip()
-    if (text.lower().endswith((".yaml", ".yml")) or "/" in text or os.sep in text
-            or Path(text).expanduser().is_file()):
+    if text.lower().endswith((".yaml", ".yml")) or "/" in text or os.sep in text or Path(text).expanduser().is_file():
         return load_sensor_yaml(text, integration_time=integration_time)
-    raise SensorError(f"unknown sensor '{name_or_path}'; known sensors: {_known()} "
-                      "(or a path to a .yaml sensor file)")
+    raise SensorError(f"unknown sensor '{name_or_path}'; known sensors: {_known()} (or a path to a .yaml sensor file)")
 
 
 @lru_cache(maxsize=64)

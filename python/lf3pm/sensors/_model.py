@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field as dataclass_field
+from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 
 import numpy as np
 
@@ -80,8 +81,9 @@ class Sensor:
         err = np.abs(np.linalg.norm(dirs, axis=1) - 1.0)
         if err.max() > _UNIT_TOL:
             bad = int(err.argmax())
-            raise SensorError(f"{label}: direction {bad} is not a unit vector "
-                              f"(|d| = {float(np.linalg.norm(dirs[bad])):.6g})")
+            raise SensorError(
+                f"{label}: direction {bad} is not a unit vector (|d| = {float(np.linalg.norm(dirs[bad])):.6g})"
+            )
         # Read-only: presets are built once and shared (get_sensor), like the sensor itself.
         dirs.setflags(write=False)
         object.__setattr__(self, "directions", dirs)
@@ -108,21 +110,28 @@ class Sensor:
     def __eq__(self, other):
         if not isinstance(other, Sensor):
             return NotImplemented
-        return (self.name == other.name and self.description == other.description
-                and self.min_range == other.min_range and self.max_range == other.max_range
-                and self.range_noise_sigma == other.range_noise_sigma
-                and self.horizontal_fov == other.horizontal_fov
-                and self.approximate == other.approximate and self.source == other.source
-                and self.directions.shape == other.directions.shape
-                and bool(np.array_equal(self.directions, other.directions)))
+        return (
+            self.name == other.name
+            and self.description == other.description
+            and self.min_range == other.min_range
+            and self.max_range == other.max_range
+            and self.range_noise_sigma == other.range_noise_sigma
+            and self.horizontal_fov == other.horizontal_fov
+            and self.approximate == other.approximate
+            and self.source == other.source
+            and self.directions.shape == other.directions.shape
+            and bool(np.array_equal(self.directions, other.directions))
+        )
 
     def __hash__(self):
         return hash((self.name, self.num_rays, self.min_range, self.max_range))
 
     def __repr__(self):
-        return (f"Sensor(name={self.name!r}, num_rays={self.num_rays}, min_range={self.min_range:g}, "
-                f"max_range={self.max_range:g}, range_noise_sigma={self.range_noise_sigma:g}, "
-                f"horizontal_fov={math.degrees(self.horizontal_fov):g} deg, approximate={self.approximate})")
+        return (
+            f"Sensor(name={self.name!r}, num_rays={self.num_rays}, min_range={self.min_range:g}, "
+            f"max_range={self.max_range:g}, range_noise_sigma={self.range_noise_sigma:g}, "
+            f"horizontal_fov={math.degrees(self.horizontal_fov):g} deg, approximate={self.approximate})"
+        )
 
 
 def directions_from_angles(azimuth, elevation) -> np.ndarray:
@@ -168,7 +177,7 @@ def spinning_directions(elevations, azimuth_count: int, horizontal_fov: float = 
 # 2-D generalisation of the golden ratio. Every prefix is well spread, so a
 # longer integration time adds rays between the earlier ones, never repeats them.
 _PLASTIC = 1.324717957244746025960908854
-_R2 = (1.0 / _PLASTIC, 1.0 / _PLASTIC ** 2)
+_R2 = (1.0 / _PLASTIC, 1.0 / _PLASTIC**2)
 
 
 def r2_sequence(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -199,11 +208,11 @@ def ray_count(point_rate: float, integration_time: float, what: str) -> int:
         raise SensorError(f"{what}: integration_time must be a positive number of seconds, got {integration_time!r}")
     count = int(round(float(point_rate) * float(integration_time)))
     if count < 1:
-        raise SensorError(f"{what}: integration_time {integration_time:g} s gives no rays at "
-                          f"{point_rate:g} points/s")
+        raise SensorError(f"{what}: integration_time {integration_time:g} s gives no rays at {point_rate:g} points/s")
     if count > MAX_RAYS:
-        raise SensorError(f"{what}: integration_time {integration_time:g} s gives {count} rays, "
-                          f"more than the limit of {MAX_RAYS}")
+        raise SensorError(
+            f"{what}: integration_time {integration_time:g} s gives {count} rays, more than the limit of {MAX_RAYS}"
+        )
     return count
 
 

@@ -47,8 +47,9 @@ class _Reader:
             self.fail(key, "must not be empty")
         return value
 
-    def number(self, key: str, default: float | None = None, *, positive: bool = False,
-               non_negative: bool = False) -> float:
+    def number(
+        self, key: str, default: float | None = None, *, positive: bool = False, non_negative: bool = False
+    ) -> float:
         if key not in self.data:
             if default is None:
                 self.fail(key, "is missing")
@@ -105,8 +106,7 @@ def _read_mapping(path: Path) -> dict:
         problem = clip(getattr(exc, "problem", None) or "syntax error")
         raise SensorError(f"sensor file {path}: invalid YAML{where} ({problem})") from None
     if not isinstance(data, dict):
-        raise SensorError(f"sensor file {path}: expected a mapping of keys (name, min_range, ...), "
-                          f"got {_type(data)}")
+        raise SensorError(f"sensor file {path}: expected a mapping of keys (name, min_range, ...), got {_type(data)}")
     return data
 
 
@@ -130,12 +130,16 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
     spinning = [k for k in _SPINNING_KEYS if k in data]
     pattern = [k for k in _PATTERN_KEYS if k in data]
     if spinning and pattern:
-        raise SensorError(f"sensor file {path}: key '{pattern[0]}' cannot be combined with key '{spinning[0]}' "
-                          "(use either elevations_deg + azimuth_count or pattern_file + point_rate + "
-                          "integration_time)")
+        raise SensorError(
+            f"sensor file {path}: key '{pattern[0]}' cannot be combined with key '{spinning[0]}' "
+            "(use either elevations_deg + azimuth_count or pattern_file + point_rate + "
+            "integration_time)"
+        )
     if not spinning and not pattern:
-        raise SensorError(f"sensor file {path}: key 'elevations_deg' (with 'azimuth_count') or key "
-                          "'pattern_file' (with 'point_rate' and 'integration_time') is missing")
+        raise SensorError(
+            f"sensor file {path}: key 'elevations_deg' (with 'azimuth_count') or key "
+            "'pattern_file' (with 'point_rate' and 'integration_time') is missing"
+        )
 
     name = r.string("name")
     if len(name) > MAX_NAME:
@@ -149,8 +153,10 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
 
     if spinning:
         if integration_time is not None:
-            raise SensorError(f"sensor file {path}: integration_time applies only to the pattern_file form, "
-                              "not to a spinning sensor (elevations_deg)")
+            raise SensorError(
+                f"sensor file {path}: integration_time applies only to the pattern_file form, "
+                "not to a spinning sensor (elevations_deg)"
+            )
         elevations = r.number_list("elevations_deg")
         for i, e in enumerate(elevations):
             if not -90.0 <= e <= 90.0:
@@ -163,8 +169,10 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
             r.fail("azimuth_count", f"gives {len(elevations) * azimuth_count} rays, more than the limit of {MAX_RAYS}")
         fov = math.radians(fov_deg)
         dirs = spinning_directions(np.radians(elevations), azimuth_count, fov)
-        default_description = (f"Custom spinning sensor '{name}': {len(elevations)} beams x {azimuth_count} "
-                               f"columns over {fov_deg:g} deg ({dirs.shape[0]} rays).")
+        default_description = (
+            f"Custom spinning sensor '{name}': {len(elevations)} beams x {azimuth_count} "
+            f"columns over {fov_deg:g} deg ({dirs.shape[0]} rays)."
+        )
     else:
         pattern_name = r.string("pattern_file")
         pattern_path = Path(pattern_name).expanduser()
@@ -180,13 +188,23 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
         except (OSError, ValueError, EOFError) as exc:
             reason = f" ({exc.strerror})" if isinstance(exc, OSError) and exc.strerror else ""
             r.fail("pattern_file", f"names {pattern_path}, which is not a readable numeric .npy array{reason}")
-        if (not isinstance(pattern, np.ndarray) or pattern.ndim != 2 or pattern.shape[1] != 2
-                or pattern.shape[0] < 1 or not np.issubdtype(pattern.dtype, np.number)):
-            r.fail("pattern_file", f"names {pattern_path}, which must hold an (N, 2) numeric array of "
-                                   f"azimuth/elevation in radians, got shape {getattr(pattern, 'shape', None)}")
+        if (
+            not isinstance(pattern, np.ndarray)
+            or pattern.ndim != 2
+            or pattern.shape[1] != 2
+            or pattern.shape[0] < 1
+            or not np.issubdtype(pattern.dtype, np.number)
+        ):
+            r.fail(
+                "pattern_file",
+                f"names {pattern_path}, which must hold an (N, 2) numeric array of "
+                f"azimuth/elevation in radians, got shape {getattr(pattern, 'shape', None)}",
+            )
         if pattern.shape[0] > MAX_RAYS:
-            r.fail("pattern_file", f"names {pattern_path}, which holds {pattern.shape[0]:,} rays, more than the "
-                                   f"limit of {MAX_RAYS:,}")
+            r.fail(
+                "pattern_file",
+                f"names {pattern_path}, which holds {pattern.shape[0]:,} rays, more than the limit of {MAX_RAYS:,}",
+            )
         pattern = np.asarray(pattern, dtype=np.float64)
         if not np.isfinite(pattern).all():
             r.fail("pattern_file", f"names {pattern_path}, which holds NaN or infinite angles")
@@ -199,10 +217,20 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
         az = np.mod(pattern[:, 0] + math.pi, 2.0 * math.pi) - math.pi
         span = float(az.max() - az.min())
         fov = 2.0 * math.pi if span > 2.0 * math.pi - 1e-3 else max(span, 1e-6)
-        default_description = (f"Custom pattern sensor '{name}': {count} rays from {pattern_path.name} "
-                               f"({t:g} s at {point_rate:g} points/s).")
+        default_description = (
+            f"Custom pattern sensor '{name}': {count} rays from {pattern_path.name} "
+            f"({t:g} s at {point_rate:g} points/s)."
+        )
 
     description = r.string("description", default_description)
-    return Sensor(name=name, description=description, directions=dirs, min_range=min_range,
-                  max_range=max_range, range_noise_sigma=sigma, horizontal_fov=fov,
-                  approximate=False, source=source)
+    return Sensor(
+        name=name,
+        description=description,
+        directions=dirs,
+        min_range=min_range,
+        max_range=max_range,
+        range_noise_sigma=sigma,
+        horizontal_fov=fov,
+        approximate=False,
+        source=source,
+    )

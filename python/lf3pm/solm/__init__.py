@@ -4,8 +4,8 @@ of poses once per map, stored as Zarr, read by planners and people.
     from lf3pm.solm import Solm, build_solm, make_grid
 """
 
-from lf3pm.solm.build import build_solm
 from lf3pm.config import SPACES
+from lf3pm.solm.build import build_solm
 from lf3pm.solm.grid import SolmGrid, make_grid
 from lf3pm.solm.reader import Solm
 

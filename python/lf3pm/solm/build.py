@@ -50,14 +50,14 @@ def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
     instead; None otherwise."""
     origin, res = np.array([grid.x0, grid.y0]), grid.res
     end = origin + res * np.array([grid.nx, grid.ny])
-    lo, hi = np.percentile(points[::max(1, len(points) // STRAY_CHUNK), :2], STRAY_PERCENTILES, axis=0)
+    lo, hi = np.percentile(points[:: max(1, len(points) // STRAY_CHUNK), :2], STRAY_PERCENTILES, axis=0)
     if np.prod(np.clip(np.minimum(hi, end) - np.maximum(lo, origin), 0, None)) >= 0.5 * np.prod(end - origin):
         return None
     box_lo = origin + np.floor((lo - origin) / res) * res
-    box_hi = origin + (np.floor((hi - origin) / res) + 1) * res   # the cells holding the box, a point on its edge too
+    box_hi = origin + (np.floor((hi - origin) / res) + 1) * res  # the cells holding the box, a point on its edge too
     filled, outside = np.zeros(grid.ny * grid.nx, bool), 0
     for first in range(0, len(points), STRAY_CHUNK):
-        xy = points[first:first + STRAY_CHUNK, :2]
+        xy = points[first : first + STRAY_CHUNK, :2]
         outside += int(np.count_nonzero(np.any((xy < box_lo) | (xy > box_hi), axis=1)))
         ij = np.floor((xy - origin) / res)
         ij = ij[np.all((ij >= 0) & (ij < [grid.nx, grid.ny]), axis=1)].astype(np.int64)
@@ -66,20 +66,37 @@ def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
         return None
     bounds = " ".join(f"{round(v, 6):g}" for v in (*box_lo, *box_hi))
     x0, y0, x1, y1 = (round(float(v), 6) for v in (*origin, *end))
-    return (f"{filled.sum():,} of the SOLM grid's {filled.size:,} x-y cells hold a map point: stray points stretch "
-            f"it over x [{x0:g}, {x1:g}], y [{y0:g}, {y1:g}]; --bounds {bounds} (the {STRAY_PERCENTILES[0]:g} "
-            f"and {STRAY_PERCENTILES[1]:g} percentiles of x and y, in whole cells) holds all but "
-            f"{outside:,} of the {len(points):,} points and skips the empty cells")
+    return (
+        f"{filled.sum():,} of the SOLM grid's {filled.size:,} x-y cells hold a map point: stray points stretch "
+        f"it over x [{x0:g}, {x1:g}], y [{y0:g}, {y1:g}]; --bounds {bounds} (the {STRAY_PERCENTILES[0]:g} "
+        f"and {STRAY_PERCENTILES[1]:g} percentiles of x and y, in whole cells) holds all but "
+        f"{outside:,} of the {len(points):,} points and skips the empty cells"
+    )
 
 
-def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path, *, seed: int = DEFAULTS.scan.seed,
-               noise: float | None = DEFAULTS.scan.noise, robot_radius: float = DEFAULTS.solm.robot_radius,
-               floor_clearance: float = DEFAULTS.solm.floor_clearance, association: str = DEFAULTS.metric.association,
-               w1: float = DEFAULTS.metric.w1, threads: int = DEFAULTS.scan.threads,
-               yaw_reuse: bool = DEFAULTS.solm.yaw_reuse, ray_stride: int = DEFAULTS.solm.ray_stride,
-               tile: int = TILE, max_tiles: int | None = None, crop: bool = False,
-               crop_above: int = DEFAULTS.solm.crop_above, engine: str = "local", address: str | None = None,
-               progress=None) -> dict:
+def build_solm(
+    world: Map | MapPoints,
+    sensor: Sensor,
+    grid: SolmGrid,
+    out: Path,
+    *,
+    seed: int = DEFAULTS.scan.seed,
+    noise: float | None = DEFAULTS.scan.noise,
+    robot_radius: float = DEFAULTS.solm.robot_radius,
+    floor_clearance: float = DEFAULTS.solm.floor_clearance,
+    association: str = DEFAULTS.metric.association,
+    w1: float = DEFAULTS.metric.w1,
+    threads: int = DEFAULTS.scan.threads,
+    yaw_reuse: bool = DEFAULTS.solm.yaw_reuse,
+    ray_stride: int = DEFAULTS.solm.ray_stride,
+    tile: int = TILE,
+    max_tiles: int | None = None,
+    crop: bool = False,
+    crop_above: int = DEFAULTS.solm.crop_above,
+    engine: str = "local",
+    address: str | None = None,
+    progress=None,
+) -> dict:
     """Builds (or resumes) the SOLM of ``world`` (a Map, or MapPoints: a map not indexed
     whole, built on crops) for ``sensor`` (a Sensor or a preset name) on ``grid`` into the
     Zarr store ``out``. Cell c (linear index over the
@@ -109,8 +126,9 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         raise Lf3pmError(f"max_tiles must be None or an integer >= 0, got {max_tiles!r}")
     scan = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
     metric = validated(MetricConfig, "metric", association=association, w1=w1)
-    layout = validated(SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride,
-                       crop_above=crop_above)
+    layout = validated(
+        SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride, crop_above=crop_above
+    )
     if engine not in ENGINES:
         raise Lf3pmError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     sensor = as_sensor(sensor)
@@ -123,17 +141,38 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
     hint = stray_points_warning(world.points, grid)
     if hint is not None:
         warnings.warn(hint, UserWarning, stacklevel=2)
-    job = make_job(sensor, grid, tile=tile, noise=scan.noise_for(sensor), seed=scan.seed, metric=metric,
-                   robot_radius=layout.robot_radius, floor_clearance=floor_clearance, yaw_reuse=layout.yaw_reuse,
-                   ray_stride=layout.ray_stride)
-    attrs = {"lf3pm_version": __version__, "grid": grid.to_dict(), "sensor": sensor.name,
-             "sensor_rays": sensor.num_rays, "noise": job.noise, "seed": scan.seed,
-             "w1": metric.w1, "w2": 1.0 - metric.w1, "association": metric.association,
-             "robot_radius": job.robot_radius, "floor_clearance": job.floor_clearance, "map_sha256": world.sha256,
-             "map_source": world.source, "channels": list(CHANNELS),
-             "noise_stream": "linear cell index over the channel shape (yaw reuse: "
-                             "2D cell index * yaw_bins + sector)", "tile": tile,
-             "yaw_reuse": layout.yaw_reuse, "ray_stride": layout.ray_stride}
+    job = make_job(
+        sensor,
+        grid,
+        tile=tile,
+        noise=scan.noise_for(sensor),
+        seed=scan.seed,
+        metric=metric,
+        robot_radius=layout.robot_radius,
+        floor_clearance=floor_clearance,
+        yaw_reuse=layout.yaw_reuse,
+        ray_stride=layout.ray_stride,
+    )
+    attrs = {
+        "lf3pm_version": __version__,
+        "grid": grid.to_dict(),
+        "sensor": sensor.name,
+        "sensor_rays": sensor.num_rays,
+        "noise": job.noise,
+        "seed": scan.seed,
+        "w1": metric.w1,
+        "w2": 1.0 - metric.w1,
+        "association": metric.association,
+        "robot_radius": job.robot_radius,
+        "floor_clearance": job.floor_clearance,
+        "map_sha256": world.sha256,
+        "map_source": world.source,
+        "channels": list(CHANNELS),
+        "noise_stream": "linear cell index over the channel shape (yaw reuse: 2D cell index * yaw_bins + sector)",
+        "tile": tile,
+        "yaw_reuse": layout.yaw_reuse,
+        "ray_stride": layout.ray_stride,
+    }
     ground_robot = grid.space != "r3"
     if ground_robot:
         attrs["occupancy_factor"] = occupancy_factor(grid)
@@ -142,8 +181,7 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
 
         check_new_store(out)
         connect(address)  # an unreachable cluster fails before the store is touched
-    ground = (column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny)
-              if ground_robot else None)
+    ground = column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny) if ground_robot else None
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
     done = read_array(group, "done")
     ty_n, tx_n = tiles_shape(grid.ny, grid.nx, tile)
@@ -162,9 +200,11 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         stops the build in one line: the file, the finished tiles kept, how to resume."""
         nonlocal depth
         if not (out / "zarr.json").is_file():  # zarr would recreate the folders of a chunk it writes
-            raise StorageError(f"{out}/zarr.json: the store vanished during the build (removed, or its disk "
-                               f"unmounted); nothing of it is kept: remove what is left at {out}, then run "
-                               f"`lf3pm solm build {world.source} -o {out}` with the same options again")
+            raise StorageError(
+                f"{out}/zarr.json: the store vanished during the build (removed, or its disk "
+                f"unmounted); nothing of it is kept: remove what is left at {out}, then run "
+                f"`lf3pm solm build {world.source} -o {out}` with the same options again"
+            )
         depth += 1
         try:
             with writing(where):
@@ -172,10 +212,12 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
         except StorageError as err:
             if depth > 1:
                 raise
-            raise StorageError(f"{err}; the build stopped with {kept} of {ty_n * tx_n} tiles finished and kept "
-                               f"in {out}: free space or fix the storage, then run `lf3pm solm build "
-                               f"{world.source} -o {out}` with the same options (or the same build_solm call) "
-                               "again to resume it") from None
+            raise StorageError(
+                f"{err}; the build stopped with {kept} of {ty_n * tx_n} tiles finished and kept "
+                f"in {out}: free space or fix the storage, then run `lf3pm solm build "
+                f"{world.source} -o {out}` with the same options (or the same build_solm call) "
+                "again to resume it"
+            ) from None
         finally:
             depth -= 1
 
@@ -201,7 +243,7 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
             build_tiles(world, job, todo, ground, Path(out), finished)
     else:
         if isinstance(world, MapPoints) and not crop and world.size <= layout.crop_above:
-            world = world.indexed(scan.threads)   # small enough to index whole: faster than crops
+            world = world.indexed(scan.threads)  # small enough to index whole: faster than crops
         crop = crop or isinstance(world, MapPoints)
         margin = crop_margin(job, world) if crop else None
         for ty, tx in todo:
@@ -210,8 +252,12 @@ def build_solm(world: Map | MapPoints, sensor: Sensor, grid: SolmGrid, out: Path
             with storing(out):
                 cells = write_tile(group, job, ty, tx, arrays)
             finished(ty, tx, cells)
-    return {"tiles": ty_n * tx_n, "built_now": len(todo), "complete": kept == ty_n * tx_n,
-            "on_crops": engine == "ray" or bool(crop)}
+    return {
+        "tiles": ty_n * tx_n,
+        "built_now": len(todo),
+        "complete": kept == ty_n * tx_n,
+        "on_crops": engine == "ray" or bool(crop),
+    }
 
 
 def _integer(value) -> bool:

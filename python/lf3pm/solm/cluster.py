@@ -2,7 +2,8 @@
 
 Each task crops the map to what its tile can see (tiles.py) and indexes only that, so a
 worker's memory is bounded by the crop, not the map; the map's points travel once,
-through Ray's shared object store, and the driver needs no index of its own (MapPoints). A task writes its tile's chunks into the Zarr store
+through Ray's shared object store, and the driver needs no index of its own (MapPoints).
+A task writes its tile's chunks into the Zarr store
 (a path every node can reach) and the driver then sets the tile's done flag, so a tile
 counts only once its data are on disk: a killed worker's task is retried by Ray and
 rewrites the same chunks, and an interrupted build resumes where it stopped. The store
@@ -45,8 +46,10 @@ def connect(address: str | None) -> None:
     try:
         ray.init(address=address, include_dashboard=False, log_to_driver=False, configure_logging=False)
     except Exception as err:  # noqa: BLE001 - Ray raises many kinds; each is one line here
-        raise Lf3pmError(f"cannot join the Ray cluster at {address or 'a new local one'}: "
-                         f"{str(err).splitlines()[0] if str(err) else type(err).__name__}") from None
+        raise Lf3pmError(
+            f"cannot join the Ray cluster at {address or 'a new local one'}: "
+            f"{str(err).splitlines()[0] if str(err) else type(err).__name__}"
+        ) from None
 
 
 def build_tiles(world: Map | MapPoints, job: TileJob, todo: list, ground, out: Path, finished) -> None:
@@ -60,9 +63,22 @@ def build_tiles(world: Map | MapPoints, job: TileJob, todo: list, ground, out: P
     points, shared_job = ray.put(world.points), ray.put(job)
     margin = crop_margin(job, world)
     store = str(Path(out).resolve())
-    tile_of = {remote.remote(points, world.frame, world.association_params, world.source, world.sha256,
-                             shared_job, ty, tx, job.ground(ground, ty, tx), margin, store): (ty, tx)
-               for ty, tx in todo}
+    tile_of = {
+        remote.remote(
+            points,
+            world.frame,
+            world.association_params,
+            world.source,
+            world.sha256,
+            shared_job,
+            ty,
+            tx,
+            job.ground(ground, ty, tx),
+            margin,
+            store,
+        ): (ty, tx)
+        for ty, tx in todo
+    }
     pending = list(tile_of)
     while pending:
         # Whatever finished within a second: one wait per batch, not one per tile.
@@ -81,13 +97,25 @@ def build_tiles(world: Map | MapPoints, job: TileJob, todo: list, ground, out: P
             finished(ty, tx, cells)
 
 
-def solm_tile(points, frame, association_params: dict, source: str, sha256: str, job: TileJob, ty: int, tx: int,
-              ground, margin: float, store: str) -> int:
+def solm_tile(
+    points,
+    frame,
+    association_params: dict,
+    source: str,
+    sha256: str,
+    job: TileJob,
+    ty: int,
+    tx: int,
+    ground,
+    margin: float,
+    store: str,
+) -> int:
     """One tile on a worker: crop, index, compute, write its chunks; returns its cell count."""
     import zarr
 
-    crop = crop_points(points, frame, association_params, job.bounds(ty, tx), margin, source=source,
-                       sha256=sha256, threads=1)
+    crop = crop_points(
+        points, frame, association_params, job.bounds(ty, tx), margin, source=source, sha256=sha256, threads=1
+    )
     arrays = compute_tile(crop, job, ty, tx, ground, threads=1)
     return write_tile(zarr.open_group(store, mode="r+"), job, ty, tx, arrays)
 

@@ -29,8 +29,9 @@ def reduced(solm: Solm, channel: str, reduce: str) -> np.ndarray:
             return getattr(np, f"nan{reduce}")(finite, axis=0)
 
 
-def heat_map(solm: Solm, path: Path, *, channel: str = "q_n", reduce: str = "mean",
-             map_points: np.ndarray | None = None) -> None:
+def heat_map(
+    solm: Solm, path: Path, *, channel: str = "q_n", reduce: str = "mean", map_points: np.ndarray | None = None
+) -> None:
     """Writes a PNG of ``channel`` (log colour scale) over the map's top view."""
     fig, ax = new_figure()
     draw_heat_map(fig, ax, solm, channel=channel, reduce=reduce, map_points=map_points)
@@ -47,8 +48,9 @@ def new_figure():
     return plt.subplots(figsize=(9, 7), dpi=110)
 
 
-def draw_heat_map(fig, ax, solm: Solm, *, channel: str = "q_n", reduce: str = "mean",
-                  map_points: np.ndarray | None = None) -> None:
+def draw_heat_map(
+    fig, ax, solm: Solm, *, channel: str = "q_n", reduce: str = "mean", map_points: np.ndarray | None = None
+) -> None:
     """Draws ``channel`` (log colour scale), the obstacles in black and, under
     unknown cells, the map's points, with a colour bar and axis labels."""
     from matplotlib.colors import LogNorm
@@ -58,22 +60,43 @@ def draw_heat_map(fig, ax, solm: Solm, *, channel: str = "q_n", reduce: str = "m
     extent = (g.x0, g.x0 + g.nx * g.res, g.y0, g.y0 + g.ny * g.res)
     if map_points is not None:
         step = max(1, len(map_points) // 300_000)
-        ax.scatter(map_points[::step, 0], map_points[::step, 1], s=0.1, c="0.75", linewidths=0,
-                   zorder=0)  # under the heat map: shows through unknown cells only
+        ax.scatter(
+            map_points[::step, 0], map_points[::step, 1], s=0.1, c="0.75", linewidths=0, zorder=0
+        )  # under the heat map: shows through unknown cells only
     positive = layer[np.isfinite(layer) & (layer > 0)]
     norm = LogNorm(positive.min(), positive.max()) if len(positive) and channel.startswith("q") else None
-    image = ax.imshow(np.ma.masked_invalid(layer), origin="lower", extent=extent, cmap="viridis_r"
-                      if channel.startswith("q") else "viridis", norm=norm,
-                      interpolation="nearest", zorder=1)
+    image = ax.imshow(
+        np.ma.masked_invalid(layer),
+        origin="lower",
+        extent=extent,
+        cmap="viridis_r" if channel.startswith("q") else "viridis",
+        norm=norm,
+        interpolation="nearest",
+        zorder=1,
+    )
     blocked = solm.channel("obstacle")
     blocked = blocked.max(axis=0) if blocked.ndim == 3 else blocked
-    ax.imshow(np.ma.masked_equal(blocked, 0), origin="lower", extent=extent, cmap="Greys",
-              vmin=0, vmax=1, interpolation="nearest", zorder=2)
-    fig.colorbar(image, ax=ax, label=f"{channel} (lower = better localization)" if
-                 channel.startswith("q") else channel, shrink=0.85)
+    ax.imshow(
+        np.ma.masked_equal(blocked, 0),
+        origin="lower",
+        extent=extent,
+        cmap="Greys",
+        vmin=0,
+        vmax=1,
+        interpolation="nearest",
+        zorder=2,
+    )
+    fig.colorbar(
+        image,
+        ax=ax,
+        label=f"{channel} (lower = better localization)" if channel.startswith("q") else channel,
+        shrink=0.85,
+    )
     how = "" if g.space == "r2" else f", {reduce} over {'yaw' if g.space == 'se2' else 'z'}"
-    ax.set_title(f"SOLM {channel}{how}: {g.space}, {g.res} m, sensor {solm.attrs['sensor']} "
-                 "(black: obstacle, blank: unknown)", fontsize=9)
+    ax.set_title(
+        f"SOLM {channel}{how}: {g.space}, {g.res} m, sensor {solm.attrs['sensor']} (black: obstacle, blank: unknown)",
+        fontsize=9,
+    )
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal")
@@ -105,10 +128,12 @@ def export_ros(solm: Solm, folder: Path, *, reduce: str = "mean") -> list[Path]:
         with atomic_write(png) as fp:
             plt.imsave(fp, pixels[::-1], cmap="gray", vmin=0, vmax=255, format="png")
         yaml = folder / f"{channel}.yaml"
-        text = (f"# lf3pm SOLM channel {channel} ({'log ' if channel.startswith('q') else ''}range "
-                f"{lo:.6g} .. {hi:.6g} mapped to white .. black), sensor {solm.attrs['sensor']}\n"
-                f"image: {png.name}\nresolution: {g.res}\norigin: [{g.x0}, {g.y0}, 0.0]\n"
-                "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+        text = (
+            f"# lf3pm SOLM channel {channel} ({'log ' if channel.startswith('q') else ''}range "
+            f"{lo:.6g} .. {hi:.6g} mapped to white .. black), sensor {solm.attrs['sensor']}\n"
+            f"image: {png.name}\nresolution: {g.res}\norigin: [{g.x0}, {g.y0}, 0.0]\n"
+            "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+        )
         with atomic_write(yaml) as fp:
             fp.write(text.encode())
         written += [png, yaml]

@@ -84,16 +84,25 @@ _DEFAULT = SolmConfig()
 MAX_CELLS = _DEFAULT.max_cells
 
 
-def make_grid(world: Map, space: str = _DEFAULT.space, res: float = _DEFAULT.res, *, bounds=None,
-              yaw_bins: int = _DEFAULT.yaw_bins, height: float = _DEFAULT.height, z_levels=None,
-              max_cells: int = MAX_CELLS) -> SolmGrid:
+def make_grid(
+    world: Map,
+    space: str = _DEFAULT.space,
+    res: float = _DEFAULT.res,
+    *,
+    bounds=None,
+    yaw_bins: int = _DEFAULT.yaw_bins,
+    height: float = _DEFAULT.height,
+    z_levels=None,
+    max_cells: int = MAX_CELLS,
+) -> SolmGrid:
     """The grid over ``bounds`` (xmin, ymin, xmax, ymax; default the map's extent);
     Lf3pmError when it would hold more than ``max_cells`` poses (at most
     lf3pm.config.MAX_CELLS_CEILING) or when a cell would be wider than the grid
     (``res`` above the larger side of the bounds). The parameters are validated by
     :class:`lf3pm.config.SolmConfig`."""
-    config = validated(SolmConfig, "solm", space=space, res=res, bounds=bounds, yaw_bins=yaw_bins, height=height,
-                       max_cells=max_cells)
+    config = validated(
+        SolmConfig, "solm", space=space, res=res, bounds=bounds, yaw_bins=yaw_bins, height=height, max_cells=max_cells
+    )
     space, res, height, yaw_bins = config.space, config.res, config.height, config.yaw_bins
     lower, upper = world.bounds
     bounds = config.bounds or (lower[0], lower[1], upper[0], upper[1])
@@ -101,25 +110,33 @@ def make_grid(world: Map, space: str = _DEFAULT.space, res: float = _DEFAULT.res
     if not (xmin < xmax and ymin < ymax):
         raise Lf3pmError(f"bounds {bounds} are empty: need xmin < xmax and ymin < ymax")
     if xmax <= lower[0] or xmin >= upper[0] or ymax <= lower[1] or ymin >= upper[1]:
-        raise Lf3pmError(f"bounds {bounds} lie outside the map's extent "
-                         f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]")
+        raise Lf3pmError(
+            f"bounds {bounds} lie outside the map's extent "
+            f"x [{lower[0]:.2f}, {upper[0]:.2f}], y [{lower[1]:.2f}, {upper[1]:.2f}]"
+        )
     span = max(xmax - xmin, ymax - ymin)
     if res > span:
-        raise Lf3pmError(f"res {res:g} m is wider than the grid ({span:g} m along its longer side): one cell "
-                         "would cover it all; use a --res below that")
+        raise Lf3pmError(
+            f"res {res:g} m is wider than the grid ({span:g} m along its longer side): one cell "
+            "would cover it all; use a --res below that"
+        )
     # One axis first, in floats: at a res of 1e-300 m its count would not even convert to an int.
     along = max(xmax - xmin, ymax - ymin, upper[2] - lower[2] - height if space == "r3" else 0.0) / res
     if along > config.max_cells:
-        raise Lf3pmError(f"the grid would hold more than {config.max_cells:,} poses ({along:.3g} cells along one "
-                         f"axis at res {res:g} m): use a coarser --res or smaller --bounds, or raise --max-cells")
+        raise Lf3pmError(
+            f"the grid would hold more than {config.max_cells:,} poses ({along:.3g} cells along one "
+            f"axis at res {res:g} m): use a coarser --res or smaller --bounds, or raise --max-cells"
+        )
     nx, ny = math.ceil((xmax - xmin) / res), math.ceil((ymax - ymin) / res)
     layers = yaw_bins if space == "se2" else 1
     if space == "r3":
         layers = len(z_levels) if z_levels is not None else max(0, math.ceil((upper[2] - lower[2] - height) / res))
     cells = nx * ny * max(layers, 1)
     if cells > config.max_cells:
-        raise Lf3pmError(f"the grid would hold {cells:,} poses ({nx} x {ny} x {max(layers, 1)}), more than "
-                         f"{config.max_cells:,}: use a coarser --res or smaller --bounds, or raise --max-cells")
+        raise Lf3pmError(
+            f"the grid would hold {cells:,} poses ({nx} x {ny} x {max(layers, 1)}), more than "
+            f"{config.max_cells:,}: use a coarser --res or smaller --bounds, or raise --max-cells"
+        )
     levels = ()
     if space == "r3":
         if z_levels is None:
@@ -129,5 +146,4 @@ def make_grid(world: Map, space: str = _DEFAULT.space, res: float = _DEFAULT.res
             raise Lf3pmError(f"z levels must be finite, got {levels}")
         if not levels:
             raise Lf3pmError("an r3 grid needs at least one z level")
-    return SolmGrid(space, xmin, ymin, float(res), nx, ny, yaw_bins if space == "se2" else 1,
-                    levels, float(height))
+    return SolmGrid(space, xmin, ymin, float(res), nx, ny, yaw_bins if space == "se2" else 1, levels, float(height))

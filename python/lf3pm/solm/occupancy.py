@@ -39,8 +39,9 @@ def occupancy_factor(grid: SolmGrid) -> int:
     return max(1, min(wanted, fitting))
 
 
-def grid_occupancy(points: np.ndarray, grid: SolmGrid, ground: np.ndarray, robot_radius: float,
-                   floor_clearance: float) -> np.ndarray:
+def grid_occupancy(
+    points: np.ndarray, grid: SolmGrid, ground: np.ndarray, robot_radius: float, floor_clearance: float
+) -> np.ndarray:
     """(ny k, nx k) bool: the occupancy cells holding a map point in the body's height
     band, from ``floor_clearance`` above the local ground to ``robot_radius`` above the
     sensor. The local ground of an occupancy cell is the lowest point within the robot
@@ -54,5 +55,4 @@ def grid_occupancy(points: np.ndarray, grid: SolmGrid, ground: np.ndarray, robot
     window = 2 * math.ceil(robot_radius / cell) + 1
     local = minimum_filter(lowest, size=window, mode="nearest")  # inf where the window is empty
     floor = np.where(np.isfinite(local), np.maximum(local, coarse), coarse)
-    return occupied_cells(points, grid.x0, grid.y0, cell, floor + floor_clearance,
-                          floor + grid.height + robot_radius)
+    return occupied_cells(points, grid.x0, grid.y0, cell, floor + floor_clearance, floor + grid.height + robot_radius)

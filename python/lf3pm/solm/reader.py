@@ -40,14 +40,15 @@ class Solm:
         except Exception as err:  # noqa: BLE001 - any unreadable store is refused the same way
             raise Lf3pmError(f"{path} is not a SOLM store ({err.__class__.__name__})") from None
         if not np.all(read_array(group, "done")):
-            raise Lf3pmError(f"{path} is an unfinished build: run the same `lf3pm solm build` again "
-                             "to resume it")
+            raise Lf3pmError(f"{path} is an unfinished build: run the same `lf3pm solm build` again to resume it")
         try:
             spec["z_levels"] = tuple(spec["z_levels"])
             grid = SolmGrid(**spec)
         except Exception as err:  # noqa: BLE001 - attributes edited into any shape
-            raise CorruptStoreError(f"{path / 'zarr.json'}: the SOLM's grid attribute is malformed "
-                                    f"({err.__class__.__name__}); build the store again") from None
+            raise CorruptStoreError(
+                f"{path / 'zarr.json'}: the SOLM's grid attribute is malformed "
+                f"({err.__class__.__name__}); build the store again"
+            ) from None
         return cls(group, grid)
 
     @property
@@ -65,9 +66,11 @@ class Solm:
         bool array, True where a cell holds a map point in the body's height band, and k."""
         k = self.attrs.get("occupancy_factor")
         if k is None:
-            raise Lf3pmError("this SOLM has no occupancy layer, which the planner needs to keep the robot off "
-                             "thin obstacles (an older build, or an r3 grid): build it again "
-                             "into a new store")
+            raise Lf3pmError(
+                "this SOLM has no occupancy layer, which the planner needs to keep the robot off "
+                "thin obstacles (an older build, or an r3 grid): build it again "
+                "into a new store"
+            )
         return read_array(self._group, "occupied").astype(bool), int(k)
 
     def grid(self) -> tuple:
@@ -128,8 +131,7 @@ def _coordinates(**named) -> list[np.ndarray]:
         except ValueError:  # ragged nesting
             a = np.asarray(None)
         if a.dtype.kind not in "biuf":  # None, strings, objects and complex numbers are no coordinates
-            raise Lf3pmError(f"Solm.query: {name} must be a number or an array of numbers, got "
-                             f"{repr(value)[:QUOTED]}")
+            raise Lf3pmError(f"Solm.query: {name} must be a number or an array of numbers, got {repr(value)[:QUOTED]}")
         a = a.astype(np.float64)
         if not np.isfinite(a).all():
             raise Lf3pmError(f"Solm.query: {name} must be finite, got {a[~np.isfinite(a)].flat[0]}")

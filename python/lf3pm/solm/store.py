@@ -70,8 +70,10 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
         old = dict(group.attrs)
         differ = sorted(k for k in (set(old) | set(attrs)) - PROVENANCE if old.get(k) != attrs.get(k))
         if differ:
-            raise Lf3pmError(f"{path} was built from another map or with other parameters "
-                             f"(differs in: {', '.join(differ)}); remove it or choose another output")
+            raise Lf3pmError(
+                f"{path} was built from another map or with other parameters "
+                f"(differs in: {', '.join(differ)}); remove it or choose another output"
+            )
         return group
     check_new_store(path)
     try:
@@ -83,18 +85,24 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
         for name in MASKS:
             group.create_array(name, shape=shape, chunks=chunks, dtype="uint8", fill_value=0)
         if ground:
-            group.create_array("ground_z", shape=shape[-2:], chunks=(tile, tile), dtype="float32",
-                               fill_value=np.nan)
+            group.create_array("ground_z", shape=shape[-2:], chunks=(tile, tile), dtype="float32", fill_value=np.nan)
             k = int(attrs["occupancy_factor"])
-            group.create_array("occupied", shape=(shape[-2] * k, shape[-1] * k), chunks=(tile * k, tile * k),
-                               dtype="uint8", fill_value=0)
+            group.create_array(
+                "occupied",
+                shape=(shape[-2] * k, shape[-1] * k),
+                chunks=(tile * k, tile * k),
+                dtype="uint8",
+                fill_value=0,
+            )
         tiles = tiles_shape(*shape[-2:], tile)
         group.create_array("done", shape=tiles, chunks=tiles, dtype="uint8", fill_value=0)
         group["done"][...] = np.zeros(tiles, np.uint8)
     except OSError as err:
         shutil.rmtree(path, ignore_errors=True)  # never leave a half-created store
-        raise StorageError(f"{path}: cannot create the store ({_quote(err)}); nothing was kept: free space or "
-                           "fix the storage, then run the build again") from None
+        raise StorageError(
+            f"{path}: cannot create the store ({_quote(err)}); nothing was kept: free space or "
+            "fix the storage, then run the build again"
+        ) from None
     return group
 
 
@@ -112,7 +120,7 @@ def chunk_path(group, name: str, coords: tuple) -> Path:
 def _quote(err: BaseException) -> str:
     """The first line of ``err``, at most QUOTED characters: the cause a one-line error adds."""
     text = (getattr(err, "strerror", None) or str(err) or err.__class__.__name__).splitlines()[0]
-    return text if len(text) <= QUOTED else text[:QUOTED - 1] + "…"
+    return text if len(text) <= QUOTED else text[: QUOTED - 1] + "…"
 
 
 @contextmanager
@@ -130,28 +138,36 @@ def read_array(group, name: str) -> np.ndarray:
     does not decode is a CorruptStoreError, an OSError a StorageError, each naming the
     file (the failing chunk found by reading chunk by chunk) and saying what to do."""
     root = store_root(group)
-    rebuild = (f"the store was not changed; build it again (remove {root}, then run `lf3pm solm build "
-               f"{group.attrs.get('map_source', 'MAP')} -o {root}` with its options)")
+    rebuild = (
+        f"the store was not changed; build it again (remove {root}, then run `lf3pm solm build "
+        f"{group.attrs.get('map_source', 'MAP')} -o {root}` with its options)"
+    )
     try:
         array = group[name]
     except OSError as err:
-        raise StorageError(f"{root / name}: cannot read the SOLM's {name} ({_quote(err)}); {rebuild} "
-                           "once the storage is sound") from None
+        raise StorageError(
+            f"{root / name}: cannot read the SOLM's {name} ({_quote(err)}); {rebuild} once the storage is sound"
+        ) from None
     except KeyError:
-        raise CorruptStoreError(f"{root / name / 'zarr.json'}: the SOLM's {name} is missing (no metadata); "
-                                f"{rebuild}") from None
+        raise CorruptStoreError(
+            f"{root / name / 'zarr.json'}: the SOLM's {name} is missing (no metadata); {rebuild}"
+        ) from None
     except Exception as err:  # noqa: BLE001 - zarr reports unreadable metadata by JSON or value errors
-        raise CorruptStoreError(f"{root / name / 'zarr.json'}: the SOLM's {name} has unreadable metadata "
-                                f"({err.__class__.__name__}: {_quote(err)}); {rebuild}") from None
+        raise CorruptStoreError(
+            f"{root / name / 'zarr.json'}: the SOLM's {name} has unreadable metadata "
+            f"({err.__class__.__name__}: {_quote(err)}); {rebuild}"
+        ) from None
     try:
         return array[...]
     except Exception as err:  # noqa: BLE001 - codecs report a chunk that does not decode by any error class
         where = _failing_chunk(group, array, name) or root / name
         if isinstance(err, OSError):
-            raise StorageError(f"{where}: cannot read the SOLM's {name} ({_quote(err)}); {rebuild} once the "
-                               "storage is sound") from None
-        raise CorruptStoreError(f"{where}: a corrupt chunk of the SOLM's {name} ({err.__class__.__name__}: "
-                                f"{_quote(err)}); {rebuild}") from None
+            raise StorageError(
+                f"{where}: cannot read the SOLM's {name} ({_quote(err)}); {rebuild} once the storage is sound"
+            ) from None
+        raise CorruptStoreError(
+            f"{where}: a corrupt chunk of the SOLM's {name} ({err.__class__.__name__}: {_quote(err)}); {rebuild}"
+        ) from None
 
 
 def _failing_chunk(group, array, name: str) -> Path | None:

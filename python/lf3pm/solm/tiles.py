@@ -37,7 +37,7 @@ class TileJob:
 
     grid: SolmGrid
     tile: int
-    rays: np.ndarray               # the sensor's directions, or its sector rays under yaw reuse
+    rays: np.ndarray  # the sensor's directions, or its sector rays under yaw reuse
     sector_half_width: int | None  # yaw reuse: sectors summed on each side of a bin; None: off
     ray_weight: float
     min_range: float
@@ -69,18 +69,37 @@ class TileJob:
         return float(cx[0]), float(cy[0]), float(cx[-1]), float(cy[-1])
 
 
-def make_job(sensor, grid: SolmGrid, *, tile: int, noise: float, seed: int = DEFAULTS.scan.seed,
-             metric: MetricConfig = DEFAULTS.metric, robot_radius: float = DEFAULTS.solm.robot_radius,
-             floor_clearance: float = DEFAULTS.solm.floor_clearance, yaw_reuse: bool = DEFAULTS.solm.yaw_reuse,
-             ray_stride: int = DEFAULTS.solm.ray_stride) -> TileJob:
+def make_job(
+    sensor,
+    grid: SolmGrid,
+    *,
+    tile: int,
+    noise: float,
+    seed: int = DEFAULTS.scan.seed,
+    metric: MetricConfig = DEFAULTS.metric,
+    robot_radius: float = DEFAULTS.solm.robot_radius,
+    floor_clearance: float = DEFAULTS.solm.floor_clearance,
+    yaw_reuse: bool = DEFAULTS.solm.yaw_reuse,
+    ray_stride: int = DEFAULTS.solm.ray_stride,
+) -> TileJob:
     """The job of a build (values as given: build_solm validates them): the sensor's rays,
     thinned by ``ray_stride`` and, under ``yaw_reuse``, laid out in yaw sectors."""
     sectors = sector_layout(sensor, grid.yaw_bins) if yaw_reuse else None
     rays, ray_weight = thin_rays(sensor.directions if sectors is None else sectors[0], ray_stride)
-    return TileJob(grid=grid, tile=tile, rays=rays, sector_half_width=None if sectors is None else sectors[1],
-                   ray_weight=ray_weight, min_range=float(sensor.min_range), max_range=float(sensor.max_range),
-                   noise=float(noise), seed=int(seed), metric=metric, robot_radius=float(robot_radius),
-                   floor_clearance=float(floor_clearance))
+    return TileJob(
+        grid=grid,
+        tile=tile,
+        rays=rays,
+        sector_half_width=None if sectors is None else sectors[1],
+        ray_weight=ray_weight,
+        min_range=float(sensor.min_range),
+        max_range=float(sensor.max_range),
+        noise=float(noise),
+        seed=int(seed),
+        metric=metric,
+        robot_radius=float(robot_radius),
+        floor_clearance=float(floor_clearance),
+    )
 
 
 def crop_margin(job: TileJob, world: Map | MapPoints) -> float:
@@ -90,8 +109,9 @@ def crop_margin(job: TileJob, world: Map | MapPoints) -> float:
     return job.max_range + disc + neighbour
 
 
-def compute_tile(world: Map, job: TileJob, ty: int, tx: int, ground: np.ndarray | None,
-                 threads: int) -> dict[str, np.ndarray]:
+def compute_tile(
+    world: Map, job: TileJob, ty: int, tx: int, ground: np.ndarray | None, threads: int
+) -> dict[str, np.ndarray]:
     """The tile's channels and masks, each of shape (layers, tile rows, tile columns).
 
     ``world``: the whole map or the tile's crop; ``ground``: the tile's ground heights
@@ -119,7 +139,8 @@ def compute_tile(world: Map, job: TileJob, ty: int, tx: int, ground: np.ndarray 
     valid = ~unknown & ~obstacle
     cell_index = np.ravel_multi_index(
         np.meshgrid(np.arange(grid.layers), np.arange(grid.ny)[ys_], np.arange(grid.nx)[xs_], indexing="ij"),
-        (grid.layers, grid.ny, grid.nx))
+        (grid.layers, grid.ny, grid.nx),
+    )
     values = {name: np.full(layer_shape, np.nan, np.float32) for name in CHANNELS}
     degenerate = np.zeros(layer_shape, np.uint8)
     params = job.params(threads)
@@ -127,8 +148,15 @@ def compute_tile(world: Map, job: TileJob, ty: int, tx: int, ground: np.ndarray 
         # Validity depends on x, y only: every bin of a cell is valid or none is.
         cell2d = valid[0]
         positions = np.ascontiguousarray(np.stack([xx[cell2d], yy[cell2d], z[0][cell2d]], axis=1))
-        res = _core.evaluate_yaw_sectors(world.index, positions, cell_index[0][cell2d].astype(np.uint64),
-                                         job.rays, grid.yaw_bins, job.sector_half_width, params)
+        res = _core.evaluate_yaw_sectors(
+            world.index,
+            positions,
+            cell_index[0][cell2d].astype(np.uint64),
+            job.rays,
+            grid.yaw_bins,
+            job.sector_half_width,
+            params,
+        )
         for name in CHANNELS:
             values[name][:, cell2d] = res[name].T
         degenerate[:, cell2d] = res["degenerate"].T.astype(np.uint8)
@@ -138,8 +166,12 @@ def compute_tile(world: Map, job: TileJob, ty: int, tx: int, ground: np.ndarray 
         for name in CHANNELS:
             values[name][valid] = res[name]
         degenerate[valid] = res["degenerate"].astype(np.uint8)
-    return {**values, "obstacle": obstacle.astype(np.uint8), "unknown": unknown.astype(np.uint8),
-            "degenerate": degenerate}
+    return {
+        **values,
+        "obstacle": obstacle.astype(np.uint8),
+        "unknown": unknown.astype(np.uint8),
+        "degenerate": degenerate,
+    }
 
 
 def write_tile(group, job: TileJob, ty: int, tx: int, arrays: dict[str, np.ndarray]) -> int:

@@ -22,8 +22,10 @@ def sector_layout(sensor: Sensor, bins: int) -> tuple[np.ndarray, int]:
     width = 2 * math.pi / bins
     half = max(0, round(sensor.horizontal_fov / (2 * width) - 0.5))
     if 2 * half + 1 >= bins:
-        raise Lf3pmError(f"sector reuse needs a field of view narrower than the {bins} yaw bins "
-                         f"(sensor {sensor.name} spans {math.degrees(sensor.horizontal_fov):.0f} deg)")
+        raise Lf3pmError(
+            f"sector reuse needs a field of view narrower than the {bins} yaw bins "
+            f"(sensor {sensor.name} spans {math.degrees(sensor.horizontal_fov):.0f} deg)"
+        )
     d = sensor.directions
     azimuth = libm.atan2(d[:, 1], d[:, 0])
     folded = azimuth - np.round(azimuth / width) * width

@@ -8,5 +8,12 @@ from lf3pm.trajectory.sampling import interpolate_poses, sample_trajectory
 from lf3pm.trajectory.trajectory import Trajectory
 from lf3pm.trajectory.trajectory_optimizer import OptimizeResult, make_problem, optimize_trajectory
 
-__all__ = ["OptimizeResult", "Robot", "Trajectory", "interpolate_poses", "make_problem", "optimize_trajectory",
-           "sample_trajectory"]
+__all__ = [
+    "OptimizeResult",
+    "Robot",
+    "Trajectory",
+    "interpolate_poses",
+    "make_problem",
+    "optimize_trajectory",
+    "sample_trajectory",
+]

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import math
 
+from pydantic import ValidationError
+
 from lf3pm import _core
 from lf3pm.config import RobotConfig, describe
 from lf3pm.errors import Lf3pmError
-from pydantic import ValidationError
 
 
 class Robot(RobotConfig):
@@ -28,7 +29,7 @@ class Robot(RobotConfig):
             raise Lf3pmError(describe(err, "robot")) from None
 
     @classmethod
-    def from_config(cls, config: RobotConfig) -> "Robot":
+    def from_config(cls, config: RobotConfig) -> Robot:
         """The robot of a configuration's robot section."""
         return cls(**config.model_dump())
 
@@ -37,13 +38,11 @@ class Robot(RobotConfig):
         """True for diff and car robots (no lateral velocity)."""
         return self.kind != "omni"
 
-    def limits(self) -> "_core.RobotLimits":
+    def limits(self) -> _core.RobotLimits:
         """The C++ core's limits struct for this robot."""
         out = _core.RobotLimits()
         out.kind = getattr(_core.RobotKind, self.kind)
-        for name in ("vmax_lon", "vmax_lat", "wmax", "amax_lon", "amax_lat", "alpha_max", "min_turn_radius",
-                     "r_safe"):
+        for name in ("vmax_lon", "vmax_lat", "wmax", "amax_lon", "amax_lat", "alpha_max", "min_turn_radius", "r_safe"):
             setattr(out, name, float(getattr(self, name)))
         out.vmax_norm = float(self.vmax_norm) if self.vmax_norm is not None and math.isfinite(self.vmax_norm) else 0.0
         return out
-

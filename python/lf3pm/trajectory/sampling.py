@@ -18,16 +18,18 @@ def check_trajectory(t, poses) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(t, dtype=np.float64)
     poses = np.asarray(poses, dtype=np.float64)
     if t.ndim != 1 or poses.ndim != 2 or poses.shape != (len(t), 4):
-        raise Lf3pmError(f"a trajectory is times (N,) and poses (N, 4) of x y z yaw, "
-                         f"got shapes {t.shape} and {poses.shape}")
+        raise Lf3pmError(
+            f"a trajectory is times (N,) and poses (N, 4) of x y z yaw, got shapes {t.shape} and {poses.shape}"
+        )
     if len(t) < 2:
         raise Lf3pmError(f"a trajectory needs at least 2 poses, got {len(t)}")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(poses))):
         raise Lf3pmError("the trajectory has non-finite times or poses")
     if np.any(np.diff(t) <= 0):
         bad = int(np.argmax(np.diff(t) <= 0))
-        raise Lf3pmError(f"trajectory times must increase strictly: t[{bad + 1}] = {t[bad + 1]} "
-                         f"follows t[{bad}] = {t[bad]}")
+        raise Lf3pmError(
+            f"trajectory times must increase strictly: t[{bad + 1}] = {t[bad + 1]} follows t[{bad}] = {t[bad]}"
+        )
     return t, poses
 
 
@@ -43,8 +45,7 @@ def interpolate_poses(t, poses, times) -> np.ndarray:
     return np.column_stack(columns)
 
 
-def sample_trajectory(t, x, y, yaw, *, every: float = 1.0, by: str = "time",
-                      z=0.0) -> tuple[np.ndarray, np.ndarray]:
+def sample_trajectory(t, x, y, yaw, *, every: float = 1.0, by: str = "time", z=0.0) -> tuple[np.ndarray, np.ndarray]:
     """Samples the trajectory (t, x, y, yaw) at a constant interval.
 
     by="time": at t[0] + k * every seconds; by="distance": every ``every``

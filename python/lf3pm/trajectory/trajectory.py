@@ -69,16 +69,27 @@ class Trajectory:
         if not rate > 0:
             raise Lf3pmError(f"sample rate must be positive, got {rate}")
         if self.duration * rate > MAX_SAMPLES:
-            raise Lf3pmError(f"a trajectory of {self.duration:.3g} s has more than {MAX_SAMPLES:,} samples at "
-                             f"{rate:g} Hz: check the robot's limits")
+            raise Lf3pmError(
+                f"a trajectory of {self.duration:.3g} s has more than {MAX_SAMPLES:,} samples at "
+                f"{rate:g} Hz: check the robot's limits"
+            )
         t = np.arange(0.0, self.duration, 1.0 / rate)
         t = np.append(t, self.duration) if t[-1] < self.duration else t
         p, v = self.evaluate(t)
         a = self.acceleration(t)
-        return {"t": t, "x": p[:, 0], "y": p[:, 1], "yaw": p[:, 2], "vx": v[:, 0], "vy": v[:, 1],
-                "omega": v[:, 2], "ax": a[:, 0], "ay": a[:, 1]}
+        return {
+            "t": t,
+            "x": p[:, 0],
+            "y": p[:, 1],
+            "yaw": p[:, 2],
+            "vx": v[:, 0],
+            "vy": v[:, 1],
+            "omega": v[:, 2],
+            "ax": a[:, 0],
+            "ay": a[:, 1],
+        }
 
-    def time_scaled(self, factor: float) -> "Trajectory":
+    def time_scaled(self, factor: float) -> Trajectory:
         """The same path traversed ``factor`` times slower (factor > 0): position at t is
         this trajectory's at t / factor, so speeds and rates scale by 1 / factor and
         accelerations by 1 / factor^2; a flat piece's heading is unchanged."""
@@ -104,8 +115,14 @@ class Trajectory:
         """:meth:`sample` as CSV with header ``t,x,y,yaw,vx,vy,omega``."""
         s = self.sample(rate)
         buf = io.StringIO()
-        np.savetxt(buf, np.column_stack([s[c] for c in CSV_COLUMNS]), delimiter=",", fmt="%.9g",
-                   header=",".join(CSV_COLUMNS), comments="")
+        np.savetxt(
+            buf,
+            np.column_stack([s[c] for c in CSV_COLUMNS]),
+            delimiter=",",
+            fmt="%.9g",
+            header=",".join(CSV_COLUMNS),
+            comments="",
+        )
         return buf.getvalue().encode()
 
 
@@ -117,14 +134,20 @@ def _travel_heading(c, tau, durations):
     (a x j) / (2 |a|^2) (from v = a t + j t^2 / 2; into rest, in reverse time)."""
     v, a = _powers(c, tau, 1)[:, :2], _powers(c, tau, 2)[:, :2]
     j = 6.0 * c[:, 3, :2]
-    scale = (np.linalg.norm(c[:, 1, :2], axis=1) + 2 * np.linalg.norm(c[:, 2, :2], axis=1) * durations
-             + 3 * np.linalg.norm(c[:, 3, :2], axis=1) * durations**2)
+    scale = (
+        np.linalg.norm(c[:, 1, :2], axis=1)
+        + 2 * np.linalg.norm(c[:, 2, :2], axis=1) * durations
+        + 3 * np.linalg.norm(c[:, 3, :2], axis=1) * durations**2
+    )
     speed2 = np.sum(v**2, axis=1)
     rest = speed2 <= (1e-6 * scale) ** 2
     sign = np.where(tau > 0.5 * durations, -1.0, 1.0)[:, None]
     u = np.where(rest[:, None], sign * a, v)
     yaw = libm.atan2(u[:, 1], u[:, 0])
-    cross = lambda x, y: x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]
+
+    def cross(x, y):
+        return x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]
+
     a2 = np.sum(a**2, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         omega = np.where(rest, np.where(a2 > 0, cross(a, j) / (2 * a2), 0.0), cross(v, a) / speed2)
@@ -164,8 +187,9 @@ def read_csv(path) -> dict:
     header = [name.strip() for name in lines[0][1].split(",")]
     missing = [c for c in CSV_COLUMNS if c not in header]
     if missing:
-        raise Lf3pmError(f"{path}: the header lacks the column(s) {', '.join(missing)} "
-                         f"(expected {','.join(CSV_COLUMNS)})")
+        raise Lf3pmError(
+            f"{path}: the header lacks the column(s) {', '.join(missing)} (expected {','.join(CSV_COLUMNS)})"
+        )
     rows = []
     for n, line in lines[1:]:
         fields = line.split(",")
@@ -187,6 +211,8 @@ def read_csv(path) -> dict:
     step = np.diff(out["t"])
     if np.any(step <= 0):
         r = int(np.argmax(step <= 0)) + 1
-        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: time {out['t'][r]:g} does not follow "
-                         f"{out['t'][r - 1]:g}: times must increase strictly")
+        raise Lf3pmError(
+            f"{path}:{lines[1 + r][0]}: time {out['t'][r]:g} does not follow "
+            f"{out['t'][r - 1]:g}: times must increase strictly"
+        )
     return out

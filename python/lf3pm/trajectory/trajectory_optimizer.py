@@ -77,10 +77,22 @@ class OptimizeResult:
         return max(ratios, key=ratios.get) if ratios else None
 
 
-def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
-                 w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
-                 esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
-                 corners: bool = False, turn_price: float = 0.0):
+def make_problem(
+    waypoints,
+    cost: GridField | None,
+    esdf: GridField | None,
+    robot: Robot,
+    *,
+    w_q: float = 1.0,
+    rho_T: float = 1.0,
+    w_energy: float = 1e-3,
+    penalty: float = DEFAULT_WEIGHTS.penalty,
+    esdf_margin: float = ESDF_MARGIN,
+    samples: int = DEFAULT_WEIGHTS.samples,
+    piece_length: float = 2.0,
+    corners: bool = False,
+    turn_price: float = 0.0,
+):
     """The C++ objective (``lf3pm._core.TrajectoryProblem``) and its initial guess from
     front-end waypoints (K, 3: x, y, yaw), K >= 2. Arguments as in :func:`optimize_trajectory`."""
     wp = np.asarray(waypoints, dtype=np.float64)
@@ -95,8 +107,14 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
             raise Lf3pmError(f"{name} must be a GridField or None")
     if esdf is not None and esdf.yaw_bins != 1:
         raise Lf3pmError("the ESDF must be an (ny, nx) field")
-    for name, value in (("w_q", w_q), ("rho_T", rho_T), ("w_energy", w_energy), ("penalty", penalty),
-                        ("esdf_margin", esdf_margin), ("turn_price", turn_price)):
+    for name, value in (
+        ("w_q", w_q),
+        ("rho_T", rho_T),
+        ("w_energy", w_energy),
+        ("penalty", penalty),
+        ("esdf_margin", esdf_margin),
+        ("turn_price", turn_price),
+    ):
         if not (math.isfinite(value) and value >= 0):
             raise Lf3pmError(f"{name} must be a non-negative number, got {value!r}")
     if not (isinstance(samples, int) and samples >= 1):
@@ -115,9 +133,18 @@ def make_problem(waypoints, cost: GridField | None, esdf: GridField | None, robo
     weights = _core.CostWeights()
     weights.w_q, weights.penalty, weights.esdf_margin, weights.samples = w_q, penalty, esdf_margin, samples
     weights.turn, weights.w_time = (turn_price, rho_T) if robot.kind == "omni" else (0.0, rho_T)
-    return _core.TrajectoryProblem(cost._core if cost is not None else None, esdf._core if esdf is not None else None,
-                                   robot.limits(), weights, rho_T, w_energy, head, tail,
-                                   np.ascontiguousarray(points[1:-1]), durations)
+    return _core.TrajectoryProblem(
+        cost._core if cost is not None else None,
+        esdf._core if esdf is not None else None,
+        robot.limits(),
+        weights,
+        rho_T,
+        w_energy,
+        head,
+        tail,
+        np.ascontiguousarray(points[1:-1]),
+        durations,
+    )
 
 
 def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float, corners: bool):
@@ -136,12 +163,16 @@ def _initial_guess(wp: np.ndarray, robot: Robot, piece_length: float, corners: b
     keep = np.concatenate([[True], step > 1e-9])
     wp, u = wp[keep], np.concatenate([[0.0], np.cumsum(step[step > 1e-9])])
     if len(wp) < 2:
-        raise Lf3pmError("start and goal coincide in x and y: nothing to optimise"
-                         if robot.nonholonomic else "start and goal coincide: nothing to optimise")
+        raise Lf3pmError(
+            "start and goal coincide in x and y: nothing to optimise"
+            if robot.nonholonomic
+            else "start and goal coincide: nothing to optimise"
+        )
     if corners:
         splits = np.maximum(1, np.ceil(np.diff(u) / piece_length).astype(int))
-        knots = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in zip(u[:-1], u[1:], splits)]
-                               + [u[-1:]])
+        knots = np.concatenate(
+            [np.linspace(a, b, k, endpoint=False) for a, b, k in zip(u[:-1], u[1:], splits)] + [u[-1:]]
+        )
     else:
         knots = np.linspace(0.0, u[-1], max(1, math.ceil(u[-1] / piece_length)) + 1)
     if robot.nonholonomic:
@@ -177,8 +208,7 @@ def _turn_in_place(x: float, y: float, yaw0: float, yaw1: float, wmax: float, al
     return c, T
 
 
-def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax: float,
-                alpha_max: float) -> Trajectory:
+def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax: float, alpha_max: float) -> Trajectory:
     """Diff robots: turn on the spot from start_yaw to the trajectory's first heading and
     from its last heading to goal_yaw (the shorter way round)."""
     # Unwrap the flat pieces (through their yaw column) to within half a turn of start_yaw.
@@ -195,21 +225,35 @@ def _with_turns(trajectory: Trajectory, start_yaw: float, goal_yaw: float, wmax:
     if abs(last - p1[2]) > 1e-9:
         c, T = _turn_in_place(p1[0], p1[1], p1[2], last, wmax, alpha_max)
         coefficients.append(c[None]), durations.append([T]), flat.append([False])
-    return Trajectory(np.concatenate(coefficients), np.concatenate(durations).astype(np.float64),
-                      np.concatenate(flat).astype(bool))
+    return Trajectory(
+        np.concatenate(coefficients), np.concatenate(durations).astype(np.float64), np.concatenate(flat).astype(bool)
+    )
 
 
 #: The C++ optimiser's L-BFGS defaults (trajectory_optimizer.hpp), written there once.
 _LBFGS = _core.trajectory_lbfgs()
 
 
-def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | None, robot: Robot, *,
-                        w_q: float = 1.0, rho_T: float = 1.0, w_energy: float = 1e-3, penalty: float = DEFAULT_WEIGHTS.penalty,
-                        esdf_margin: float = ESDF_MARGIN, samples: int = DEFAULT_WEIGHTS.samples, piece_length: float = 2.0,
-                        corners: bool = False, turn_price: float = 0.0,
-                        g_epsilon: float = _LBFGS.g_epsilon, rel_cost_tol: float = _LBFGS.delta,
-                        max_iterations: int = _LBFGS.max_iterations,
-                        check_rate: float = LIMIT_CHECK_RATE) -> OptimizeResult:
+def optimize_trajectory(
+    waypoints,
+    cost: GridField | None,
+    esdf: GridField | None,
+    robot: Robot,
+    *,
+    w_q: float = 1.0,
+    rho_T: float = 1.0,
+    w_energy: float = 1e-3,
+    penalty: float = DEFAULT_WEIGHTS.penalty,
+    esdf_margin: float = ESDF_MARGIN,
+    samples: int = DEFAULT_WEIGHTS.samples,
+    piece_length: float = 2.0,
+    corners: bool = False,
+    turn_price: float = 0.0,
+    g_epsilon: float = _LBFGS.g_epsilon,
+    rel_cost_tol: float = _LBFGS.delta,
+    max_iterations: int = _LBFGS.max_iterations,
+    check_rate: float = LIMIT_CHECK_RATE,
+) -> OptimizeResult:
     """Optimise a trajectory through the front end's waypoints (K, 3: x, y, yaw).
 
     ``cost``: the localisability cost (a SOLM channel; None to leave it out), weighted
@@ -230,9 +274,21 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
     (:func:`within_limits`). Single-threaded.
     """
     start = time.perf_counter()
-    problem = make_problem(waypoints, cost, esdf, robot, w_q=w_q, rho_T=rho_T, w_energy=w_energy,
-                           penalty=penalty, esdf_margin=esdf_margin, samples=samples,
-                           piece_length=piece_length, corners=corners, turn_price=turn_price)
+    problem = make_problem(
+        waypoints,
+        cost,
+        esdf,
+        robot,
+        w_q=w_q,
+        rho_T=rho_T,
+        w_energy=w_energy,
+        penalty=penalty,
+        esdf_margin=esdf_margin,
+        samples=samples,
+        piece_length=piece_length,
+        corners=corners,
+        turn_price=turn_price,
+    )
     lbfgs = _core.trajectory_lbfgs()
     lbfgs.g_epsilon, lbfgs.delta, lbfgs.max_iterations = g_epsilon, rel_cost_tol, max_iterations
     out = problem.optimize(lbfgs)
@@ -242,8 +298,17 @@ def optimize_trajectory(waypoints, cost: GridField | None, esdf: GridField | Non
         wp = np.asarray(waypoints, dtype=np.float64)
         trajectory = _with_turns(trajectory, wp[0, 2], wp[-1, 2], robot.wmax, robot.alpha_max)
     trajectory, scale, violations = within_limits(trajectory, robot, esdf, check_rate)
-    return OptimizeResult(trajectory, out["iterations"], out["evaluations"], out["status"], out["reason"],
-                          dict(out["terms"]), violations, time.perf_counter() - start, scale)
+    return OptimizeResult(
+        trajectory,
+        out["iterations"],
+        out["evaluations"],
+        out["status"],
+        out["reason"],
+        dict(out["terms"]),
+        violations,
+        time.perf_counter() - start,
+        scale,
+    )
 
 
 #: Violation ratios that time scaling by k divides by k (speeds and rates) and by k^2
@@ -260,8 +325,11 @@ _STRETCH_MARGIN = 1e-12
 def stretch_factor(violations: dict) -> float:
     """The uniform time stretch (>= 1) that brings every speed, rate and acceleration
     ratio of ``violations`` to at most 1: max(1, r_v, r_omega, sqrt(r_a), sqrt(r_alpha))."""
-    return max([1.0] + [violations[k] for k in _SPEED_RATIOS if k in violations]
-               + [math.sqrt(violations[k]) for k in _ACCELERATION_RATIOS if k in violations])
+    return max(
+        [1.0]
+        + [violations[k] for k in _SPEED_RATIOS if k in violations]
+        + [math.sqrt(violations[k]) for k in _ACCELERATION_RATIOS if k in violations]
+    )
 
 
 def within_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, rate: float = LIMIT_CHECK_RATE):
@@ -291,11 +359,13 @@ def check_limits(trajectory: Trajectory, robot: Robot, esdf: GridField | None, r
     # The yaw acceleration as a tracking controller sees it: central differences of the
     # sampled yaw rate (a jump in the rate shows up as a spike).
     alpha = np.gradient(s["omega"], s["t"]) if len(s["t"]) > 1 else np.zeros(1)
-    out = {"max_v_lon_ratio": float(np.max(np.abs(v_lon)) / robot.vmax_lon),
-           "max_omega_ratio": float(np.max(np.abs(s["omega"])) / robot.wmax),
-           "max_a_lon_ratio": float(np.max(np.abs(a_lon)) / robot.amax_lon),
-           "max_a_lat_ratio": float(np.max(np.abs(a_lat)) / robot.amax_lat),
-           "max_alpha_ratio": float(np.max(np.abs(alpha)) / robot.alpha_max)}
+    out = {
+        "max_v_lon_ratio": float(np.max(np.abs(v_lon)) / robot.vmax_lon),
+        "max_omega_ratio": float(np.max(np.abs(s["omega"])) / robot.wmax),
+        "max_a_lon_ratio": float(np.max(np.abs(a_lon)) / robot.amax_lon),
+        "max_a_lat_ratio": float(np.max(np.abs(a_lat)) / robot.amax_lat),
+        "max_alpha_ratio": float(np.max(np.abs(alpha)) / robot.alpha_max),
+    }
     if robot.nonholonomic:
         out["max_h"] = float(np.max(np.abs(v_lat)))
     else:

@@ -23,8 +23,6 @@ from lf3pm.scan.scan_simulator import simulate_scan
 from lf3pm.sensors import Sensor, as_sensor
 
 
-
-
 class RegistrationTarget:
     """The map prepared once for small_gicp: points with normals and a k-d tree."""
 
@@ -35,12 +33,12 @@ class RegistrationTarget:
         self.cloud = small_gicp.PointCloud(np.ascontiguousarray(map.points))
         workers = threads or _default_threads()
         self.tree = small_gicp.KdTree(self.cloud, num_threads=workers)
-        small_gicp.estimate_normals(self.cloud, self.tree, num_neighbors=normal_neighbors,
-                                    num_threads=workers)
+        small_gicp.estimate_normals(self.cloud, self.tree, num_neighbors=normal_neighbors, num_threads=workers)
 
     @classmethod
-    def for_map(cls, map: Map, target: "RegistrationTarget | None" = None,
-                threads: int = DEFAULTS.scan.threads) -> "RegistrationTarget":
+    def for_map(
+        cls, map: Map, target: RegistrationTarget | None = None, threads: int = DEFAULTS.scan.threads
+    ) -> RegistrationTarget:
         """``target`` checked to be ``map``'s (Lf3pmError if it was prepared from another
         map), or a new one when None."""
         if target is None:
@@ -60,13 +58,13 @@ def _default_threads() -> int:
 class MdeResult:
     """MDE at one pose, with every trial's error and the parameters used."""
 
-    mde: float                    # mean of |log(T_gt^-1 T_regi)|^2 (m^2 and rad^2 mixed, as in the paper)
+    mde: float  # mean of |log(T_gt^-1 T_regi)|^2 (m^2 and rad^2 mixed, as in the paper)
     trials: int
-    errors: list                  # per trial |log(...)|^2
-    translation_errors: list      # per trial |t error| (m)
-    rotation_errors_deg: list     # per trial |rotation error| (deg)
-    converged: int                # trials small_gicp reported as converged
-    hits: int                     # points in the registered scan
+    errors: list  # per trial |log(...)|^2
+    translation_errors: list  # per trial |t error| (m)
+    rotation_errors_deg: list  # per trial |rotation error| (deg)
+    converged: int  # trials small_gicp reported as converged
+    hits: int  # points in the registered scan
     pose: list
     sensor: str
     params: dict = field(default_factory=dict)
@@ -75,13 +73,23 @@ class MdeResult:
         return asdict(self)
 
 
-def mde(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, trials: int = DEFAULTS.mde.trials,
-        sigma_t: float = DEFAULTS.mde.sigma_t, sigma_r_deg: float = DEFAULTS.mde.sigma_r,
-        noise: float | None = DEFAULTS.scan.noise, seed: int = DEFAULTS.scan.seed,
-        scan_voxel: float = DEFAULTS.scan.scan_voxel,
-        max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
-        max_iterations: int = DEFAULTS.mde.max_iterations, target: RegistrationTarget | None = None,
-        threads: int = DEFAULTS.scan.threads, clearance: float = DEFAULTS.scan.clearance) -> MdeResult:
+def mde(
+    map: Map | str,
+    pose,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    *,
+    trials: int = DEFAULTS.mde.trials,
+    sigma_t: float = DEFAULTS.mde.sigma_t,
+    sigma_r_deg: float = DEFAULTS.mde.sigma_r,
+    noise: float | None = DEFAULTS.scan.noise,
+    seed: int = DEFAULTS.scan.seed,
+    scan_voxel: float = DEFAULTS.scan.scan_voxel,
+    max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
+    max_iterations: int = DEFAULTS.mde.max_iterations,
+    target: RegistrationTarget | None = None,
+    threads: int = DEFAULTS.scan.threads,
+    clearance: float = DEFAULTS.scan.clearance,
+) -> MdeResult:
     """MDE of point-to-plane registration at ``pose`` (see module docstring).
 
     The scan is simulated with range noise ``noise`` (default: the sensor's) from
@@ -98,15 +106,26 @@ def mde(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, trials:
     # small_gicp would grind through it for minutes.
     extent = max(float(np.max(map.bounds[1] - map.bounds[0])), 1.0)
     if sigma_t > extent:
-        raise Lf3pmError(f"mde.sigma_t {sigma_t:g} m is larger than the map ({extent:.3g} m across): "
-                         "no registration starts that far off")
+        raise Lf3pmError(
+            f"mde.sigma_t {sigma_t:g} m is larger than the map ({extent:.3g} m across): "
+            "no registration starts that far off"
+        )
     sigma, scan_voxel = scan_config.noise_for(sensor), scan_config.scan_voxel
     truth = pose_matrix(pose)
     map.check_pose(truth, clearance)
     target = RegistrationTarget.for_map(map, target, threads)
 
-    scan = simulate_scan(map, truth, sensor.directions, sensor.min_range, sensor.max_range, noise=sigma,
-                         seed=seed, scan_voxel=scan_voxel, threads=threads)
+    scan = simulate_scan(
+        map,
+        truth,
+        sensor.directions,
+        sensor.min_range,
+        sensor.max_range,
+        noise=sigma,
+        seed=seed,
+        scan_voxel=scan_voxel,
+        threads=threads,
+    )
     points = scan.sensor_points
     if len(points) < 10:
         raise Lf3pmError(f"the scan at this pose has only {len(points)} hits: nothing to register")
@@ -119,20 +138,41 @@ def mde(map: Map | str, pose, sensor: Sensor | str = DEFAULTS.sensor, *, trials:
     truth_inv = np.linalg.inv(truth)
     for _ in range(trials):
         start = truth @ se3_exp(rng.normal(size=6) * sigmas)
-        result = small_gicp.align(target.cloud, source, target.tree, init_T_target_source=start,
-                                  registration_type="PLANE_ICP",
-                                  max_correspondence_distance=max_correspondence_distance,
-                                  max_iterations=max_iterations,
-                                  num_threads=threads or _default_threads())
+        result = small_gicp.align(
+            target.cloud,
+            source,
+            target.tree,
+            init_T_target_source=start,
+            registration_type="PLANE_ICP",
+            max_correspondence_distance=max_correspondence_distance,
+            max_iterations=max_iterations,
+            num_threads=threads or _default_threads(),
+        )
         twist = se3_log(truth_inv @ result.T_target_source)
         errors.append(float(twist @ twist))
         t_err.append(float(np.linalg.norm((truth_inv @ result.T_target_source)[:3, 3])))
         r_err.append(float(math.degrees(np.linalg.norm(twist[3:]))))
         converged += bool(result.converged)
-    params = {"seed": int(seed), "noise": sigma, "sigma_t": sigma_t, "sigma_r_deg": sigma_r_deg,
-              "scan_voxel": scan_voxel, "max_correspondence_distance": max_correspondence_distance,
-              "max_iterations": max_iterations, "registration": "small_gicp PLANE_ICP",
-              "map_sha256": map.sha256}
-    return MdeResult(mde=float(np.mean(errors)), trials=trials, errors=errors,
-                     translation_errors=t_err, rotation_errors_deg=r_err, converged=converged,
-                     hits=len(points), pose=truth.tolist(), sensor=sensor.name, params=params)
+    params = {
+        "seed": int(seed),
+        "noise": sigma,
+        "sigma_t": sigma_t,
+        "sigma_r_deg": sigma_r_deg,
+        "scan_voxel": scan_voxel,
+        "max_correspondence_distance": max_correspondence_distance,
+        "max_iterations": max_iterations,
+        "registration": "small_gicp PLANE_ICP",
+        "map_sha256": map.sha256,
+    }
+    return MdeResult(
+        mde=float(np.mean(errors)),
+        trials=trials,
+        errors=errors,
+        translation_errors=t_err,
+        rotation_errors_deg=r_err,
+        converged=converged,
+        hits=len(points),
+        pose=truth.tolist(),
+        sensor=sensor.name,
+        params=params,
+    )

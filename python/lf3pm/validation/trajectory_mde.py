@@ -16,9 +16,9 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
-from lf3pm.validation.mde import RegistrationTarget, mde
 from lf3pm.map import Map, as_map
 from lf3pm.sensors import Sensor, as_sensor
+from lf3pm.validation.mde import RegistrationTarget, mde
 
 
 def pose_seed(seed: int, index: int) -> int:
@@ -38,13 +38,13 @@ class TrajectoryMde:
     """
 
     s: float
-    mde: list                     # per pose, NaN where refused
-    seeds: list                   # per pose, as passed to mde()
-    refused: list                 # (index, one-line reason)
+    mde: list  # per pose, NaN where refused
+    seeds: list  # per pose, as passed to mde()
+    refused: list  # (index, one-line reason)
     translation_error_median: list  # per pose, m (NaN where refused)
-    converged: list               # per pose, trials small_gicp reported converged (0 where refused)
-    hits: list                    # per pose, scan points (0 where refused)
-    poses: list                   # (N, 4) x y z yaw
+    converged: list  # per pose, trials small_gicp reported converged (0 where refused)
+    hits: list  # per pose, scan points (0 where refused)
+    poses: list  # (N, 4) x y z yaw
     sensor: str
     params: dict = field(default_factory=dict)
 
@@ -54,23 +54,35 @@ class TrajectoryMde:
 
     def to_dict(self) -> dict:
         """JSON-ready dict (NaN becomes None)."""
+
         def clean(value):
             if isinstance(value, float) and not math.isfinite(value):
                 return None
             if isinstance(value, (list, tuple)):
                 return [clean(v) for v in value]
             return value
+
         return {k: clean(v) for k, v in asdict(self).items()}
 
 
-def mde_along(map: Map | str, poses, sensor: Sensor | str = DEFAULTS.sensor, *, trials: int = DEFAULTS.mde.trials,
-              sigma_t: float = DEFAULTS.mde.sigma_t, sigma_r_deg: float = DEFAULTS.mde.sigma_r,
-              seed: int = DEFAULTS.scan.seed, noise: float | None = DEFAULTS.scan.noise,
-              scan_voxel: float = DEFAULTS.scan.scan_voxel,
-              max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
-              max_iterations: int = DEFAULTS.mde.max_iterations, clearance: float = DEFAULTS.scan.clearance,
-              target: RegistrationTarget | None = None, threads: int = DEFAULTS.scan.threads,
-              progress=None) -> TrajectoryMde:
+def mde_along(
+    map: Map | str,
+    poses,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    *,
+    trials: int = DEFAULTS.mde.trials,
+    sigma_t: float = DEFAULTS.mde.sigma_t,
+    sigma_r_deg: float = DEFAULTS.mde.sigma_r,
+    seed: int = DEFAULTS.scan.seed,
+    noise: float | None = DEFAULTS.scan.noise,
+    scan_voxel: float = DEFAULTS.scan.scan_voxel,
+    max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
+    max_iterations: int = DEFAULTS.mde.max_iterations,
+    clearance: float = DEFAULTS.scan.clearance,
+    target: RegistrationTarget | None = None,
+    threads: int = DEFAULTS.scan.threads,
+    progress=None,
+) -> TrajectoryMde:
     """MDE (see :func:`lf3pm.validation.mde`) at each of ``poses`` ((N, 4) x y z
     yaw, sampled by the caller at a constant time interval) and S, their sum.
 
@@ -99,11 +111,22 @@ def mde_along(map: Map | str, poses, sensor: Sensor | str = DEFAULTS.sensor, *, 
         pose_s = pose_seed(seed, i)
         seeds.append(pose_s)
         try:
-            result = mde(map, pose, sensor, trials=trials, sigma_t=sigma_t, sigma_r_deg=sigma_r_deg,
-                         noise=noise, seed=pose_s, scan_voxel=scan_voxel,
-                         max_correspondence_distance=max_correspondence_distance,
-                         max_iterations=max_iterations, target=target, threads=threads,
-                         clearance=clearance)
+            result = mde(
+                map,
+                pose,
+                sensor,
+                trials=trials,
+                sigma_t=sigma_t,
+                sigma_r_deg=sigma_r_deg,
+                noise=noise,
+                seed=pose_s,
+                scan_voxel=scan_voxel,
+                max_correspondence_distance=max_correspondence_distance,
+                max_iterations=max_iterations,
+                target=target,
+                threads=threads,
+                clearance=clearance,
+            )
         except Lf3pmError as err:
             refused.append((i, str(err)))
             values.append(math.nan)
@@ -118,13 +141,29 @@ def mde_along(map: Map | str, poses, sensor: Sensor | str = DEFAULTS.sensor, *, 
         if progress is not None:
             progress(i + 1, len(poses))
     evaluated = [v for v in values if math.isfinite(v)]
-    params = {"seed": int(seed), "pose_seed": "SeedSequence([seed, index]).generate_state(1)[0]",
-              "trials": trials, "noise": sensor.range_noise_sigma if noise is None else float(noise),
-              "sigma_t": sigma_t, "sigma_r_deg": sigma_r_deg, "scan_voxel": scan_voxel,
-              "max_correspondence_distance": max_correspondence_distance,
-              "max_iterations": max_iterations, "clearance": clearance,
-              "registration": "small_gicp PLANE_ICP", "map_sha256": map.sha256}
-    return TrajectoryMde(s=float(np.sum(evaluated)) if evaluated else math.nan, mde=values,
-                         seeds=seeds, refused=refused, translation_error_median=t_med,
-                         converged=converged, hits=hits, poses=poses.tolist(), sensor=sensor.name,
-                         params=params)
+    params = {
+        "seed": int(seed),
+        "pose_seed": "SeedSequence([seed, index]).generate_state(1)[0]",
+        "trials": trials,
+        "noise": sensor.range_noise_sigma if noise is None else float(noise),
+        "sigma_t": sigma_t,
+        "sigma_r_deg": sigma_r_deg,
+        "scan_voxel": scan_voxel,
+        "max_correspondence_distance": max_correspondence_distance,
+        "max_iterations": max_iterations,
+        "clearance": clearance,
+        "registration": "small_gicp PLANE_ICP",
+        "map_sha256": map.sha256,
+    }
+    return TrajectoryMde(
+        s=float(np.sum(evaluated)) if evaluated else math.nan,
+        mde=values,
+        seeds=seeds,
+        refused=refused,
+        translation_error_median=t_med,
+        converged=converged,
+        hits=hits,
+        poses=poses.tolist(),
+        sensor=sensor.name,
+        params=params,
+    )

@@ -42,8 +42,16 @@ class ViewApp:
     (for tests); an error met while serving stays in the panel until the action that met
     it succeeds."""
 
-    def __init__(self, inputs: ViewInputs, *, host: str, port: int, robot=None,
-                 guidance: GuidanceConfig | None = None, sensor: str | None = None):
+    def __init__(
+        self,
+        inputs: ViewInputs,
+        *,
+        host: str,
+        port: int,
+        robot=None,
+        guidance: GuidanceConfig | None = None,
+        sensor: str | None = None,
+    ):
         import viser
 
         from lf3pm.trajectory.robots import Robot
@@ -54,8 +62,11 @@ class ViewApp:
         solm = inputs.solm
         self.sensor = sensor or (solm.attrs.get("sensor") if solm is not None else DEFAULTS.sensor)
         # The body the SOLM's obstacle mask was built for.
-        self.footprint_radius = float(solm.attrs.get("robot_radius", DEFAULTS.solm.robot_radius)
-                                      if solm is not None else DEFAULTS.solm.robot_radius)
+        self.footprint_radius = float(
+            solm.attrs.get("robot_radius", DEFAULTS.solm.robot_radius)
+            if solm is not None
+            else DEFAULTS.solm.robot_radius
+        )
         self.status = ""
         self._errors = {}  # the page action that failed: its message, shown in the panel
         self._lock = threading.RLock()  # an action may set a control whose callback runs inside it
@@ -97,40 +108,51 @@ class ViewApp:
         self._map_point_size = max(0.03, 1.5 * float(self.inputs.world.index.median_spacing))
         lo, hi = self.inputs.world.bounds
         gui = self.server.gui
-        gui.add_markdown(f"**Map** `{self.inputs.world.source}`: {len(self._map_points):,} of "
-                         f"{len(points):,} points shown, coloured by height")
+        gui.add_markdown(
+            f"**Map** `{self.inputs.world.source}`: {len(self._map_points):,} of "
+            f"{len(points):,} points shown, coloured by height"
+        )
         # Indoors the ceiling hides everything under it: cut the map below it.
         bottom, top = math.floor(lo[2] * 10) / 10, math.ceil(hi[2] * 10) / 10
-        self.map_ceiling = gui.add_slider("hide the map above (m)", min=bottom, max=top, step=0.1,
-                                          initial_value=top)
+        self.map_ceiling = gui.add_slider("hide the map above (m)", min=bottom, max=top, step=0.1, initial_value=top)
         self.map_ceiling.on_update(lambda event: self._guarded(self._draw_map, event.client))
         self._draw_map()
 
     def _draw_map(self, client=None) -> None:
         keep = self._map_points[:, 2] <= self.map_ceiling.value
         with self._busy(client, "drawing the map"):
-            self.server.scene.add_point_cloud("/map", self._map_points[keep], self._map_colors[keep],
-                                              point_size=self._map_point_size, point_shape="square",
-                                              point_shading="flat")
+            self.server.scene.add_point_cloud(
+                "/map",
+                self._map_points[keep],
+                self._map_colors[keep],
+                point_size=self._map_point_size,
+                point_shape="square",
+                point_shading="flat",
+            )
 
     def _add_solm_controls(self) -> None:
         solm, gui = self.inputs.solm, self.server.gui
         g = solm.grid_spec
         with gui.add_folder("SOLM"):
-            gui.add_markdown(f"{g.space.upper()} grid, {g.nx} × {g.ny} cells of {g.res:g} m, "
-                             f"sensor {solm.attrs.get('sensor')}")
+            gui.add_markdown(
+                f"{g.space.upper()} grid, {g.nx} × {g.ny} cells of {g.res:g} m, sensor {solm.attrs.get('sensor')}"
+            )
             self.channel = gui.add_dropdown("channel", tuple(layers.CHANNELS), initial_value="q_n")
             self.min_yaw = self.layer = None
             if g.space == "se2":
                 self.min_yaw = gui.add_checkbox("min over yaw", initial_value=True)
-                self.layer = gui.add_slider("yaw (deg)", min=0, max=360 - 360 / g.yaw_bins, step=360 / g.yaw_bins,
-                                            initial_value=0, disabled=True)
+                self.layer = gui.add_slider(
+                    "yaw (deg)",
+                    min=0,
+                    max=360 - 360 / g.yaw_bins,
+                    step=360 / g.yaw_bins,
+                    initial_value=0,
+                    disabled=True,
+                )
                 self.min_yaw.on_update(lambda event: self._guarded(self._solm_changed, event.client))
             elif g.space == "r3":
-                self.layer = gui.add_slider("height level", min=0, max=len(g.z_levels) - 1, step=1,
-                                            initial_value=0)
-            self.colorbar = gui.add_image(np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8),
-                                          label="colour bar")
+                self.layer = gui.add_slider("height level", min=0, max=len(g.z_levels) - 1, step=1, initial_value=0)
+            self.colorbar = gui.add_image(np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8), label="colour bar")
         self.channel.on_update(lambda event: self._guarded(self._solm_changed, event.client))
         if self.layer is not None:
             self.layer.on_update(lambda event: self._guarded(self._solm_changed, event.client))
@@ -147,10 +169,15 @@ class ViewApp:
     def _solm_changed(self, client=None) -> None:
         with self._busy(client, "drawing the SOLM", self.channel.value):
             layer = layers.solm_layer(self.inputs.solm, self.channel.value, self._solm_index())
-            self.server.scene.add_point_cloud("/solm", layer["centres"], layer["colors"], point_size=layer["res"],
-                                              point_shape="square", point_shading="flat")
-            self.colorbar.image = layers.colorbar_image(layer["lo"], layer["hi"],
-                                                        layers.CHANNELS[self.channel.value])
+            self.server.scene.add_point_cloud(
+                "/solm",
+                layer["centres"],
+                layer["colors"],
+                point_size=layer["res"],
+                point_shape="square",
+                point_shading="flat",
+            )
+            self.colorbar.image = layers.colorbar_image(layer["lo"], layer["hi"], layers.CHANNELS[self.channel.value])
 
     def _add_given_plans(self) -> None:
         gui = self.server.gui
@@ -160,9 +187,11 @@ class ViewApp:
         for k, (name, samples) in enumerate(self.inputs.plans.items()):
             color = PLAN_COLORS[k % len(PLAN_COLORS)]
             self._draw_trajectory(f"/plans/{k}", samples, color, PLAN_WIDTH + PLAN_STEP * (n - 1 - k), lift=0.02 * k)
-            lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
-                         f"{layers.path_length(samples['x'], samples['y']):.1f} m, {samples['t'][-1]:.1f} s"
-                         + self._error_text(*self.predicted_error(samples)))
+            lines.append(
+                f"- <span style='color:rgb{color}'>■</span> {name}: "
+                f"{layers.path_length(samples['x'], samples['y']):.1f} m, {samples['t'][-1]:.1f} s"
+                + self._error_text(*self.predicted_error(samples))
+            )
         gui.add_markdown("**Plans**\n\n" + "\n".join(lines))
 
     def _add_replays(self) -> None:
@@ -170,10 +199,16 @@ class ViewApp:
             return
         lines = []
         for k, (name, tracks) in enumerate(self.inputs.replays.items()):
-            self.server.scene.add_line_segments(f"/replays/{k}/truth", tracks["truth"], TRUTH,
-                                                thickness=TRUTH_WIDTH, thickness_units="screen")
-            self.server.scene.add_line_segments(f"/replays/{k}/estimate", tracks["estimate"], tracks["colors"],
-                                                thickness=ESTIMATE_WIDTH, thickness_units="screen")
+            self.server.scene.add_line_segments(
+                f"/replays/{k}/truth", tracks["truth"], TRUTH, thickness=TRUTH_WIDTH, thickness_units="screen"
+            )
+            self.server.scene.add_line_segments(
+                f"/replays/{k}/estimate",
+                tracks["estimate"],
+                tracks["colors"],
+                thickness=ESTIMATE_WIDTH,
+                thickness_units="screen",
+            )
             lines.append(f"- {layers.replay_caption(name, tracks)}")
         self.server.gui.add_markdown("**Replays**\n\n" + "\n".join(lines))
 
@@ -211,18 +246,21 @@ class ViewApp:
     def _add_click_controls(self) -> None:
         gui = self.server.gui
         with gui.add_folder("Click on the ground to"):
-            self.mode = gui.add_dropdown("action", ("inspect a cell", "set the start", "set the goal"),
-                                         initial_value="inspect a cell")
-            self.cell_text = gui.add_markdown("Click a cell: its metric, its simulated scan and its "
-                                              "least observable directions.")
+            self.mode = gui.add_dropdown(
+                "action", ("inspect a cell", "set the start", "set the goal"), initial_value="inspect a cell"
+            )
+            self.cell_text = gui.add_markdown(
+                "Click a cell: its metric, its simulated scan and its least observable directions."
+            )
         if self.inputs.solm is not None:
             with gui.add_folder("Plan"):
                 # Or drag the ring that appears at a clicked start or goal.
                 self.start_yaw = gui.add_slider("start yaw (deg)", min=-180, max=180, step=5, initial_value=0)
                 self.goal_yaw = gui.add_slider("goal yaw (deg)", min=-180, max=180, step=5, initial_value=0)
                 button = gui.add_button("plan: default guidance and none")
-                self.plan_text = gui.add_markdown(f"Robot: {self.robot.kind} (from the configuration); "
-                                                  "set a start and a goal by clicking.")
+                self.plan_text = gui.add_markdown(
+                    f"Robot: {self.robot.kind} (from the configuration); set a start and a goal by clicking."
+                )
             button.on_click(lambda event: self._guarded(self.plan_between, event.client))
             self.start_yaw.on_update(lambda _: self._guarded(self._draw_ends))
             self.goal_yaw.on_update(lambda _: self._guarded(self._draw_ends))
@@ -251,9 +289,14 @@ class ViewApp:
         end's heading (and its slider)."""
         yaw = math.radians(self._yaw_slider(end).value)
         ring = self.server.scene.add_transform_controls(
-            f"/ends/{end}_yaw", scale=2.0, active_axes=(False, False, True), disable_axes=True,
-            disable_sliders=True, position=(xy[0], xy[1], self.ground_height(*xy) + self._above_layer),
-            wxyz=_yaw_quaternion(yaw))
+            f"/ends/{end}_yaw",
+            scale=2.0,
+            active_axes=(False, False, True),
+            disable_axes=True,
+            disable_sliders=True,
+            position=(xy[0], xy[1], self.ground_height(*xy) + self._above_layer),
+            wxyz=_yaw_quaternion(yaw),
+        )
         ring.on_update(lambda event: self._guarded(self._ring_turned, end, event.target))
         self._rings[end] = ring
 
@@ -303,8 +346,11 @@ class ViewApp:
         if solm is not None and solm.grid_spec.space == "se2":
             index = self._solm_index()
             if index is None:  # the best yaw at this cell
-                values = solm.query(np.full(solm.grid_spec.yaw_bins, xy[0]), np.full(solm.grid_spec.yaw_bins, xy[1]),
-                                    yaw=solm.grid_spec.yaws())[0]
+                values = solm.query(
+                    np.full(solm.grid_spec.yaw_bins, xy[0]),
+                    np.full(solm.grid_spec.yaw_bins, xy[1]),
+                    yaw=solm.grid_spec.yaws(),
+                )[0]
                 index = int(np.nanargmin(values)) if np.isfinite(values).any() else 0
             yaw = float(solm.grid_spec.yaws()[index])
         z = self.ground_height(*xy) + height
@@ -316,26 +362,39 @@ class ViewApp:
         hits = result.observations["points"].astype(np.float32)
         self.server.scene.add_point_cloud("/cell/scan", hits, SCAN, point_size=0.08, point_shape="circle")
         position = np.asarray(pose_matrix(pose))[:3, 3]
-        text = [(f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
-                 f"at z = {z:.2f} m"), f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
-                f"- {result.hits:,} hits of {result.rays:,} rays (red points)"]
+        text = [
+            (
+                f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
+                f"at z = {z:.2f} m"
+            ),
+            f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
+            f"- {result.hits:,} hits of {result.rays:,} rays (red points)",
+        ]
         if result.predicted_localization_error_m is not None:
             lo, hi = result.predicted_localization_error_interval_m
-            text.append(f"- predicted localization error {result.predicted_localization_error_m * 100:.1f} cm "
-                        f"({lo * 100:.1f}-{hi * 100:.1f} cm)")
+            text.append(
+                f"- predicted localization error {result.predicted_localization_error_m * 100:.1f} cm "
+                f"({lo * 100:.1f}-{hi * 100:.1f} cm)"
+            )
         elif result.predicted_localization_error_withheld is not None:
             text.append(f"- predicted localization error withheld: {result.predicted_localization_error_withheld}")
         if solm is not None:
             stored = float(solm.query(xy[0], xy[1], yaw=yaw, z=z if solm.grid_spec.space == "r3" else None)[0])
-            text.append(f"- SOLM q_n here {stored:.4g} (interpolated)" if math.isfinite(stored) else
-                        "- the SOLM has no value here (an obstacle, unknown ground or its edge)")
+            text.append(
+                f"- SOLM q_n here {stored:.4g} (interpolated)"
+                if math.isfinite(stored)
+                else "- the SOLM has no value here (an obstacle, unknown ground or its edge)"
+            )
         if not result.degenerate and len(result.observations["A"]) >= 6:
             weak = layers.weak_directions(result.observations, position)
-            self.server.scene.add_arrows("/cell/weak", weak["arrows"], np.array(ARROWS), shaft_radius=0.05,
-                                         head_radius=0.15, head_length=0.3)
+            self.server.scene.add_arrows(
+                "/cell/weak", weak["arrows"], np.array(ARROWS), shaft_radius=0.05, head_radius=0.15, head_length=0.3
+            )
             d = weak["directions"][0]
-            text.append(f"- least observable translation ({d[0]:+.2f}, {d[1]:+.2f}, {d[2]:+.2f}), red arrow; "
-                        "orange and yellow: the others, shorter as they are better observed")
+            text.append(
+                f"- least observable translation ({d[0]:+.2f}, {d[1]:+.2f}, {d[2]:+.2f}), red arrow; "
+                "orange and yellow: the others, shorter as they are better observed"
+            )
         else:
             text.append("- degenerate: the scan does not fix the pose")
         self.cell_text.content = "\n".join(text)
@@ -343,19 +402,28 @@ class ViewApp:
         return {"q_n": result.q_n, "hits": result.hits, "pose": pose}
 
     def _draw_ends(self) -> None:
-        for name, xy, yaw_slider, color in (("start", self._start, getattr(self, "start_yaw", None), (60, 220, 60)),
-                                            ("goal", self._goal, getattr(self, "goal_yaw", None), (230, 60, 60))):
+        for name, xy, yaw_slider, color in (
+            ("start", self._start, getattr(self, "start_yaw", None), (60, 220, 60)),
+            ("goal", self._goal, getattr(self, "goal_yaw", None), (230, 60, 60)),
+        ):
             if xy is None or yaw_slider is None:
                 continue
             yaw = math.radians(yaw_slider.value)
             z = self.ground_height(*xy) + self._above_layer
             tip = np.array([xy[0] + 1.5 * math.cos(yaw), xy[1] + 1.5 * math.sin(yaw), z])
-            self.server.scene.add_arrows(f"/ends/{name}", np.array([[[xy[0], xy[1], z], tip]]), color,
-                                         shaft_radius=0.08, head_radius=0.25, head_length=0.5)
+            self.server.scene.add_arrows(
+                f"/ends/{name}",
+                np.array([[[xy[0], xy[1], z], tip]]),
+                color,
+                shaft_radius=0.08,
+                head_radius=0.25,
+                head_length=0.5,
+            )
             ring = self._rings.get(name)
             # The slider moved: turn the ring with it (a drag keeps within a step).
-            if ring is not None and (abs(math.remainder(_quaternion_yaw(ring.wxyz) - yaw, 2 * math.pi))
-                                     > math.radians(yaw_slider.step)):
+            if ring is not None and (
+                abs(math.remainder(_quaternion_yaw(ring.wxyz) - yaw, 2 * math.pi)) > math.radians(yaw_slider.step)
+            ):
                 ring.wxyz = _yaw_quaternion(yaw)
 
     def plan_between(self, client=None) -> dict:
@@ -372,36 +440,53 @@ class ViewApp:
             if self._planner is None:
                 self._planner = Planner(self.inputs.solm)
             g = self.guidance
-            plans = {"default guidance": self._planner.plan(start, goal, robot=self.robot, metric=g.metric,
-                                                            weight=g.weight, power=g.power,
-                                                            turn_radius=g.turn_radius),
-                     "none (shortest)": self._planner.plan(start, goal, robot=self.robot, metric="none")}
+            plans = {
+                "default guidance": self._planner.plan(
+                    start,
+                    goal,
+                    robot=self.robot,
+                    metric=g.metric,
+                    weight=g.weight,
+                    power=g.power,
+                    turn_radius=g.turn_radius,
+                ),
+                "none (shortest)": self._planner.plan(start, goal, robot=self.robot, metric="none"),
+            }
         lines, out = [], {}
         for k, (name, plan) in enumerate(plans.items()):
             samples = plan.trajectory.sample(20.0)
             color = GUIDED if name.startswith("default") else UNGUIDED
-            self._draw_trajectory(f"/planned/{name.split()[0]}", samples, color,
-                                  PLAN_WIDTH + PLAN_STEP * (len(plans) - 1 - k), lift=0.02 * k)
+            self._draw_trajectory(
+                f"/planned/{name.split()[0]}",
+                samples,
+                color,
+                PLAN_WIDTH + PLAN_STEP * (len(plans) - 1 - k),
+                lift=0.02 * k,
+            )
             summary = plan.summary()
             error, withheld = self.predicted_error(samples)
             out[name] = {**summary, "predicted_error_m": error, "predicted_error_withheld": withheld}
-            lines.append(f"- <span style='color:rgb{color}'>■</span> {name}: "
-                         f"{summary['trajectory_length_m']:.1f} m, {summary['duration_s']:.1f} s"
-                         + self._error_text(error, withheld))
+            lines.append(
+                f"- <span style='color:rgb{color}'>■</span> {name}: "
+                f"{summary['trajectory_length_m']:.1f} m, {summary['duration_s']:.1f} s"
+                + self._error_text(error, withheld)
+            )
         self.plan_text.content = f"Robot {self.robot.kind}:\n\n" + "\n".join(lines)
         self.status = self.plan_text.content
         return out
 
-    def _draw_trajectory(self, name: str, samples: dict, color, width: float = PLAN_WIDTH,
-                         lift: float = 0.0) -> None:
+    def _draw_trajectory(self, name: str, samples: dict, color, width: float = PLAN_WIDTH, lift: float = 0.0) -> None:
         z = np.array([self.ground_height(x, y) for x, y in zip(samples["x"][::20], samples["y"][::20])])
         z = np.interp(np.arange(len(samples["x"])), np.arange(0, len(samples["x"]), 20), z) + self._above_layer + lift
         path = layers.polyline(samples["x"], samples["y"], z)
         self.server.scene.add_line_segments(f"{name}/path", path, color, thickness=width, thickness_units="screen")
         with_z = dict(samples, z=z)
-        self.server.scene.add_line_segments(f"{name}/footprint",
-                                            layers.footprints(with_z, self.footprint_radius, FOOTPRINT_EVERY_S),
-                                            color, thickness=0.05)
+        self.server.scene.add_line_segments(
+            f"{name}/footprint",
+            layers.footprints(with_z, self.footprint_radius, FOOTPRINT_EVERY_S),
+            color,
+            thickness=0.05,
+        )
 
     @staticmethod
     def _error_text(error: float | None, withheld: str | None) -> str:
@@ -414,8 +499,12 @@ class ViewApp:
         trajectory's samples (evenly spaced in time) from its predictor, the time mean of
         q_n (experiments/localization_error.py), here the SOLM's q_n over the samples where
         it is known; or None and why, in one line. (None, None) without a SOLM or a fit."""
-        from lf3pm.calibration import (LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error,
-                                       unsupported_reason)
+        from lf3pm.calibration import (
+            LOCALIZATION_PACKAGED,
+            packaged_calibration,
+            predict_localization_error,
+            unsupported_reason,
+        )
 
         solm, fit = self.inputs.solm, packaged_calibration(LOCALIZATION_PACKAGED)
         if solm is None or fit is None:
@@ -477,8 +566,10 @@ class ViewApp:
     def _show_errors(self) -> None:
         """The errors of the actions that failed last, in the panel for every page open now
         or later, verbatim (a path may hold markup)."""
-        self.error_text.content = "".join(f"<div style='color:#c62828;font-size:0.85em;overflow-wrap:anywhere'>"
-                                          f"<b>error:</b> {html.escape(m)}</div>" for m in self._errors.values())
+        self.error_text.content = "".join(
+            f"<div style='color:#c62828;font-size:0.85em;overflow-wrap:anywhere'><b>error:</b> {html.escape(m)}</div>"
+            for m in self._errors.values()
+        )
         self.error_text.visible = bool(self._errors)
 
     def stop(self) -> None:
@@ -495,8 +586,15 @@ def _quaternion_yaw(wxyz) -> float:
     return 2.0 * math.atan2(wxyz[3], wxyz[0])
 
 
-def serve(inputs: ViewInputs, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, robot=None,
-          guidance: GuidanceConfig | None = None, sensor: str | None = None) -> ViewApp:
+def serve(
+    inputs: ViewInputs,
+    *,
+    host: str = DEFAULT_HOST,
+    port: int = DEFAULT_PORT,
+    robot=None,
+    guidance: GuidanceConfig | None = None,
+    sensor: str | None = None,
+) -> ViewApp:
     """Starts the viewer of ``inputs`` (lf3pm.view.load_view_inputs) on ``host``:``port``
     and returns it (its server runs in a thread; ``stop()`` ends it). ``port`` 0 serves on
     any free port (``ViewApp.port`` says which); any other port must be free: one in use
@@ -508,8 +606,7 @@ def serve(inputs: ViewInputs, *, host: str = DEFAULT_HOST, port: int = DEFAULT_P
     from lf3pm.trajectory.robots import Robot
 
     if not isinstance(inputs, ViewInputs):
-        raise Lf3pmError(f"serve needs the viewer's inputs (lf3pm.view.load_view_inputs), got "
-                         f"{type(inputs).__name__}")
+        raise Lf3pmError(f"serve needs the viewer's inputs (lf3pm.view.load_view_inputs), got {type(inputs).__name__}")
     if isinstance(port, int) and not isinstance(port, bool) and port == 0:
         check_host(host)
     else:

@@ -36,8 +36,9 @@ class ViewInputs:
     replays: dict = field(default_factory=dict)
 
 
-def load_view_inputs(map_path, solm_path=None, plan_paths=(), replay_paths=(),
-                     threads: int = DEFAULTS.scan.threads) -> ViewInputs:
+def load_view_inputs(
+    map_path, solm_path=None, plan_paths=(), replay_paths=(), threads: int = DEFAULTS.scan.threads
+) -> ViewInputs:
     """Reads and checks everything the viewer shows: a missing or unreadable file, a SOLM
     built on another map (its recorded map hash differs from this map's), a malformed
     trajectory CSV or a replay JSON that is not what ``lf3pm replay --json`` writes (a
@@ -52,8 +53,10 @@ def load_view_inputs(map_path, solm_path=None, plan_paths=(), replay_paths=(),
         solm = Solm.open(solm_path)
         built_on = solm.attrs.get("map_sha256")
         if built_on is not None and built_on != world.sha256:
-            raise Lf3pmError(f"{solm_path} was built on another map than {map_path} "
-                             f"(map hash {built_on[:12]}…, this map's {world.sha256[:12]}…)")
+            raise Lf3pmError(
+                f"{solm_path} was built on another map than {map_path} "
+                f"(map hash {built_on[:12]}…, this map's {world.sha256[:12]}…)"
+            )
     plans = {_name(p, "plan"): read_csv(p) for p in plan_paths}
     replays = {}
     for path in replay_paths:
@@ -110,9 +113,11 @@ def check_host(host: str) -> None:
     try:
         _bind(host, 0)
     except OSError as err:
-        raise Lf3pmError(f"host {host!r} is not an address of this machine ({err.strerror or err}): use "
-                         "127.0.0.1 (this machine only), 0.0.0.0 (every interface) or one of its "
-                         "addresses") from None
+        raise Lf3pmError(
+            f"host {host!r} is not an address of this machine ({err.strerror or err}): use "
+            "127.0.0.1 (this machine only), 0.0.0.0 (every interface) or one of its "
+            "addresses"
+        ) from None
 
 
 def check_port(host: str, port: int) -> None:

@@ -103,10 +103,16 @@ def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
         z = np.where(np.isfinite(ground), ground, 0.0) + 0.05
     shown = np.isfinite(values) & (values > 0)
     v = values[shown]
-    lo, hi = (np.percentile(v, [2, 98]) if len(v) else (1.0, 2.0))
+    lo, hi = np.percentile(v, [2, 98]) if len(v) else (1.0, 2.0)
     hi = max(hi, lo * 1.0001)
-    return {"centres": np.c_[xs[shown], ys[shown], z[shown]].astype(np.float32),
-            "colors": colormap(v, lo, hi), "values": v, "lo": float(lo), "hi": float(hi), "res": g.res}
+    return {
+        "centres": np.c_[xs[shown], ys[shown], z[shown]].astype(np.float32),
+        "colors": colormap(v, lo, hi),
+        "values": v,
+        "lo": float(lo),
+        "hi": float(hi),
+        "res": g.res,
+    }
 
 
 def colorbar_image(lo: float, hi: float, label: str, pixels: tuple = COLORBAR_PIXELS) -> np.ndarray:
@@ -178,33 +184,46 @@ def replay_tracks(replay: dict) -> dict:
     run = runs[0] if isinstance(runs, list) and runs else replay
     if not isinstance(run, dict):
         raise Lf3pmError(f"the replay JSON's runs[0] must be an object, got {type(run).__name__}")
-    keys = [("truth_xyz", "estimate_xyz", "errors"),
-            ("truth_xyz_every_second", "estimate_xyz_every_second", "errors_every_second")]
+    keys = [
+        ("truth_xyz", "estimate_xyz", "errors"),
+        ("truth_xyz_every_second", "estimate_xyz_every_second", "errors_every_second"),
+    ]
     names = next((k for k in keys if all(name in run for name in k)), None)
     if names is None:
-        raise Lf3pmError("the replay JSON holds no true and estimated positions (write it with "
-                         "`lf3pm replay --json`)")
-    truth, estimate, errors = (_numbers(run[name], name, width, nulls=name != names[0])
-                               for name, width in zip(names, (3, 3, None)))
+        raise Lf3pmError("the replay JSON holds no true and estimated positions (write it with `lf3pm replay --json`)")
+    truth, estimate, errors = (
+        _numbers(run[name], name, width, nulls=name != names[0]) for name, width in zip(names, (3, 3, None))
+    )
     if not (len(truth) == len(estimate) == len(errors)):
-        raise Lf3pmError(f"the replay JSON's {', '.join(names)} differ in length "
-                         f"({len(truth)}, {len(estimate)}, {len(errors)})")
+        raise Lf3pmError(
+            f"the replay JSON's {', '.join(names)} differ in length ({len(truth)}, {len(estimate)}, {len(errors)})"
+        )
     if len(truth) < 2:
         raise Lf3pmError("the replay JSON holds fewer than 2 scans")
     known = errors[np.isfinite(errors)]
     if np.any(known < 0):
         raise Lf3pmError(f"the replay JSON's {names[2]} must be >= 0 (distances), got {known.min():g}")
     rest = run.get("rest") or {}
-    if not (isinstance(rest, dict) and (not rest or (isinstance(rest.get("steady"), bool)
-                                                     and _is_number(rest.get("speed_mps"))))):
-        raise Lf3pmError("the replay JSON's rest must be an object with steady (true or false) and speed_mps "
-                         f"(a number), got {repr(rest)[:60]}")
+    if not (
+        isinstance(rest, dict)
+        and (not rest or (isinstance(rest.get("steady"), bool) and _is_number(rest.get("speed_mps"))))
+    ):
+        raise Lf3pmError(
+            "the replay JSON's rest must be an object with steady (true or false) and speed_mps "
+            f"(a number), got {repr(rest)[:60]}"
+        )
     lo = max(float(known.min()), 1e-3) if known.size else 1e-3
     hi = max(float(known.max()), 2e-3) if known.size else 2e-3
     colors = colormap(errors, lo, hi, name="plasma")
-    return {"truth": polyline(*truth.T), "estimate": polyline(*estimate.T),
-            "colors": np.stack([colors[:-1], colors[1:]], axis=1), "errors": errors, "lo": lo, "hi": hi,
-            "rest": dict(rest)}
+    return {
+        "truth": polyline(*truth.T),
+        "estimate": polyline(*estimate.T),
+        "colors": np.stack([colors[:-1], colors[1:]], axis=1),
+        "errors": errors,
+        "lo": lo,
+        "hi": hi,
+        "rest": dict(rest),
+    }
 
 
 def _is_number(value) -> bool:
@@ -232,12 +251,16 @@ def replay_caption(name: str, tracks: dict) -> str:
     """The viewer's line for a replay (replay_tracks' ``tracks``): its error range and
     colours, and a warning when a LIO entered the trajectory already moving."""
     lo, hi = tracks["lo"] * 100, tracks["hi"] * 100
-    text = (f"{name}: error {lo:.1f}-{hi:.1f} cm (estimate coloured from dark, {lo:.1f} cm, to yellow, "
-            f"{hi:.1f} cm; truth grey).")
+    text = (
+        f"{name}: error {lo:.1f}-{hi:.1f} cm (estimate coloured from dark, {lo:.1f} cm, to yellow, "
+        f"{hi:.1f} cm; truth grey)."
+    )
     rest = tracks["rest"]
     if rest and not rest["steady"]:
-        text += (f" **The odometry was already moving at {rest['speed_mps']:.2f} m/s before the trajectory "
-                 "started: this error measures its start, not the trajectory.**")
+        text += (
+            f" **The odometry was already moving at {rest['speed_mps']:.2f} m/s before the trajectory "
+            "started: this error measures its start, not the trajectory.**"
+        )
     return text
 
 
@@ -255,6 +278,7 @@ def weak_directions(observations: dict, position: np.ndarray) -> dict:
     values = np.maximum(values, 1e-12)
     lengths = ARROW_LENGTH * np.sqrt(values[0] / values)
     p = np.asarray(position, dtype=np.float32)
-    arrows = np.stack([np.stack([p, p + (length * vectors[:, k]).astype(np.float32)])
-                       for k, length in enumerate(lengths)])
+    arrows = np.stack(
+        [np.stack([p, p + (length * vectors[:, k]).astype(np.float32)]) for k, length in enumerate(lengths)]
+    )
     return {"arrows": arrows, "eigenvalues": values, "directions": vectors.T}
