@@ -39,8 +39,9 @@ test: lint
 	  || echo "chromium not installed: the browser test of lf3pm view will be skipped"
 	$(PY) -m pytest -q
 
-# bench_evaluate.py's Embree baseline needs embreex. The SOLM benchmark's baseline
-# uses Open3D, whose import needs Debian's
+# Every benchmark in bench/, each printing its ratio against its baseline (tests/test_bench.py
+# checks that each script is listed here). bench_evaluate.py's Embree baseline needs embreex.
+# The SOLM benchmark's baseline uses Open3D, whose import needs Debian's
 # libusb-1.0-0 (shared BUILD-NOTES): installed here when we may, else said why not.
 bench: build
 	$(PY) -m pip install -q "open3d>=0.18" embreex
@@ -55,8 +56,13 @@ bench: build
 	$(PY) bench/bench_graph_search.py
 	$(PY) bench/bench_esdf.py
 	$(PY) bench/bench_planner_backend.py
+	$(PY) bench/bench_planner_occupancy.py
+	for robot in omni diff car; do $(PY) bench/bench_random_queries.py --robot $$robot || exit 1; done
+	$(PY) bench/bench_motion.py
 	$(PY) bench/bench_odometry_replay.py
 	$(PY) bench/bench_replay.py
+	$(PY) bench/bench_solm_cluster.py
+	$(PY) bench/bench_solm_memory.py
 
 clean:
 	rm -rf build out $(VENV)

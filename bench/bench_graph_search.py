@@ -25,13 +25,12 @@ from __future__ import annotations
 import argparse
 import math
 import resource
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from common import build_boxes_solm
 from scipy.ndimage import gaussian_filter
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
@@ -128,13 +127,7 @@ def boxes_solm(path: str | None):
 
     if path:
         return Solm.open(path)
-    tmp = Path(tempfile.mkdtemp())
-    for args in (
-        ["scene", "boxes", "-o", tmp / "boxes.pcd"],
-        ["solm", "build", tmp / "boxes.pcd", "-o", tmp / "boxes.zarr", "--res", "0.5", "--ray-stride", "4"],
-    ):
-        subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
-    return Solm.open(tmp / "boxes.zarr")
+    return Solm.open(build_boxes_solm(Path(tempfile.mkdtemp())))
 
 
 def car_cases(trav, cost, angle, boxes: str | None) -> None:

@@ -4,7 +4,8 @@ Synthetic sites of 10, 30 and 60 M points (a 1 km x 1 km rolling ground with 400
 buildings; the point spacing sets the count) written as .npy; for each, `lf3pm solm
 build` of one 32 x 32-cell tile (0.5 m, VLP-16) in the site's centre, run under
 /usr/bin/time -v, once indexing the whole map and once on crops (`--crop`). Prints the
-peak resident memory, the wall time and the map's own size in memory (24 bytes a point).
+peak resident memory, the wall time and the map's own size in memory (24 bytes a point),
+and the ratio of the crops' peak to the whole index's (the baseline) where both ran.
 
     .venv/bin/python bench/bench_solm_memory.py [--millions 10 30 60] [--skip-whole-above 30]
 """
@@ -85,8 +86,8 @@ def main() -> None:
         "--skip-whole-above", type=float, default=30.0, help="Do not index maps of more million points whole."
     )
     args = parser.parse_args()
-    print("| map points | map array GiB | whole index: peak GiB | s | crops: peak GiB | s |")
-    print("|---|---|---|---|---|---|")
+    print("| map points | map array GiB | whole index: peak GiB | s | crops: peak GiB | s | peak crops / whole |")
+    print("|---|---|---|---|---|---|---|")
     for millions in args.millions:
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "site.npy"
@@ -94,12 +95,16 @@ def main() -> None:
             np.save(path, points)
             size = points.nbytes / 2**30
             del points
-            whole = ("-", "-")
+            whole, whole_rss = ("-", "-"), None
             if millions <= args.skip_whole_above:
                 rss, wall = run(path, Path(tmp) / "whole.zarr", ["--crop-above", str(10**9)])
-                whole = (f"{rss:.2f}", f"{wall:.0f}")
+                whole, whole_rss = (f"{rss:.2f}", f"{wall:.0f}"), rss
             rss, wall = run(path, Path(tmp) / "crops.zarr", ["--crop"])
-            print(f"| {millions:g} M | {size:.2f} | {whole[0]} | {whole[1]} | {rss:.2f} | {wall:.0f} |", flush=True)
+            ratio = "-" if whole_rss is None else f"{rss / whole_rss:.2f}x"
+            print(
+                f"| {millions:g} M | {size:.2f} | {whole[0]} | {whole[1]} | {rss:.2f} | {wall:.0f} | {ratio} |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":
