@@ -5,11 +5,13 @@ A benchmark is a bench/*.py script (it has an ``if __name__ == "__main__":`` blo
 other modules there are helpers the benchmarks import. Every benchmark is in the Makefile's
 bench target; no bench module imports a private lf3pm name (the bound core, lf3pm._core, is
 the C++ API and allowed), puts tests/ on sys.path or imports a tests/ module, or reads a run
-folder under out/."""
+folder under out/; every lf3pm name a bench module imports exists."""
 
 from __future__ import annotations
 
 import ast
+import importlib
+import importlib.util
 import re
 from pathlib import Path
 
@@ -125,6 +127,33 @@ def test_bench_reads_no_run_folder(path):
         if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in skip
     ]
     assert [s for s in strings if re.match(r"\.?/?out(/|$)", s)] == []
+
+
+def module_exists(dotted: str) -> bool:
+    try:
+        return importlib.util.find_spec(dotted) is not None
+    except ModuleNotFoundError:  # a parent is a module, not a package
+        return False
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: p.name)
+def test_bench_imports_resolve(path):
+    """Every ``from lf3pm... import name`` of a bench module, at its top or inside a function,
+    names something lf3pm has: a refactor that renames it must update the benchmark."""
+    missing = []
+    for node in ast.walk(tree(path)):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] != "lf3pm":
+                continue
+            module = importlib.import_module(node.module)
+            for alias in node.names:
+                if not hasattr(module, alias.name) and not module_exists(f"{node.module}.{alias.name}"):
+                    missing.append(f"{node.module}.{alias.name}")
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "lf3pm" and not module_exists(alias.name):
+                    missing.append(alias.name)
+    assert missing == [], f"{path.name} imports names lf3pm does not have"
 
 
 def test_the_checks_see_what_they_look_for():
