@@ -15,6 +15,7 @@
 #include "lf3pm/trajectory/minco.hpp"
 #include "lf3pm/trajectory/trajectory_cost.hpp"
 #include "lf3pm/trajectory/trajectory_optimizer.hpp"
+#include "lf3pm/trajectory/travel_heading.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -120,6 +121,32 @@ void bind_trajectory(nb::module_& m) {
       "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity; "
       "3 x 3: and acceleration, which frees the neighbouring junction's waypoint), the free intermediate "
       "waypoints (K, 3) and durations (N,).");
+
+  m.def(
+      "travel_heading",
+      [](nb::ndarray<const double, nb::shape<-1, 4, 3>, nb::c_contig, nb::device::cpu> c, Vec tau, Vec durations) {
+        const std::size_t n = c.shape(0);
+        if (tau.shape(0) != n || durations.shape(0) != n)
+          throw std::invalid_argument("travel_heading: c, tau and durations must have one row per sample");
+        std::vector<double> yaw(n), omega(n);
+        for (std::size_t i = 0; i < n; ++i) {
+          const double t = tau(i), d = durations(i);
+          Eigen::Vector2d c1, c2, c3, v, a, j;
+          for (int k = 0; k < 2; ++k) {
+            c1(k) = c(i, 1, k), c2(k) = c(i, 2, k), c3(k) = c(i, 3, k);
+            v(k) = c1(k) + t * (2.0 * c2(k) + t * (3.0 * c3(k)));  // Horner, as Trajectory's positions
+            a(k) = 2.0 * c2(k) + t * (6.0 * c3(k));
+            j(k) = 6.0 * c3(k);
+          }
+          const TravelHeading h = travel_heading(v, a, j, t > 0.5 * d, velocity_scale(c1, c2, c3, d));
+          yaw[i] = h.yaw, omega[i] = h.omega;
+        }
+        return nb::make_tuple(lf3pm::bindings::to_numpy(std::move(yaw)), lf3pm::bindings::to_numpy(std::move(omega)));
+      },
+      "c"_a, "tau"_a, "durations"_a,
+      "The flat map of a nonholonomic robot (travel_heading.hpp): yaw = atan2(ydot, xdot) and its rate on "
+      "cubic pieces c (n, 4, 3) at local times tau (n,) of pieces of the given durations (n,), with the "
+      "limits at rest. Returns (yaw, omega), each (n,).");
 
   nb::class_<LbfgsParams>(m, "LbfgsParams", "L-BFGS parameters (the defaults; see lbfgs.hpp).")
       .def(nb::init<>())

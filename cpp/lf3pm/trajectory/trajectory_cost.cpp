@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "lf3pm/trajectory/travel_heading.hpp"
+
 namespace lf3pm {
 
 namespace {
@@ -81,6 +83,7 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
     Eigen::Matrix<double, 4, 3> gc = Eigen::Matrix<double, 4, 3>::Zero();
     double gt = 0.0;
     const Eigen::Vector3d jerk = 6.0 * c.row(3).transpose();
+    const double scale = velocity_scale(c.row(1).head<2>(), c.row(2).head<2>(), c.row(3).head<2>(), dur);
     for (int j = 0; j <= k_max; ++j) {
       const double alpha = double(j) / k_max, t = alpha * dur;
       const Eigen::Vector4d b0(1.0, t, t * t, t * t * t), b1(0.0, 1.0, 2.0 * t, 3.0 * t * t),
@@ -96,17 +99,14 @@ void TrajectoryCost::add(const Eigen::MatrixX3d& coef, const Eigen::VectorXd& du
         // Flat output: yaw = atan2(ydot, xdot); s = |v|^2, cr = v x a (omega = cr / s).
         const double s2 = v(0) * v(0) + v(1) * v(1), cr = v(0) * a(1) - v(1) * a(0);
         if (!cost_.empty() && weights_.w_q != 0.0) {
-          // At rest (the ends) the direction of travel is that of +-a: the robot starts
-          // moving along a, and comes to rest moving along -a.
-          const bool rest = s2 < 1e-18;
-          const Eigen::Vector3d& u = rest ? a : v;
-          const double sign = rest && alpha > 0.5 ? -1.0 : 1.0, u2 = u(0) * u(0) + u(1) * u(1);
-          f.q = weights_.w_q * cost_.sample(p(0), p(1), std::atan2(sign * u(1), sign * u(0)), field_grad);
+          const TravelHeading h = travel_heading(v.head<2>(), a.head<2>(), jerk.head<2>(), alpha > 0.5, scale);
+          const double u2 = h.u.squaredNorm();
+          f.q = weights_.w_q * cost_.sample(p(0), p(1), h.yaw, field_grad);
           qp(0) += weights_.w_q * field_grad(0), qp(1) += weights_.w_q * field_grad(1);
-          if (u2 > 1e-18) {  // d yaw / d u = (-u_y, u_x) / |u|^2, whatever the sign
+          if (u2 > 1e-18) {  // d yaw / d u = (-u_y, u_x) / |u|^2, whatever the sign (none from a u ~ 0)
             const double dy = weights_.w_q * field_grad(2) / u2;
-            Eigen::Vector3d& gu = rest ? qa : qv;
-            gu(0) -= dy * u(1), gu(1) += dy * u(0);
+            Eigen::Vector3d& gu = h.rest ? qa : qv;
+            gu(0) -= dy * h.u(1), gu(1) += dy * h.u(0);
           }
         }
         double d = ilon2 * cubic_penalty(s2 * ilon2 - 1.0, w, f.velocity);

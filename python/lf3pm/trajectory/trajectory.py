@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lf3pm import libm
+from lf3pm import _core
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
 from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
@@ -52,7 +52,7 @@ class Trajectory:
         p, v = _powers(c, tau, 0), _powers(c, tau, 1)
         if self.flat is not None and np.any(self.flat[piece]):
             f = np.asarray(self.flat)[piece]
-            yaw, omega = _travel_heading(c, tau, self.durations[piece])
+            yaw, omega = _core.travel_heading(np.ascontiguousarray(c), tau, self.durations[piece])
             yaw += 2 * np.pi * np.round((p[:, 2] - yaw) / (2 * np.pi))
             p[f, 2], v[f, 2] = yaw[f], omega[f]
         return p, v
@@ -124,34 +124,6 @@ class Trajectory:
             comments="",
         )
         return buf.getvalue().encode()
-
-
-def _travel_heading(c, tau, durations):
-    """Direction of travel atan2(ydot, xdot) and its rate (v x a) / |v|^2 on pieces c
-    (n, 4, 3) at times tau (n,). Where a piece is at rest (|v| below 1e-6 of the
-    piece's velocity scale; rounding would decide the direction there), their limits:
-    the robot starts moving along a and comes to rest moving along -a, turning at
-    (a x j) / (2 |a|^2) (from v = a t + j t^2 / 2; into rest, in reverse time)."""
-    v, a = _powers(c, tau, 1)[:, :2], _powers(c, tau, 2)[:, :2]
-    j = 6.0 * c[:, 3, :2]
-    scale = (
-        np.linalg.norm(c[:, 1, :2], axis=1)
-        + 2 * np.linalg.norm(c[:, 2, :2], axis=1) * durations
-        + 3 * np.linalg.norm(c[:, 3, :2], axis=1) * durations**2
-    )
-    speed2 = np.sum(v**2, axis=1)
-    rest = speed2 <= (1e-6 * scale) ** 2
-    sign = np.where(tau > 0.5 * durations, -1.0, 1.0)[:, None]
-    u = np.where(rest[:, None], sign * a, v)
-    yaw = libm.atan2(u[:, 1], u[:, 0])
-
-    def cross(x, y):
-        return x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]
-
-    a2 = np.sum(a**2, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        omega = np.where(rest, np.where(a2 > 0, cross(a, j) / (2 * a2), 0.0), cross(v, a) / speed2)
-    return yaw, omega
 
 
 def _powers(c, tau, order: int):
