@@ -1,5 +1,6 @@
-"""The package's layout: no import cycle between lf3pm's packages and top-level
-modules, lazy (in-function) imports included."""
+"""The package's layout: no import cycle in lf3pm, lazy (in-function) imports
+included: neither between its packages and top-level modules, nor between modules
+(inside one package as well as across packages)."""
 
 import ast
 from pathlib import Path
@@ -57,6 +58,37 @@ def unit_graph() -> dict[str, set[str]]:
     return graph
 
 
+def ancestors(module: str) -> set[str]:
+    """The packages that hold ``module`` (lf3pm.a.b: lf3pm, lf3pm.a)."""
+    parts = module.split(".")
+    return {".".join(parts[:k]) for k in range(1, len(parts))}
+
+
+def module_graph() -> dict[str, set[str]]:
+    """Module -> the lf3pm modules it imports, lazy imports included (the facade and
+    entry points left out, as in unit_graph). Importing ``a.b.c`` from outside package
+    ``a.b`` runs ``a/b/__init__.py`` first: an edge to it too (a package's own modules
+    are loaded from inside it, so it is no edge of theirs)."""
+    graph: dict[str, set[str]] = {}
+    modules = {module_name(p) for p in PACKAGE.rglob("*.py")}
+    for path in PACKAGE.rglob("*.py"):
+        source = module_name(path)
+        if source in ("lf3pm", "lf3pm.__main__"):
+            continue
+        inside = ancestors(source) | {source}
+        for target in imports(path):
+            while target not in modules and "." in target:
+                target = target.rpartition(".")[0]
+            for module in (ancestors(target) | {target}) - inside - {"lf3pm"}:
+                graph.setdefault(source, set()).add(module)
+    return graph
+
+
+#: Module cycles in files this change did not own, allowed until they are removed
+#: (TEMPORARY: the lead removes this list; each entry is one cycle's sorted modules).
+KNOWN_MODULE_CYCLES: list[list[str]] = []
+
+
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     """The strongly connected components of more than one unit (Tarjan)."""
     index, low, stack, on_stack, found = {}, {}, [], set(), []
@@ -91,6 +123,30 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_the_cycle_finder_finds_a_cycle():
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_the_module_graph_sees_imports_inside_a_package_and_through_its_init():
+    graph = module_graph()
+    assert "lf3pm.experiments.benefit.records" in graph["lf3pm.experiments.benefit.report"]
+    # The study imports its records from inside their package: no edge to its __init__;
+    # its figures import lf3pm.solm.figures from outside lf3pm.solm: an edge to its __init__.
+    assert "lf3pm.experiments.benefit" not in graph["lf3pm.experiments.benefit.study"]
+    assert {"lf3pm.solm", "lf3pm.solm.figures"} <= graph["lf3pm.experiments.benefit.figures"]
+
+
+def test_no_import_cycle_between_modules():
+    """Inside a package too: benefit's report and figures import its records, never back."""
+    found = [c for c in cycles(module_graph()) if c not in KNOWN_MODULE_CYCLES]
+    assert not found, "import cycles between lf3pm's modules: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_the_benefit_report_and_figures_read_its_records_only():
+    """Of the experiments, the benefit study's report and figures import its records alone
+    (not how the study runs or computes)."""
+    graph = module_graph()
+    for name in ("report", "figures"):
+        used = {m for m in graph[f"lf3pm.experiments.benefit.{name}"] if m.startswith("lf3pm.experiments")}
+        assert used == {"lf3pm.experiments.benefit.records"}, (name, used)
 
 
 def test_no_import_cycle_between_packages():

@@ -24,6 +24,7 @@ from lf3pm.atomic import atomic_write
 from lf3pm.calibration import fit_localization_error
 from lf3pm.config import DEFAULT_HEIGHT, MetricConfig
 from lf3pm.errors import Lf3pmError
+from lf3pm.experiments.benefit.records import LOCALIZATION, Pair, Predictor, StudyFolder, read_json, write_json
 
 #: Poses per second of trajectory at which q_n is evaluated.
 FIT_RATE = 1.0
@@ -31,7 +32,7 @@ FIT_RATE = 1.0
 MIN_PLANS = 10
 
 
-def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: float = DEFAULT_HEIGHT) -> dict:
+def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: float = DEFAULT_HEIGHT) -> Predictor:
     """q_n at the trajectory CSV's poses every 1/``rate`` s: its time mean over the
     non-degenerate poses, the share of degenerate ones and the count."""
     from lf3pm.metric import evaluate
@@ -47,42 +48,44 @@ def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: f
             continue
     q = np.asarray(values, float)
     finite = np.isfinite(q)
-    return {
-        "q_n_mean": float(np.mean(q[finite])) if finite.any() else math.nan,
-        "degenerate_share": float(np.mean(~finite)) if len(q) else math.nan,
-        "poses": int(len(q)),
-    }
+    return Predictor(
+        q_n_mean=float(np.mean(q[finite])) if finite.any() else math.nan,
+        degenerate_share=float(np.mean(~finite)) if len(q) else math.nan,
+        poses=int(len(q)),
+    )
 
 
-def localization_error_fit(out: Path, cases, records: list, *, seeds: int, pair_seed: int, step=None) -> dict:
-    """The fit over the study's plans (``records``: its pairs with their replay
-    summaries), written to DIR/localization_error.json."""
+def localization_error_fit(
+    out: Path, cases, pairs: list[Pair], *, seeds: int, pair_seed: int, step=None
+) -> tuple[dict, dict[tuple[str, int, str], Predictor]]:
+    """The fit over the study's plans (``pairs``, with their replays), written to
+    DIR/localization_error.json, and each plan's predictor by (map, pair number,
+    guidance)."""
     by_name = {case.name: case for case in cases}
-    maps, q_n, ape, sensors, worlds = [], [], [], set(), {}
-    plans = [(pair, name, plan) for pair in records for name, plan in pair["plans"].items() if "localization" in plan]
+    folder = StudyFolder(Path(out))
+    maps, q_n, ape, sensors, worlds, predictors = [], [], [], set(), {}, {}
+    plans = [(pair, name, plan) for pair in pairs for name, plan in pair.plans.items() if LOCALIZATION in plan.replays]
     if step is not None:
         step("q_n along the plans (localization-error fit)", len(plans), 0, restart=True)
     for pair, name, plan in plans:
-        case = by_name[pair["case"]]
-        path = Path(out) / "predictors" / case.name / f"{pair['pair']:02d}_{name}.json"
+        case = by_name[pair.case]
+        path = folder.predictor(case.name, pair.number, name)
         if path.exists():
-            predictor = json.loads(path.read_text())
+            predictor = Predictor.from_json(read_json(path))
         else:
             if case.name not in worlds:
                 from lf3pm.experiments.map_cases import load_case_map
 
                 worlds = {case.name: load_case_map(case)[0]}  # one map in memory at a time
-            predictor = plan_predictor(worlds[case.name], Path(out) / plan["csv"], case.sensor)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_write(path) as fp:
-                fp.write(json.dumps(predictor).encode())
+            predictor = plan_predictor(worlds[case.name], folder.root / plan.csv, case.sensor)
+            write_json(path, predictor.to_json())
         if step is not None:
             step("q_n along the plans (localization-error fit)", len(plans))
-        plan["q_n_exact"] = predictor
-        if predictor["degenerate_share"] == 0:
+        predictors[(pair.case, pair.number, name)] = predictor
+        if predictor.degenerate_share == 0:
             maps.append(case.name)
-            q_n.append(predictor["q_n_mean"])
-            ape.append(plan["localization"]["ape"])
+            q_n.append(predictor.q_n_mean)
+            ape.append(plan.replays[LOCALIZATION].ape)
             sensors.add(case.sensor)
     provenance = {
         "command": f"lf3pm experiment benefit (seeds={seeds}, pair_seed={pair_seed})",
@@ -100,4 +103,4 @@ def localization_error_fit(out: Path, cases, records: list, *, seeds: int, pair_
         fit = fit_localization_error(maps, q_n, ape, provenance=provenance)
     with atomic_write(Path(out) / "localization_error.json") as fp:
         fp.write(json.dumps(fit, indent=1).encode())
-    return fit
+    return fit, predictors

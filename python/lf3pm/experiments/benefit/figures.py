@@ -1,4 +1,4 @@
-"""Figures of the benefit study (experiments/benefit.py)."""
+"""Figures of the benefit study, from its summary and folder alone."""
 
 from __future__ import annotations
 
@@ -8,6 +8,17 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.config import COMPOSITE_CHANNELS
+from lf3pm.experiments.benefit.records import (
+    APE_FLOOR,
+    DEFAULT,
+    LIO,
+    LOCALIZATION,
+    NONE,
+    Measure,
+    StudyFolder,
+    Summary,
+    read_replay,
+)
 from lf3pm.solm.figures import save_figure
 
 _MARKERS = "osD^vP*X"
@@ -22,32 +33,33 @@ def _plt():
     return plt
 
 
-def _errors(summary: dict, guidance: str, method: str):
-    """(case, unguided APE, guided APE) of every pair replayed both ways."""
+def _errors(summary: Summary, guidance: str, method: str) -> list[tuple[str, float, float]]:
+    """(map, unguided APE, guided APE) of every pair replayed both ways by ``method``."""
     out = []
-    for pair in summary["pairs"]:
-        plans = pair["plans"]
-        if method in plans[guidance] and method in plans["none"]:
-            out.append((pair["case"], plans["none"][method]["ape"], plans[guidance][method]["ape"]))
+    for pair in summary.pairs:
+        both = pair.both(guidance, method)
+        if both is not None:
+            out.append((pair.case, both[1].ape, both[0].ape))
     return out
 
 
-def scatter_figure(summary: dict, path: Path) -> None:
+def scatter_figure(summary: Summary, path: Path) -> None:
     """APE of each guided plan against its unguided twin, log-log, one panel per
     guidance, a row for localization and one for the LIO (the guidances it replayed);
     below the diagonal guidance helped."""
     plt = _plt()
-    names = [g["name"] for g in summary["guidance"] if g["name"] != "none"]
+    names = [g.name for g in summary.guided]
+    lio_compared = summary.compared(Measure(LIO)).by_guidance
     rows_of_panels = [
-        [(name, "localization") for name in names],
-        [(name, "lio") for name in names if name in summary["comparisons"]["lio"]],
+        [(name, LOCALIZATION) for name in names],
+        [(name, LIO) for name in names if name in lio_compared],
     ]
     rows_of_panels = [row for row in rows_of_panels if row]
     columns = max(len(row) for row in rows_of_panels)
     fig, axes = plt.subplots(
         len(rows_of_panels), columns, figsize=(3.6 * columns, 3.9 * len(rows_of_panels)), dpi=110, squeeze=False
     )
-    cases = [c["name"] for c in summary["cases"]]
+    cases = [c.name for c in summary.cases]
     for ax in axes.flat:
         ax.set_visible(False)
     panels = [
@@ -59,7 +71,7 @@ def scatter_figure(summary: dict, path: Path) -> None:
         ax.set_visible(True)
         rows = _errors(summary, guidance, method)
         values = [v for _, a, b in rows for v in (a, b)] or [1e-3, 1.0]
-        lo, hi = max(min(values) / 1.5, 1e-4), max(values) * 1.5
+        lo, hi = max(min(values) / 1.5, APE_FLOOR), max(values) * 1.5
         ax.plot([lo, hi], [lo, hi], "k-", lw=0.8)
         ax.plot([lo, hi], [lo / 2, hi / 2], "k:", lw=0.8)
         for number, case in enumerate(cases):
@@ -78,8 +90,8 @@ def scatter_figure(summary: dict, path: Path) -> None:
         ax.set_aspect("equal")
         ax.set_xlabel("APE rmse, no guidance (m)")
         ax.set_ylabel(f"APE rmse, {guidance} (m)")
-        c = summary["comparisons"][method][guidance]
-        ratio = f"median ratio {c['median_ratio']:.2f}" if c.get("pairs") else "no pairs"
+        c = summary.compared(Measure(method)).by_guidance[guidance]
+        ratio = f"median ratio {c.median_ratio:.2f}" if c.pairs else "no pairs"
         ax.set_title(f"{method}: {guidance}\n{ratio}", fontsize=9)
     axes[0][0].legend(fontsize=7, loc="upper left")
     # Wrapped to the figure's width: one column of panels (a single guidance) is narrow.
@@ -91,28 +103,26 @@ def scatter_figure(summary: dict, path: Path) -> None:
     save_figure(fig, Path(path))
 
 
-def ratio_figure(summary: dict, path: Path) -> None:
+def ratio_figure(summary: Summary, path: Path) -> None:
     """Per map, the ratio APE(default) / APE(none) of every pair (localization and LIO,
     the legend naming the LIO's odometry per map)."""
-    from lf3pm.experiments.benefit import odometry_line
-
-    if not any(g["name"] == "default" for g in summary["guidance"]):
+    if not any(g.name == DEFAULT for g in summary.guidance):
         return
     plt = _plt()
-    cases = [c["name"] for c in summary["cases"]]
+    cases = [c.name for c in summary.cases]
     fig, ax = plt.subplots(figsize=(max(6, 1.3 * len(cases)), 4), dpi=110)
-    for offset, method, colour in ((-0.15, "localization", "tab:blue"), (0.15, "lio", "tab:orange")):
-        rows = _errors(summary, "default", method)
+    labels = {LOCALIZATION: LOCALIZATION, LIO: f"LIO ({summary.odometry_line()})"}
+    for offset, method, colour in ((-0.15, LOCALIZATION, "tab:blue"), (0.15, LIO, "tab:orange")):
+        rows = _errors(summary, DEFAULT, method)
         for number, case in enumerate(cases):
-            r = np.array([b / max(a, 1e-4) for c, a, b in rows if c == case])
+            r = np.array([b / max(a, APE_FLOOR) for c, a, b in rows if c == case])
             if r.size:
-                label = (
-                    method
-                    if method == "localization" or "lio_odometry" not in summary
-                    else f"LIO ({odometry_line(summary)})"
-                )
                 ax.scatter(
-                    np.full(r.size, number + offset), r, s=16, color=colour, label=label if number == 0 else None
+                    np.full(r.size, number + offset),
+                    r,
+                    s=16,
+                    color=colour,
+                    label=labels[method] if number == 0 else None,
                 )
                 ax.plot([number + offset - 0.1, number + offset + 0.1], [np.median(r)] * 2, color=colour, lw=2)
     ax.axhline(1.0, color="k", lw=0.8)
@@ -125,39 +135,39 @@ def ratio_figure(summary: dict, path: Path) -> None:
     save_figure(fig, Path(path))
 
 
-def example_figures(cases, summary: dict, out: Path) -> None:
+def example_figures(summary: Summary, folder: StudyFolder) -> None:
     """For each map, its first pair's unguided and default trajectories over the SOLM, and
-    their localization error along the way."""
-    from lf3pm.experiments.benefit import replay_path
-    from lf3pm.experiments.replay_tasks import load_replay
+    their localization error along the way (seed 0)."""
     from lf3pm.solm import Solm
     from lf3pm.solm.figures import draw_heat_map
     from lf3pm.trajectory.trajectory import read_csv
 
     plt = _plt()
-    folder = out / "examples"
-    folder.mkdir(parents=True, exist_ok=True)
-    for case in cases:
-        pair = next((p for p in summary["pairs"] if p["case"] == case.name), None)
-        if pair is None or "default" not in pair["plans"]:
+    folder.examples.mkdir(parents=True, exist_ok=True)
+    default = next((g for g in summary.guidance if g.name == DEFAULT), None)
+    for case in summary.cases:
+        pair = next((p for p in summary.pairs if p.case == case.name), None)
+        if pair is None or default is None or DEFAULT not in pair.plans:
             continue
-        solm = Solm.open(out / "solm" / f"{case.name}.zarr")
+        solm = Solm.open(folder.solm(case.name))
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 9), dpi=110, gridspec_kw={"height_ratios": [3, 1]})
-        channel = next(g["channel"] for g in summary["guidance"] if g["name"] == "default")
         # A composite cost channel is no SOLM channel: drawn over its first part.
-        draw_heat_map(fig, top, solm, channel=COMPOSITE_CHANNELS.get(channel, (channel,))[0], reduce="min")
-        for name, colour in (("none", "white"), ("default", "tab:red")):
-            plan = pair["plans"][name]
-            t, x, y, yaw = (read_csv(out / plan["csv"])[k] for k in ("t", "x", "y", "yaw"))
+        draw_heat_map(
+            fig, top, solm, channel=COMPOSITE_CHANNELS.get(default.channel, (default.channel,))[0], reduce="min"
+        )
+        for name, colour in ((NONE, "white"), (DEFAULT, "tab:red")):
+            plan = pair.plans[name]
+            t, x, y, yaw = (read_csv(folder.root / plan.csv)[k] for k in ("t", "x", "y", "yaw"))
             every = max(1, len(t) // 30)
-            label = f"{name}: {plan['length_m']:.0f} m"
-            if "localization" in plan:
-                label += f", localization APE {100 * plan['localization']['ape']:.1f} cm"
-                first = load_replay(replay_path(out, case, pair["pair"], name, "localization", 0))
+            label = f"{name}: {plan.length_m:.0f} m"
+            localization = plan.replays.get(LOCALIZATION)
+            if localization is not None:
+                label += f", localization APE {100 * localization.ape:.1f} cm"
+                first = read_replay(folder.replay(case.name, pair.number, name, LOCALIZATION, 0))
                 bottom.plot(
-                    first["times_every_second"],
-                    first["errors_every_second"],
-                    color="k" if name == "none" else colour,
+                    first.times_every_second,
+                    first.errors_every_second,
+                    color="k" if name == NONE else colour,
                     label=f"{name} (seed 0)",
                 )
             top.plot(x, y, "-", color=colour, lw=1.6, label=label, zorder=4)
@@ -172,9 +182,9 @@ def example_figures(cases, summary: dict, out: Path) -> None:
                 zorder=5,
             )
         top.legend(loc="best", fontsize=8, facecolor="0.6")
-        top.set_title(f"{case.name}: pair {pair['pair']} ({pair['robot']}, {case.sensor}), heading ticks", fontsize=9)
+        top.set_title(f"{case.name}: pair {pair.number} ({pair.robot}, {case.sensor}), heading ticks", fontsize=9)
         bottom.set_xlabel("time (s)")
         bottom.set_ylabel("localization error (m)")
         bottom.legend(fontsize=8)
         fig.tight_layout()
-        save_figure(fig, folder / f"{case.name}.png")
+        save_figure(fig, folder.examples / f"{case.name}.png")

@@ -1,0 +1,186 @@
+"""The benefit study's statistics: each guidance against none (paired_stats), by map,
+robot and risk, which SOLM channel predicts each replay's error, the LIO's bound and
+the issue's goal, all from the study's records."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from lf3pm.experiments.benefit.records import (
+    APE_FLOOR,
+    DEFAULT,
+    LIO,
+    LOCALIZATION,
+    MEASURES,
+    NONE,
+    BeyondBound,
+    BeyondPair,
+    ChannelFit,
+    Comparison,
+    Comparisons,
+    Measure,
+    Pair,
+    RestCount,
+    RiskSplit,
+    SeedReplays,
+)
+from lf3pm.experiments.paired_stats import compare
+
+#: SOLM channels whose mean along each trajectory the summary records (calibration).
+CHANNELS = ("q_n", "q_min", "q_max", "step_norm")
+
+#: The bound the issue sets on the LIO's error along a guided plan (m): the report lists
+#: every default-guided plan beyond it, beside its unguided plan, so that where and how
+#: often the bound fails is read off the study, not looked for.
+LIO_BOUND = 0.3
+
+
+def paired(pair: Pair, guidance: str, measure: Measure) -> tuple[SeedReplays, SeedReplays] | None:
+    """The (guided, unguided) replays of ``pair`` that ``measure`` compares: both plans'
+    by its method; with steady starts only the seeds at which both plans' rest was
+    steady (None: no such seed, or no rest recorded)."""
+    both = pair.both(guidance, measure.method)
+    if both is None or not measure.steady_starts:
+        return both
+    a, b = both
+    if a.rest_steady_per_seed is None or b.rest_steady_per_seed is None:
+        return None
+    keep = [k for k, (x, y) in enumerate(zip(a.rest_steady_per_seed, b.rest_steady_per_seed)) if x and y]
+    if not keep:
+        return None
+    return a.on_seeds(keep), b.on_seeds(keep)
+
+
+def comparison(pairs: list[Pair], guidance: str, measure: Measure) -> Comparison:
+    """Plans of ``guidance`` against the unguided ones over ``pairs``, by ``measure``."""
+    rows = [(pair, both) for pair in pairs if (both := paired(pair, guidance, measure)) is not None]
+    if not rows:
+        return Comparison(0)
+    guided = [pair.plans[guidance] for pair, _ in rows]
+    unguided = [pair.plans[NONE] for pair, _ in rows]
+    return Comparison(
+        **compare(
+            [max(a.ape, APE_FLOOR) for _, (a, _) in rows],
+            [max(b.ape, APE_FLOOR) for _, (_, b) in rows],
+            guided_length=[p.length_m for p in guided],
+            unguided_length=[p.length_m for p in unguided],
+            guided_duration=[p.duration_s for p in guided],
+            unguided_duration=[p.duration_s for p in unguided],
+            guided_seeds=[list(a.ape_per_seed) for _, (a, _) in rows],
+            unguided_seeds=[list(b.ape_per_seed) for _, (_, b) in rows],
+        )
+    )
+
+
+def comparisons(pairs: list[Pair], cases: list[str], guidance: list[str], lio_guidance: list[str]) -> dict:
+    """summary.comparisons: by each measure (:data:`MEASURES`, by key), every guidance
+    its method replayed (``guidance``: all, ``lio_guidance``: the LIO's) against none,
+    over all pairs and at risk or not; where the default guidance ran at all, the
+    default per map (``cases``' order) and per robot."""
+    risky, safe = [p for p in pairs if p.at_risk], [p for p in pairs if not p.at_risk]
+    robots = sorted({p.robot for p in pairs})
+    out = {}
+    for measure in MEASURES:
+        compared = guidance if measure.method == LOCALIZATION else lio_guidance
+        by_map = by_robot = None
+        if DEFAULT in guidance:
+            by_map = {case: comparison([p for p in pairs if p.case == case], DEFAULT, measure) for case in cases}
+            by_robot = {kind: comparison([p for p in pairs if p.robot == kind], DEFAULT, measure) for kind in robots}
+        out[measure.key] = Comparisons(
+            {name: comparison(pairs, name, measure) for name in compared},
+            {name: RiskSplit(comparison(risky, name, measure), comparison(safe, name, measure)) for name in compared},
+            by_map,
+            by_robot,
+        )
+    return out
+
+
+def lio_beyond_bound(pairs: list[Pair], bound: float = LIO_BOUND) -> BeyondBound:
+    """The pairs whose default-guided plan's LIO APE (median over seeds) exceeds
+    ``bound`` m, with the unguided plan's, among the pairs with both replayed."""
+    both = [(p, b) for p in pairs if (b := p.both(DEFAULT, LIO)) is not None]
+    beyond = tuple(
+        BeyondPair(p.case, p.number, p.robot, p.at_risk, guided.ape, unguided.ape)
+        for p, (guided, unguided) in both
+        if guided.ape > bound
+    )
+    return BeyondBound(bound, len(both), beyond)
+
+
+def calibration(pairs: list[Pair]) -> dict:
+    """How each channel's mean along a trajectory predicts the APE of each replay method
+    ({method: {channel: ChannelFit}}), over every plan replayed so: Spearman rho pooled
+    and within maps (mean), and the slope b of log APE = a + b log(mean channel) (pooled
+    least squares): the power at which the channel's cost ratios track APE ratios."""
+    from scipy.stats import spearmanr
+
+    out = {}
+    for method in (LOCALIZATION, LIO):
+        for channel in CHANNELS:
+            rows = [
+                (pair.case, plan.solm_mean[channel], plan.replays[method].ape)
+                for pair in pairs
+                for plan in pair.plans.values()
+                if method in plan.replays and plan.solm_mean.get(channel, 0) > 0
+            ]
+            if len(rows) < 3:
+                continue
+            case, q, ape = (np.array(c) for c in zip(*rows))
+            ape = np.maximum(ape.astype(float), APE_FLOOR)
+            within = [
+                spearmanr(q[case == c], ape[case == c])[0]
+                for c in np.unique(case)
+                if np.sum(case == c) >= 5 and np.ptp(ape[case == c]) > 0
+            ]
+            slope = np.polyfit(np.log(q.astype(float)), np.log(ape), 1)[0]
+            out.setdefault(method, {})[channel] = ChannelFit(
+                plans=len(rows),
+                spearman_pooled=float(spearmanr(q, ape)[0]),
+                spearman_within_mean=float(np.nanmean(within)) if within else math.nan,
+                log_log_slope=float(slope),
+            )
+    return out
+
+
+def rest_counts(pairs: list[Pair]) -> dict[str, RestCount]:
+    """Per map: LIO replays in all, and those whose rest was not steady (the odometry
+    moved while the sensor stood still)."""
+    counts: dict = {}
+    for pair in pairs:
+        replays, unsteady = counts.get(pair.case, (0, 0))
+        for plan in pair.plans.values():
+            lio = plan.replays.get(LIO)
+            flags = lio.rest_steady_per_seed if lio is not None and lio.rest_steady_per_seed is not None else ()
+            replays += len(flags)
+            unsteady += sum(not f for f in flags)
+        counts[pair.case] = (replays, unsteady)
+    return {case: RestCount(*c) for case, c in counts.items()}
+
+
+def goal(comparisons: dict[str, Comparisons]) -> dict:
+    """The issue's goals for the default guidance, each True or False: on the at-risk
+    pairs a median APE ratio of at most 0.3 with Wilcoxon p < 0.01; on the others a
+    median ratio within [0.95, 1.05] whose 95 % interval ends at most at 1.10, and
+    meaningfully worse (beyond seed noise and by more than paired_stats.WORSE_MARGIN)
+    on at most 10 % of them; each by every measure; a median length overhead of at most
+    15 %. None where a goal cannot be judged: seed noise needs two seeds."""
+    out = {}
+    for measure in MEASURES:
+        split = comparisons[measure.key].by_risk.get(DEFAULT)
+        if split is None:
+            continue
+        risky, safe, key = split.at_risk, split.no_risk, measure.key
+        if risky.pairs:
+            out[f"{key}_at_risk_ratio_at_most_0.3"] = risky.median_ratio <= 0.3
+            out[f"{key}_at_risk_wilcoxon_p_below_0.01"] = bool(risky.wilcoxon_p < 0.01)
+        if safe.pairs:
+            out[f"{key}_no_risk_ratio_within_0.95_1.05"] = 0.95 <= safe.median_ratio <= 1.05
+            out[f"{key}_no_risk_ci_upper_at_most_1.10"] = safe.median_ratio_ci95[1] <= 1.10
+            worse = safe.share_worse_beyond_noise_and_margin
+            out[f"{key}_no_risk_worse_on_at_most_10pct"] = bool(worse <= 0.1) if math.isfinite(worse) else None
+    overall = comparisons[Measure(LOCALIZATION).key].by_guidance.get(DEFAULT)
+    if overall is not None and overall.pairs:
+        out["length_overhead_at_most_15pct"] = overall.median_length_overhead <= 0.15
+    return out

@@ -1,0 +1,271 @@
+"""Running the benefit study: SOLMs, pairs and their plans, the replays, then the
+analysis, report and figures (lf3pm.experiments.benefit)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from lf3pm.config import DEFAULTS, BenefitConfig, validated
+from lf3pm.errors import Lf3pmError
+from lf3pm.experiments.benefit import analysis
+from lf3pm.experiments.benefit.cases import CASES, QUICK
+from lf3pm.experiments.benefit.records import (
+    DEFAULT,
+    LIO,
+    LOCALIZATION,
+    NONE,
+    Comparisons,
+    ErrorFit,
+    LioRun,
+    Pair,
+    Parameters,
+    Plan,
+    SeedReplays,
+    StudyFolder,
+    Summary,
+    plan_prefix,
+    read_replay,
+    replay_label,
+    write_summary,
+)
+from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
+from lf3pm.experiments.benefit.localization_error import localization_error_fit
+from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
+from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN
+from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
+from lf3pm.experiments.risk import AT_RISK_SHARE, RISK_FACTOR, at_risk, risk_share
+from lf3pm.planner.poses import grid_cell
+from lf3pm.replays.replay_result import REST_SPEED_LIMIT
+
+
+def run(
+    out: Path,
+    *,
+    quick: bool = False,
+    seeds: int = DEFAULTS.benefit.seeds,
+    workers: int = DEFAULTS.benefit.workers,
+    pair_seed: int = DEFAULTS.benefit.pair_seed,
+    cases: tuple | None = None,
+    guidance: tuple | None = None,
+    lio: str = DEFAULTS.benefit.lio,
+    odometry: str = DEFAULTS.benefit.odometry,
+    progress=None,
+) -> Summary:
+    """Runs (or resumes) the study into ``out`` and returns its summary. ``guidance``
+    replaces :data:`~lf3pm.experiments.guidance.GUIDANCE` (candidates to compare, e.g.
+    when choosing the default). ``lio``: which plans the LIO replays too: ``all``, or
+    ``default`` (the one named default and the unguided one: a shorter run).
+    ``odometry``: the LIO's (:func:`lio_run`); the replays of each keep their own JSONs,
+    so that a second odometry's run in the same folder reuses the SOLMs, plans and
+    localization replays."""
+    folder = StudyFolder(Path(out))
+    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio, odometry=odometry)
+    cases = cases if cases is not None else (QUICK if quick else CASES)
+    guidance = tuple(guidance) if guidance is not None else GUIDANCE
+    names = [g.name for g in guidance]
+    reserved = (NONE, *Comparisons.GROUPS)
+    if len(set(names)) != len(names) or any(n in reserved for n in names):
+        raise Lf3pmError(f"guidance names must be distinct and none of {', '.join(reserved)}, got {', '.join(names)}")
+    lio_names = [NONE] + (names if lio == "all" else [n for n in names if n == DEFAULT])
+    if quick:
+        seeds = 1
+    step = progress or (lambda label, total, advance=1, restart=False: None)
+    started = time.perf_counter()
+    folder.root.mkdir(parents=True, exist_ok=True)
+    pairs, tasks = [], []
+    lio_runs = {case.name: lio_run(case, odometry) for case in cases}
+    for number, case in enumerate(cases):
+        step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
+        solm_path = build_case_solm(case, folder.solm(case.name))
+        drawn = plan_pairs(case, solm_path, folder, np.random.SeedSequence([pair_seed, number]), guidance)
+        for pair in drawn:
+            pairs.append(pair)
+            for name, plan in pair.plans.items():
+                for method in (LOCALIZATION, LIO) if name in lio_names else (LOCALIZATION,):
+                    options = {"odometry": lio_runs[case.name].odometry} if method == LIO else {}
+                    label = replay_label(method, lio_runs[case.name])
+                    for seed in range(seeds):
+                        path = folder.replay(case.name, pair.number, name, label, seed)
+                        tasks.append(ReplayTask(case, str(folder.root / plan.csv), method, seed, path, options))
+        step(f"{case.name}: {len(drawn)} pairs planned", len(cases))
+    run_replays(tasks, workers, step)
+    pairs, replay_seconds = with_replays(folder, pairs, lio_runs, lio_names, seeds)
+    comparisons = analysis.comparisons(pairs, [c.name for c in cases], names, lio_names[1:])
+    fit, predictors = localization_error_fit(folder.root, cases, pairs, seeds=seeds, pair_seed=pair_seed, step=step)
+    pairs = [
+        replace(
+            pair,
+            plans={
+                name: replace(plan, q_n_exact=predictors.get((pair.case, pair.number, name)))
+                for name, plan in pair.plans.items()
+            },
+        )
+        for pair in pairs
+    ]
+    summary = Summary(
+        seeds=seeds,
+        pair_seed=pair_seed,
+        runtime_s=time.perf_counter() - started,
+        lio_guidance=tuple(lio_names),
+        lio_runs=lio_runs,
+        odometry_names=odometry_names(lio_runs),
+        replay_cpu_s=replay_seconds,
+        parameters=Parameters(FAILURE_APE, WORSE_MARGIN, AT_RISK_SHARE, RISK_FACTOR, REST_SPEED_LIMIT),
+        cases=tuple(cases),
+        guidance=(UNGUIDED,) + guidance,
+        pairs=tuple(pairs),
+        comparisons=comparisons,
+        lio_rest=analysis.rest_counts(pairs),
+        calibration=analysis.calibration(pairs),
+        lio_beyond_bound=analysis.lio_beyond_bound(pairs),
+        goal=analysis.goal(comparisons),
+        localization_error=ErrorFit(fit),
+    )
+    write_outputs(folder, summary)
+    return summary
+
+
+def write_outputs(folder: StudyFolder, summary: Summary) -> None:
+    """summary.json, the report and the figures of ``summary`` into ``folder``."""
+    from lf3pm.atomic import atomic_write
+    from lf3pm.experiments.benefit.figures import example_figures, ratio_figure, scatter_figure
+    from lf3pm.experiments.benefit.report import report
+
+    write_summary(folder.summary, summary)
+    with atomic_write(folder.report) as fp:
+        fp.write(report(summary).encode())
+    scatter_figure(summary, folder.root / "scatter.png")
+    ratio_figure(summary, folder.root / "ratios.png")
+    example_figures(summary, folder)
+
+
+# --- pairs and plans ------------------------------------------------------------------
+
+
+def plan_pairs(
+    case: MapCase, solm_path: Path, folder: StudyFolder, seed: np.random.SeedSequence, guidance: tuple
+) -> list[Pair]:
+    """``case.pairs`` seeded pairs, each planned with every guidance (a draw that some
+    guidance cannot plan is replaced), trajectories written as CSV."""
+    from lf3pm.planner.plan import Planner
+    from lf3pm.solm import Solm
+    from lf3pm.trajectory.robots import Robot
+
+    _, zones = load_case_map(case)
+    planner = Planner(Solm.open(solm_path))
+    rng = np.random.default_rng(seed)
+    trajectories = folder.trajectories(case.name)
+    trajectories.mkdir(parents=True, exist_ok=True)
+    pairs, attempts = [], 0
+    while len(pairs) < case.pairs:
+        attempts += 1
+        if attempts > 50 * case.pairs:
+            raise Lf3pmError(
+                f"map case {case.name}: found only {len(pairs)} of {case.pairs} plannable pairs in {attempts - 1} draws"
+            )
+        number = len(pairs)
+        robot = Robot(case.robots[number % len(case.robots)], r_safe=case.r_safe)
+        ends = ("goal", "start") if case.both_ways and number % 2 else ("start", "goal")
+        a, b = (_draw(planner, zones[end], robot, rng) for end in ends)
+        if a is None or b is None or math.hypot(b[0] - a[0], b[1] - a[1]) < case.min_distance:
+            continue
+        heading = math.atan2(b[1] - a[1], b[0] - a[0])
+        start, goal = (a[0], a[1], heading), (b[0], b[1], heading)
+        plans, risk = {}, None
+        try:
+            for g in (UNGUIDED,) + guidance:
+                plan = planner.plan(start, goal, robot=robot, metric=g.channel, weight=g.weight, power=g.power)
+                if g is UNGUIDED:
+                    risk = risk_share(planner.solm, plan.trajectory)
+                csv = trajectories / f"{number:02d}_{robot.kind}_{g.name}.csv"
+                write_plan(plan.trajectory, csv, folder.replays(case.name), plan_prefix(number, g.name))
+                summary = plan.summary()
+                plans[g.name] = Plan(
+                    guidance=g.name,
+                    csv=str(csv.relative_to(folder.root)),
+                    length_m=summary["trajectory_length_m"],
+                    duration_s=summary["duration_s"],
+                    violations=summary["violations"],
+                    solm_mean=_solm_means(planner, plan),
+                )
+        except Lf3pmError:
+            continue
+        pairs.append(Pair(case.name, number, robot.kind, start, goal, risk, at_risk(risk), plans))
+    return pairs
+
+
+def _solm_means(planner, plan) -> dict:
+    """Each channel's time mean along the trajectory (at 10 Hz, interpolated, at the
+    trajectory's yaw), in the channel's own units (degenerate cells at its cap)."""
+    from lf3pm.grid_field import GridField
+
+    s = plan.trajectory.sample(10.0)
+    out = {}
+    for channel in analysis.CHANNELS:
+        layer = planner.cost_layer(channel, 1.0)
+        g = planner.esdf
+        field = GridField(layer.filled, g.x0, g.y0, g.res)
+        out[channel] = float(np.mean(field.sample(s["x"], s["y"], s["yaw"])[0]) * layer.scale)
+    return out
+
+
+def _draw(planner, zone, robot, rng, tries: int = 200):
+    """A random traversable cell centre inside ``zone`` (None if none found)."""
+    g = planner.esdf
+    free = g.traversable(robot.r_safe)
+    xmin, ymin, xmax, ymax = zone
+    for _ in range(tries):
+        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+        cell = grid_cell(g, x, y)
+        if cell is not None and free[cell[1], cell[0]]:
+            return g.x0 + (cell[0] + 0.5) * g.res, g.y0 + (cell[1] + 0.5) * g.res
+    return None
+
+
+# --- replays --------------------------------------------------------------------------
+
+
+def lio_run(case: MapCase, odometry: str) -> LioRun:
+    """The odometry the LIO replays of ``case`` run for the study's ``odometry`` (one the
+    sensor cannot feed, LIO-SAM without rings: auto's choice), and their label."""
+    from lf3pm.replays.lio import choose_odometry, runs_on
+    from lf3pm.sensors import get_sensor
+
+    sensor = get_sensor(case.sensor)
+    if odometry != "auto" and not runs_on(odometry, sensor):
+        odometry = "auto"
+    return LioRun.of(choose_odometry(odometry, sensor), auto=choose_odometry("auto", sensor))
+
+
+def odometry_names(lio_runs: dict[str, LioRun]) -> dict[str, str]:
+    """The display name of each odometry the study ran (lf3pm.replays.lio.ODOMETRIES)."""
+    from lf3pm.replays.lio import ODOMETRIES
+
+    return {run.odometry: ODOMETRIES[run.odometry].name for run in lio_runs.values()}
+
+
+def with_replays(
+    folder: StudyFolder, pairs: list[Pair], lio_runs: dict[str, LioRun], lio_names: list[str], seeds: int
+) -> tuple[list[Pair], float]:
+    """``pairs`` with each plan's replays read from the folder (the seeds found), and
+    the replays' CPU seconds in all."""
+    seconds, out = 0.0, []
+    for pair in pairs:
+        plans = {}
+        for name, plan in pair.plans.items():
+            replays = {}
+            for method in (LOCALIZATION, LIO) if name in lio_names else (LOCALIZATION,):
+                label = replay_label(method, lio_runs[pair.case])
+                paths = (folder.replay(pair.case, pair.number, name, label, s) for s in range(seeds))
+                runs = [read_replay(p) for p in paths if p.exists()]
+                seconds += sum(r.seconds for r in runs)
+                if runs:
+                    replays[method] = SeedReplays.of(runs)
+            plans[name] = replace(plan, replays=replays)
+        out.append(replace(pair, plans=plans))
+    return out, seconds
