@@ -71,6 +71,8 @@ def test_bad_comparisons_and_guidance_are_one_line_errors():
 
 
 def test_quick_study_end_to_end(tmp_path):
+    from lf3pm.experiments.benefit.records import LIO, LOCALIZATION, MEASURES, Measure, read_summary
+
     out = tmp_path / "benefit"
     bad = subprocess.run(
         [sys.executable, "-m", "lf3pm.cli", "experiment", "benefit", "--quick", "--lio", "some", "-o", str(out)],
@@ -93,37 +95,44 @@ def test_quick_study_end_to_end(tmp_path):
     ]
     run = subprocess.run(command, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
-    summary = json.loads((out / "summary.json").read_text())
-    assert len(summary["pairs"]) == 2 and {p["case"] for p in summary["pairs"]} == {"tunnel", "orientation"}
-    for pair in summary["pairs"]:
-        assert set(pair["plans"]) == {"none", "q_n", "q_min", "step_norm", "default"}
-        for name, plan in pair["plans"].items():
-            assert math.isfinite(plan["localization"]["ape"])
-            assert ("lio" in plan) == (name in ("none", "default"))
-    assert summary["lio_guidance"] == ["none", "default"]
+    raw = json.loads((out / "summary.json").read_text())
+    summary = read_summary(out / "summary.json")
+    assert summary.to_json() == raw or json.dumps(summary.to_json()) == json.dumps(raw)  # NaN != NaN
+    assert len(summary.pairs) == 2 and {p.case for p in summary.pairs} == {"tunnel", "orientation"}
+    for pair in summary.pairs:
+        assert set(pair.plans) == {"none", "q_n", "q_min", "step_norm", "default"}
+        for name, plan in pair.plans.items():
+            assert math.isfinite(plan.replays[LOCALIZATION].ape)
+            assert (LIO in plan.replays) == (name in ("none", "default"))
+            assert plan.q_n_exact is not None and plan.q_n_exact.poses > 0
+    assert summary.lio_guidance == ("none", "default")
     # What predicts each replay's error: every channel the planner takes, over the plans replayed so.
-    cal = summary["calibration"]
-    assert set(cal["localization"]) == set(cal["lio"]) == {"q_n", "q_min", "q_max", "step_norm"}
-    assert cal["localization"]["q_n"]["plans"] == 10 and cal["lio"]["q_max"]["plans"] == 4
-    assert summary["lio_beyond_bound"]["pairs_replayed"] == 2
+    cal = summary.calibration
+    assert set(cal[LOCALIZATION]) == set(cal[LIO]) == {"q_n", "q_min", "q_max", "step_norm"}
+    assert cal[LOCALIZATION]["q_n"].plans == 10 and cal[LIO]["q_max"].plans == 4
+    assert summary.lio_beyond_bound.pairs_replayed == 2
     # Each LIO replay says whether the odometry held still during its rest, and the
     # comparison from steady starts keeps only the seeds where both plans' did.
-    lio_plans = [p["plans"][n]["lio"] for p in summary["pairs"] for n in ("none", "default")]
-    assert all(len(plan["rest_steady_per_seed"]) == 1 for plan in lio_plans)
-    assert sum(v["replays"] for v in summary["lio_rest"].values()) == len(lio_plans)
+    lio_plans = [p.plans[n].replays[LIO] for p in summary.pairs for n in ("none", "default")]
+    assert all(len(r.rest_steady_per_seed) == 1 for r in lio_plans)
+    assert sum(v.replays for v in summary.lio_rest.values()) == len(lio_plans)
     steady_pairs = sum(
-        all(p["plans"][n]["lio"]["rest_steady_per_seed"][0] for n in ("none", "default")) for p in summary["pairs"]
+        all(p.plans[n].replays[LIO].rest_steady_per_seed[0] for n in ("none", "default")) for p in summary.pairs
     )
-    assert summary["comparisons"]["lio_steady"]["default"]["pairs"] == steady_pairs
-    loc = summary["comparisons"]["localization"]
-    assert loc["default"]["pairs"] == 2 and set(loc["default_by_map"]) == {"tunnel", "orientation"}
+    assert summary.compared(Measure(LIO, steady_starts=True)).by_guidance["default"].pairs == steady_pairs
+    assert set(raw["comparisons"]) == {m.key for m in MEASURES}
+    loc = summary.compared(Measure(LOCALIZATION))
+    assert loc.by_guidance["default"].pairs == 2 and set(loc.default_by_map) == {"tunnel", "orientation"}
     # In the tunnel the unguided plans drive through the degenerate passage and the guided
     # ones take the structured lane: guidance must localize better there.
-    tunnel = [p for p in summary["pairs"] if p["case"] == "tunnel"]
-    for pair in tunnel:
-        assert pair["plans"]["default"]["localization"]["ape"] < pair["plans"]["none"]["localization"]["ape"]
+    for pair in (p for p in summary.pairs if p.case == "tunnel"):
+        both = pair.both("default", LOCALIZATION)
+        assert both[0].ape < both[1].ape
     for name in ("benefit.md", "scatter.png", "ratios.png", "examples/tunnel.png", "examples/orientation.png"):
         assert (out / name).stat().st_size > 0
+    # Every JSON the study caches carries the records' schema version.
+    predictors = sorted((out / "predictors").rglob("*.json"))
+    assert len(predictors) == 10 and all(json.loads(p.read_text())["schema"] == raw["schema"] for p in predictors)
     # A rerun resumes: every replay is on disk, nothing is recomputed.
     replays = sorted((out / "replays").rglob("*.json"))
     stamps = [p.stat().st_mtime_ns for p in replays]
@@ -139,9 +148,15 @@ def test_quick_study_end_to_end(tmp_path):
     added = sorted(set((out / "replays").rglob("*.json")) - set(replays))
     assert [p.name for p in added] == ["00_default_lio-genz_0.json", "00_none_lio-genz_0.json"]
     assert all(p.parent.name == "tunnel" for p in added)
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["lio_odometry"] == {"tunnel": "genz", "orientation": "genz"}
+    summary = read_summary(out / "summary.json")
+    assert {case: run.odometry for case, run in summary.lio_runs.items()} == {"tunnel": "genz", "orientation": "genz"}
+    assert {case: run.label for case, run in summary.lio_runs.items()} == {"tunnel": "lio-genz", "orientation": "lio"}
     assert "## LIO (GenZ-LIO: tunnel, orientation)" in (out / "benefit.md").read_text()
+    # A predictor cached by an older version of the records: refused, in one line naming it.
+    predictors[0].write_text(json.dumps({"q_n_mean": 0.1, "degenerate_share": 0.0, "poses": 3}))
+    stale = subprocess.run(command, capture_output=True, text=True)
+    assert stale.returncode != 0 and str(predictors[0]) in stale.stderr
+    assert len(stale.stderr.strip().splitlines()) == 1 and "schema" in stale.stderr
 
 
 def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
@@ -173,35 +188,24 @@ def test_a_changed_plan_drops_the_replays_made_of_the_old_one(tmp_path):
     assert csv.read_bytes() == line(0.5).csv_bytes()
 
 
-def test_a_lio_replay_saved_without_its_rest_gets_it_added(tmp_path, monkeypatch):
-    """Replays saved before the rest was recorded: run_replays adds it (replay_rest on the
-    rest alone) and keeps the rest of the record; a localization replay is left alone."""
-    import importlib
+def _plan(guidance, ape=None, lio=None, steady=None, length=10.0, csv="unused.csv"):
+    """A typed plan with a localization replay of APE ``ape`` and LIO replays of APEs
+    ``lio`` (one per seed, their rests steady or not as ``steady`` says)."""
+    from lf3pm.experiments.benefit.records import LIO, LOCALIZATION, Plan, SeedReplays
 
-    from lf3pm.experiments import replay_tasks
+    replays = {}
+    if ape is not None:
+        replays[LOCALIZATION] = SeedReplays(ape, (ape,), 0.0, 10)
+    if lio is not None:
+        rests = tuple(steady) if steady is not None else None
+        replays[LIO] = SeedReplays(float(np.median(lio)), tuple(lio), 0.0, 10, rests)
+    return Plan(guidance, csv, length, length, {}, {}, replays)
 
-    replay_module = importlib.import_module("lf3pm.replays.replay")  # lf3pm.replays.replay is the function
-    from lf3pm.experiments.benefit import QUICK
 
-    rest = {"seconds": 2.0, "drift_m": 0.3, "speed_mps": 0.2, "steady": False}
-    calls = []
-    monkeypatch.setattr(replay_module, "replay_rest", lambda *a, **k: calls.append((a, k)) or rest)
-    monkeypatch.setattr(replay_tasks, "_case_map", lambda case: ("map", None))
-    monkeypatch.setattr(replay_tasks, "replay_task", lambda task: pytest.fail(f"replayed {task}"))
-    old = {"ape_rmse": 0.5, "scans": 10}
-    lio, localization = tmp_path / "00_none_lio_1.json", tmp_path / "00_none_localization_1.json"
-    for path in (lio, localization):
-        path.write_text(json.dumps(old))
-    tasks = [
-        replay_tasks.ReplayTask(QUICK[1], "plan.csv", "lio", 1, lio, {"odometry": "genz"}),
-        replay_tasks.ReplayTask(QUICK[1], "plan.csv", "localization", 1, localization),
-    ]
-    replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)
-    assert json.loads(lio.read_text()) == {**old, "rest": rest}
-    assert json.loads(localization.read_text()) == old
-    assert calls == [(("map", "plan.csv", QUICK[1].sensor, 1), {"threads": 1, "odometry": "genz"})]
-    replay_tasks.run_replays(tasks, 1, lambda *a, **k: None)  # nothing left to do
-    assert len(calls) == 1
+def _pair(number, plans, case="m", robot="omni", at_risk=False):
+    from lf3pm.experiments.benefit.records import Pair
+
+    return Pair(case, number, robot, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 0.0, at_risk, {p.guidance: p for p in plans})
 
 
 def test_localization_error_fit_counts_its_own_phase(tmp_path):
@@ -209,27 +213,22 @@ def test_localization_error_fit_counts_its_own_phase(tmp_path):
     not a continuation of the replays' count; saved predictors are read, not recomputed."""
     from types import SimpleNamespace
 
-    from lf3pm.experiments.localization_error import localization_error_fit
+    from lf3pm.experiments.benefit.localization_error import localization_error_fit
+    from lf3pm.experiments.benefit.records import Predictor, StudyFolder, write_json
 
     case = SimpleNamespace(name="m", sensor="vlp16")
-    records = [
-        {
-            "case": "m",
-            "pair": k,
-            "plans": {g: {"csv": "unused.csv", "localization": {"ape": 0.01}} for g in ("none", "default")},
-        }
-        for k in range(2)
-    ]
-    for pair in records:
-        for name in pair["plans"]:
-            path = tmp_path / "predictors" / "m" / f"{pair['pair']:02d}_{name}.json"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps({"q_n_mean": 0.1, "degenerate_share": 0.0, "poses": 10}))
+    pairs = [_pair(k, [_plan(g, ape=0.01) for g in ("none", "default")]) for k in range(2)]
+    for pair in pairs:
+        for name in pair.plans:
+            write_json(
+                StudyFolder(tmp_path).predictor("m", pair.number, name),
+                {"q_n_mean": 0.1, "degenerate_share": 0.0, "poses": 10},
+            )
     calls = []
-    localization_error_fit(
+    _, predictors = localization_error_fit(
         tmp_path,
         [case],
-        records,
+        pairs,
         seeds=1,
         pair_seed=0,
         step=lambda label, total, advance=1, restart=False: calls.append((total, advance, restart)),
@@ -237,43 +236,80 @@ def test_localization_error_fit_counts_its_own_phase(tmp_path):
     assert calls[0] == (4, 0, True)
     assert sum(advance for _, advance, _ in calls) == 4 and not any(restart for *_, restart in calls[1:])
     assert (tmp_path / "localization_error.json").is_file()
+    assert predictors[("m", 1, "default")] == Predictor(0.1, 0.0, 10)
+
+
+def test_a_cached_json_of_another_schema_is_refused_in_one_line(tmp_path):
+    from lf3pm.experiments.benefit.records import SCHEMA, StaleRecordError, read_json, read_summary
+
+    for name, data in (("none.json", {"a": 1}), ("old.json", {"schema": 0}), ("new.json", {"schema": SCHEMA + 1})):
+        path = tmp_path / name
+        path.write_text(json.dumps(data))
+        with pytest.raises(StaleRecordError) as error:
+            read_json(path)
+        message = str(error.value)
+        assert str(path) in message and "\n" not in message and isinstance(error.value, Lf3pmError)
+    with pytest.raises(StaleRecordError, match="summary.json"):
+        (tmp_path / "summary.json").write_text(json.dumps({"experiment": "benefit", "pairs": []}))
+        read_summary(tmp_path / "summary.json")
+
+
+def test_steady_starts_keep_the_seeds_at_which_both_plans_rest_was_steady():
+    """By the LIO from steady starts a pair keeps the seeds whose rest was steady before
+    both of its plans (the median over those); a pair with none, or no rest recorded, is
+    left out; the plain LIO measure keeps every seed."""
+    from lf3pm.experiments.benefit.analysis import comparison, paired
+    from lf3pm.experiments.benefit.records import LIO, Measure
+
+    steady, lio = Measure(LIO, steady_starts=True), Measure(LIO)
+    kept = _pair(
+        0,
+        [
+            _plan("none", lio=[0.4, 0.2, 9.0], steady=[True, True, False]),
+            _plan("default", lio=[0.1, 0.3, 0.05], steady=[True, True, True]),
+        ],
+    )
+    guided, unguided = paired(kept, "default", steady)
+    assert guided.ape_per_seed == (0.1, 0.3) and guided.ape == pytest.approx(0.2)
+    assert unguided.ape_per_seed == (0.4, 0.2) and unguided.ape == pytest.approx(0.3)
+    assert paired(kept, "default", lio)[1].ape_per_seed == (0.4, 0.2, 9.0)
+    none_steady = _pair(1, [_plan("none", lio=[0.4], steady=[False]), _plan("default", lio=[0.1], steady=[True])])
+    no_rest = _pair(2, [_plan("none", lio=[0.4]), _plan("default", lio=[0.1])])
+    assert paired(none_steady, "default", steady) is None and paired(no_rest, "default", steady) is None
+    assert comparison([kept, none_steady, no_rest], "default", steady).pairs == 1
+    assert comparison([kept, none_steady, no_rest], "default", lio).pairs == 3
 
 
 def test_goal_is_not_judged_without_seed_noise():
     """With one seed per replay "worse beyond seed noise" is NaN: the goal on it is None
     (the report says n/a), not a failure; with seeds it is judged."""
-    from lf3pm.experiments.benefit import STEADY, _goal
+    from lf3pm.experiments.benefit.analysis import goal
+    from lf3pm.experiments.benefit.records import MEASURES, Comparison, Comparisons, RiskSplit
 
     def comparisons(worse):
-        safe = {
-            "pairs": 10,
-            "median_ratio": 1.0,
-            "median_ratio_ci95": (0.97, 1.03),
-            "share_worse_beyond_noise_and_margin": worse,
-        }
-        by_risk = {"by_risk": {"default": {"no_risk": safe}}}
-        return {
-            "localization": {**by_risk, "default": {"pairs": 10, "median_length_overhead": 0.01}},
-            "lio": by_risk,
-            STEADY: by_risk,
-        }
+        safe = Comparison(
+            10, median_ratio=1.0, median_ratio_ci95=(0.97, 1.03), share_worse_beyond_noise_and_margin=worse
+        )
+        split = {"default": RiskSplit(Comparison(0), safe)}
+        overall = {"default": Comparison(10, median_length_overhead=0.01)}
+        return {m.key: Comparisons(overall, split) for m in MEASURES}
 
-    assert _goal(comparisons(math.nan))["lio_no_risk_worse_on_at_most_10pct"] is None
-    assert _goal(comparisons(0.05))["lio_no_risk_worse_on_at_most_10pct"] is True
-    assert _goal(comparisons(0.2))["localization_no_risk_worse_on_at_most_10pct"] is False
+    assert goal(comparisons(math.nan))["lio_no_risk_worse_on_at_most_10pct"] is None
+    assert goal(comparisons(0.05))["lio_no_risk_worse_on_at_most_10pct"] is True
+    assert goal(comparisons(0.2))["localization_no_risk_worse_on_at_most_10pct"] is False
+    assert goal(comparisons(0.05))["length_overhead_at_most_15pct"] is True
 
 
 def test_lio_beyond_bound_lists_the_default_plans_past_it():
     """Only pairs with both plans replayed by the LIO count; a default-guided plan past the
     bound is listed with its unguided plan's error, one within it is not."""
-    from lf3pm.experiments.benefit import LIO_BOUND, lio_beyond_bound
+    from lf3pm.experiments.benefit.analysis import LIO_BOUND, lio_beyond_bound
 
     def pair(number, guided, unguided, lio=True):
-        plans = {"none": {"lio": {"ape": unguided}}, "default": {"lio": {"ape": guided}}}
         if not lio:
-            plans = {name: {} for name in plans}
-        return {"case": "m", "pair": number, "robot": "omni", "at_risk": False, "plans": plans}
+            return _pair(number, [_plan("none"), _plan("default")])
+        return _pair(number, [_plan("none", lio=[unguided]), _plan("default", lio=[guided])])
 
     out = lio_beyond_bound([pair(0, LIO_BOUND + 0.01, 0.05), pair(1, LIO_BOUND - 0.01, 2.0), pair(2, 5.0, 5.0, False)])
-    assert out["pairs_replayed"] == 2 and out["bound_m"] == LIO_BOUND
-    assert [(b["pair"], b["guided_m"], b["unguided_m"]) for b in out["pairs"]] == [(0, LIO_BOUND + 0.01, 0.05)]
+    assert out.pairs_replayed == 2 and out.bound_m == LIO_BOUND
+    assert [(b.pair, b.guided_m, b.unguided_m) for b in out.pairs] == [(0, LIO_BOUND + 0.01, 0.05)]
