@@ -107,7 +107,7 @@ def experiment_gobi(
 @experiment_app.command("benefit")
 def experiment_benefit(
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
-    quick: bool = typer.Option(False, help="Two small maps, two pairs each, one seed (a few minutes)."),
+    quick: bool = typer.Option(False, help="Two small maps, one pair each, one seed (a few minutes)."),
     seeds: int | None = option("benefit.seeds"),
     workers: int | None = option("benefit.workers"),
     pair_seed: int | None = option("benefit.pair_seed"),

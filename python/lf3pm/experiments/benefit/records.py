@@ -25,7 +25,7 @@ import numpy as np
 
 from lf3pm.config import REPLAY_METHODS
 from lf3pm.errors import Lf3pmError
-from lf3pm.experiments.guidance import Guidance
+from lf3pm.experiments.guidance import UNGUIDED, Guidance
 from lf3pm.experiments.map_cases import MapCase
 from lf3pm.experiments.replay_tasks import load_replay, replay_json
 
@@ -47,9 +47,9 @@ def _method(name: str) -> str:
 #: The replay methods the study judges plans by: map localization, and the LIO.
 LOCALIZATION = _method("localization")
 LIO = _method("lio")
-#: The guidance name of the unguided plan (experiments.guidance.UNGUIDED), and of the
-#: one the study's goal is about.
-NONE = "none"
+#: The guidance name of the unguided plan, and of the one the study's goal is about
+#: (experiments.guidance: the shipped default's).
+NONE = UNGUIDED.name
 DEFAULT = "default"
 
 

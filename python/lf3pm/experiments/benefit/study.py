@@ -14,6 +14,7 @@ from lf3pm.config import DEFAULTS, BenefitConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.benefit import analysis
 from lf3pm.experiments.benefit.cases import CASES, QUICK
+from lf3pm.experiments.benefit.localization_error import localization_error_fit
 from lf3pm.experiments.benefit.records import (
     DEFAULT,
     LIO,
@@ -34,7 +35,6 @@ from lf3pm.experiments.benefit.records import (
     write_summary,
 )
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
-from lf3pm.experiments.benefit.localization_error import localization_error_fit
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN
 from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
