@@ -22,6 +22,7 @@ from lf3pm.trajectory.sampling import LinearMotion
 
 pytest.importorskip("genz_lio", reason="genz-lio has wheels for Python 3.8-3.12 only")
 from lf3pm.replays import lio  # noqa: E402
+from lf3pm.replays.genz import GenZ, GenzSettings  # noqa: E402
 
 #: GenZ-LIO's conventions are what most tests here check: they name it (the default,
 #: "auto", would run DLIO for the VLP-16); DLIO's tests pass odometry="dlio".
@@ -113,8 +114,8 @@ def test_noise_free_run_in_a_room_tracks_closely(run):
     assert estimate.status[:2] == ["initializing", "map seeded"]
     assert set(estimate.status[2:]) == {"ok"} and estimate.lost == []
     # lf3pm's build of GenZ-LIO (make build), at lf3pm's initial covariance.
-    assert (estimate.odometry, estimate.package, estimate.version) == ("GenZ-LIO", "genz-lio", lio.GENZ_LF3PM_BUILD)
-    assert estimate.params["overrides"]["initial_covariance"] == {"pose_variance": lio.GENZ_INIT_POSE_VARIANCE}
+    assert (estimate.odometry, estimate.package, estimate.version) == ("GenZ-LIO", "genz-lio", GenZ.build)
+    assert estimate.params["overrides"]["initial_covariance"] == GenzSettings().initial_covariance
 
 
 def rmse(motion, estimate):
@@ -189,7 +190,7 @@ def test_pypi_genz_lio_runs_at_its_own_covariance_and_says_so(run, monkeypatch):
     covariance it is given): the run's parameters say GenZ-LIO's own 1, and a warning (in
     its messages too) says why that matters and how to get lf3pm's build."""
     motion, sensor, scans, imu, first, _ = run
-    monkeypatch.setattr(lio, "GENZ_LF3PM_BUILD", "0.1.1+other")
+    monkeypatch.setattr(GenZ, "build", "0.1.1+other")
     with pytest.warns(UserWarning, match="not lf3pm's build"):
         estimate = run_lio(scans[:3], imu, sensor, initial_pose=first)
     assert estimate.params["overrides"]["initial_covariance"] == {"pose_variance": 1.0}
@@ -211,9 +212,10 @@ def test_a_crash_of_the_odometry_is_one_line(run, tmp_path, monkeypatch):
 
 
 def test_the_filter_is_told_the_imu_preset_noise(run):
+    from lf3pm.replays.genz import imu_noise_model
     from lf3pm.replays.imu import ImuPreset
-    from lf3pm.replays.lio import NOISE_INFLATION, imu_noise_model
 
+    NOISE_INFLATION = GenzSettings().noise_inflation
     imu = run[3]
     sigma = imu.preset.sigmas(200.0)
     model = imu_noise_model(imu)
@@ -327,7 +329,7 @@ def test_a_lidar_clock_50ms_late_is_detected(town):
 @pytest.fixture(scope="module")
 def dlio_run(room):
     """The room's figure of eight after 2 s at rest (DLIO calibrates its IMU over the
-    first 1 s, lio.DLIO_SETTINGS), noise-free, through DLIO."""
+    first 1 s, dlio.DlioSettings), noise-free, through DLIO."""
     pytest.importorskip("evalio", reason="evalio (DLIO) is not installed: pip install 'lf3pm[lio]'")
     motion, sensor, scans, imu, first = figure_of_eight(room, rest=2.0)
     return motion, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first, odometry="dlio")

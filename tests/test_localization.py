@@ -152,7 +152,7 @@ def test_bad_parameters(boxes):
         replay(world, motion, "vlp16", "localization", target=target, voxel=1.0)
     with pytest.raises(Lf3pmError, match="unknown method"):
         replay(world, motion, "vlp16", "slam")
-    with pytest.raises(Lf3pmError, match="degeneracy bound"):
+    with pytest.raises(Lf3pmError, match="localization.degenerate_std must be greater than 0"):
         replay(world, motion, "vlp16", "localization", target=target, degenerate_std=0.0)
     other = lf3pm.load_map(build_scene("boxes").points[::2])
     with pytest.raises(Lf3pmError, match="another map"):

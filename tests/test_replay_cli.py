@@ -1,7 +1,6 @@
 """`lf3pm replay` from the command line: a table, one JSON object, a PNG, and one
 line with exit status 2 for every kind of bad input."""
 
-import importlib.util
 import json
 
 import numpy as np
@@ -113,12 +112,6 @@ def test_outputs_replace_only_regular_files(files, tmp_path):
     existing.mkdir()
     done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--bag", existing)
     assert done.exit_code == 2 and "exists" in done.stderr
-
-
-@pytest.mark.skipif(importlib.util.find_spec("lf3pm.replays.lio") is not None, reason="the LIO is installed")
-def test_lio_unavailable_is_one_line(files):
-    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio")
-    assert done.exit_code == 2 and "method lio is not available" in done.stderr
 
 
 @pytest.mark.parametrize("odometry, name", [("dlio", "DLIO"), ("liosam", "LIO-SAM")])

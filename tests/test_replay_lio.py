@@ -1,10 +1,9 @@
-"""The replay's LIO dispatch and the CLI's --bag, against stand-in imu and lio
-modules (the real ones are lf3pm.replays.imu / lio): what they are given,
-what the result keeps, and the bag they feed."""
+"""The lio replay method and the CLI's --bag, against a stand-in IMU simulation and
+odometry (the real ones: lf3pm.replays.imu.simulate_imu, lf3pm.replays.lio.run_lio):
+what they are given, what the result keeps, and the bag they feed."""
 
 import json
 import sys
-import types
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -14,10 +13,11 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.cli import app
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
-from lf3pm.replays.lio import choose_odometry
+from lf3pm.replays import lio
 from lf3pm.replays.motion import Motion
-from lf3pm.replays.replay import LIO_REST, replay, replay_rest
+from lf3pm.replays.replay import replay, replay_rest
 from lf3pm.scenes import build_scene
 
 
@@ -82,19 +82,14 @@ def run_lio(scans, imu, sensor, *, initial_pose, **params):
 
 @pytest.fixture
 def fake_lio(monkeypatch):
-    imu = types.ModuleType("lf3pm.replays.imu")
-    imu.simulate_imu = simulate_imu
-    lio = types.ModuleType("lf3pm.replays.lio")
-    lio.run_lio = run_lio
-    lio.choose_odometry = choose_odometry  # the CLI checks the odometry and sensor before the map loads
-    monkeypatch.setitem(sys.modules, "lf3pm.replays.imu", imu)
-    monkeypatch.setitem(sys.modules, "lf3pm.replays.lio", lio)
+    """The lio method (lf3pm.replays.lio.Lio) with the stand-in IMU and odometry."""
+    monkeypatch.setattr(lio, "simulate_imu", simulate_imu)
+    monkeypatch.setattr(lio, "run_lio", run_lio)
     calls.clear()
     # Simulating a scan takes SIMULATE_S on the stand-in clock, which the stream and the
-    # replay read.
-    replay_module = sys.modules["lf3pm.replays.replay"]  # the package's `replay` is the function
+    # lio method read.
     scans_module = sys.modules["lf3pm.scan.scans"]
-    for module in (scans_module, replay_module):
+    for module in (scans_module, lio):
         monkeypatch.setattr(module, "time", Clock)
     for name in ("simulate_moving_scan", "simulate_scan"):
         monkeypatch.setattr(scans_module, name, _taking(getattr(scans_module, name)))
@@ -119,9 +114,9 @@ def test_lio_dispatch(fake_lio, boxes):
     world, motion = boxes
     result = replay(world, motion, "vlp16", "lio", seed=7, imu_rate=100.0, window=3)
     assert calls["imu"] == {"rate": 100.0, "seed": 7, "noise": True}
-    # The IMU covers the rest the LIO gets before the motion (replay.LIO_REST) and the 1 s of motion.
+    # The IMU covers the rest the LIO gets before the motion (replay.rest) and the 1 s of motion.
     assert calls["lio"]["params"] == {"window": 3}
-    assert calls["lio"]["imu_samples"] == round(LIO_REST * 100.0) + 101
+    assert calls["lio"]["imu_samples"] == round(DEFAULTS.replay.rest * 100.0) + 101
     np.testing.assert_array_equal(calls["lio"]["initial_pose"], result.truth[0])
     # Scored from the trajectory's start, re-anchored there: the drift counts from that scan.
     drift = 0.001 * np.arange(len(result.truth))
@@ -166,7 +161,7 @@ def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(
     monkeypatch.setattr(sys.modules[__name__], "DRIFT_PER_SCAN", per_scan)
     world, motion = boxes
     result = replay(world, motion, "vlp16", "lio", seed=0)
-    scans = round(LIO_REST * 10)
+    scans = round(DEFAULTS.replay.rest * 10)
     assert result.rest["drift_m"] == pytest.approx(per_scan * scans)
     assert result.rest["speed_mps"] == pytest.approx(per_scan * 10)
     assert result.rest["steady"] is steady and (per_scan * 10 <= REST_SPEED_LIMIT) is steady

@@ -41,11 +41,12 @@ MAX_SEED = 2**63 - 1
 #: OpenMP aborts the process when asked for a negative or huge team of threads.
 MAX_THREADS = 1024
 
-#: The SOLM's state spaces (lf3pm.solm.grid) and the replay's state estimators.
+#: The SOLM's state spaces (lf3pm.solm.grid) and the replay's state estimators (the names
+#: YAML and the CLI take; lf3pm.replays.methods.METHODS holds the methods by these names).
 SPACES = ("r2", "se2", "r3")
 REPLAY_METHODS = ("localization", "lio", "odometry")
-#: The LiDAR-inertial odometries of the ``lio`` replay (lf3pm.replays.lio.ODOMETRIES);
-#: ``auto`` picks by the sensor (lio.choose_odometry).
+#: The lio replay's odometries lf3pm ships (YAML and the CLI take these and any a plugin
+#: registers: lf3pm.replays.registry); ``auto`` picks by the sensor.
 LIO_ODOMETRIES = ("auto", "genz", "dlio", "liosam")
 
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
@@ -322,16 +323,59 @@ class ReplayConfig(Section):
     method: Literal[REPLAY_METHODS] = Field(
         "localization", description="localization (prior map), lio or odometry (KISS-ICP)."
     )
-    seeds: int = Field(1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1.")
+    seeds: int = Field(
+        1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1 and reports each and the median."
+    )
     height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the smoothed ground (m).")
     rate: float = Field(10.0, gt=0, le=1000, description="Scans per second.")
     imu_rate: float = Field(200.0, gt=0, le=100_000, description="The lio method's IMU samples per second.")
     imu_noise: bool = Field(True, description="The lio method's IMU noise (false: exact samples).")
-    odometry: Literal[LIO_ODOMETRIES] = Field(
+    imu_preset: str | None = Field(
+        None, min_length=1, description="The lio method's IMU model (lf3pm.replays.imu.PRESETS; none: bmi088)."
+    )
+    odometry: str = Field(
         "auto",
+        min_length=1,
         description="The lio method's odometry: genz (GenZ-LIO), dlio (DLIO, from evalio), liosam "
-        "(LIO-SAM, from evalio; spinning sensors only) or auto (dlio for a spinning "
-        "sensor, genz for a non-repetitive one: docs/lio.md).",
+        "(LIO-SAM, from evalio; spinning sensors only), one a plugin registers, or auto (dlio for a "
+        "spinning sensor, genz for a non-repetitive one: docs/lio.md).",
+    )
+    rest: float = Field(
+        2.0,
+        ge=0,
+        le=MAX_TRAJECTORY_SECONDS,
+        description="Seconds the sensor stands still at the first pose before a lio replay's trajectory, "
+        "for the odometry to initialise (scored from the trajectory's start; docs/lio.md).",
+    )
+
+
+class LocalizationConfig(Section):
+    """The localization replay: wheel odometry predicting small_gicp registrations to the
+    prior map, degenerate directions kept at the prediction (docs/replay.md says why)."""
+
+    scale_error: float = Field(
+        0.02, gt=-1, le=10, description="Wheel odometry: fractional error of the travelled distance."
+    )
+    yaw_noise: float = Field(
+        0.01, ge=0, le=10, description="Wheel odometry: density of the heading's random walk (rad/sqrt(s))."
+    )
+    scan_voxel: float = Field(
+        0.25, ge=0, le=100, description="Scan downsampling voxel before registration (m; 0: off)."
+    )
+    degenerate_std: float = Field(
+        0.01,
+        gt=0,
+        le=100,
+        description="Largest deviation range noise may leave in a direction that counts as constrained (m).",
+    )
+    remap: bool = Field(True, description="Keep the prediction along degenerate directions (Zhang et al. 2016).")
+    max_correspondence_distance: float = Field(
+        1.0, gt=0, le=1000, description="Registration's correspondence cutoff (m)."
+    )
+    max_iterations: int = Field(30, ge=1, le=10_000, description="Registration's iteration limit.")
+    min_points: int = Field(100, ge=1, description="Fewest points a registration may use (fewer: the prediction).")
+    registration_threads: int = Field(
+        1, ge=1, le=MAX_THREADS, description="Registration threads (1: bit-for-bit reproducible)."
     )
 
 
@@ -342,6 +386,7 @@ class KissIcpConfig(Section):
         1.0, gt=0, le=100, description="Local map voxel (m; KISS-ICP's own choice for outdoor 100 m LiDARs)."
     )
     min_points: int = Field(100, ge=1, description="Scans with fewer hits are not given to KISS-ICP.")
+    deskew: bool = Field(True, description="KISS-ICP deskews each scan from its returns' firing times.")
 
 
 def _seed(what: str):
@@ -409,6 +454,7 @@ class Config(Section):
     robot: RobotConfig = RobotConfig()
     guidance: GuidanceConfig = GuidanceConfig()
     replay: ReplayConfig = ReplayConfig()
+    localization: LocalizationConfig = LocalizationConfig()
     kiss_icp: KissIcpConfig = KissIcpConfig()
     table1: Table1Config = Table1Config()
     correlation: CorrelationConfig = CorrelationConfig()

@@ -23,8 +23,11 @@ def show_config(
     """Print every parameter and its value (the defaults, or FILE.yaml's) as YAML for --config."""
     with user_errors():
         from lf3pm.config import to_yaml
+        from lf3pm.replays import registry
 
-        print(to_yaml(load_config(config)), end="")
+        loaded = load_config(config)
+        registry.check_name(loaded.replay.odometry)  # a plugin's name too (an entry point)
+        print(to_yaml(loaded), end="")
 
 
 @app.command()

@@ -45,15 +45,15 @@ def replay_command(
     trajectory: Path = typer.Argument(..., metavar="TRAJ.csv", help="Trajectory CSV as `lf3pm plan` writes it."),
     map_path: Path = typer.Option(..., "--map", metavar="MAP", help="Point-cloud map the trajectory runs on."),
     config: Path | None = CONFIG_OPTION,
-    sensor: str | None = option("sensor", help="Sensor preset name or YAML file."),
+    sensor: str | None = option("sensor"),
     method: str | None = option("replay.method"),
     odometry: str | None = option("replay.odometry"),
-    seeds: int | None = option("replay.seeds", help="Runs seeds SEED .. SEED+N-1 and reports each and the median."),
+    seeds: int | None = option("replay.seeds"),
     seed: int | None = option("scan.seed", help="First seed (range noise, odometry and IMU noise)."),
     height: float | None = option("replay.height"),
     rate: float | None = option("replay.rate"),
     noise: float | None = option("scan.noise"),
-    threads: int | None = option("scan.threads", help="Scan simulation threads (0 = all cores)."),
+    threads: int | None = option("scan.threads"),
     as_json: bool = typer.Option(
         False,
         "--json",
@@ -69,23 +69,25 @@ def replay_command(
     with user_errors():
         cfg = configure(config, locals(), REPLAY_PATHS)
         from lf3pm.map import load_map
+        from lf3pm.replays import registry
+        from lf3pm.replays.methods import METHODS
         from lf3pm.replays.motion import Motion
-        from lf3pm.replays.replay import lio_modules, replay_bag, replay_seeds, resolve_sensor
+        from lf3pm.replays.replay import replay_bag, replay_seeds, resolve_sensor
 
         check_output(png)
         check_output(bag, folder=True, new=True)
         run, scan = cfg.replay, cfg.scan
         lidar = resolve_sensor(cfg.sensor, run.rate)
-        if bag is not None:
-            lio_modules("--bag (it carries the simulated IMU)")
-        if run.method == "lio":
-            lio_modules()
-            from lf3pm.replays.lio import choose_odometry
-
-            choose_odometry(run.odometry, lidar)  # a pair it refuses or warns about, before the map loads
+        # The method and its odometry checked before the map loads: a name, a pair of
+        # odometry and sensor refused or warned about.
+        registry.check_name(run.odometry, "--odometry" if odometry is not None else "replay.odometry")
+        options = {}
+        if METHODS[run.method].uses_odometry:
+            options = {"odometry": run.odometry}
+            registry.choose_odometry(run.odometry, lidar)
         elif odometry is not None:
-            raise Lf3pmError(f"--odometry applies to --method lio, not {run.method}")
-        options = {"odometry": run.odometry} if run.method == "lio" else {}
+            lio = next(name for name, m in METHODS.items() if m.uses_odometry)
+            raise Lf3pmError(f"--odometry applies to --method {lio}, not {run.method}")
         samples = read_trajectory(trajectory)
         with map_loading() as progress:
             world = load_map(map_path, threads=scan.threads, progress=progress)
@@ -178,7 +180,7 @@ def print_series(series) -> None:
     from lf3pm.replays.replay_result import FIGURES
 
     first = series.results[0]
-    odometry = first.report.get("odometry") if first.method == "lio" else None
+    odometry = first.report.get("odometry")
     method = f"{first.method} ({odometry})" if odometry else first.method
     table = Table(
         title=f"replay: {method}, {first.sensor}, {first.scans} scans at "

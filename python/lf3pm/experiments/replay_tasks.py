@@ -21,7 +21,16 @@ from typing import NamedTuple
 import numpy as np
 
 from lf3pm.atomic import atomic_write
+from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.map_cases import load_case_map
+
+#: The version of the replay records replay_task writes ("schema" in each); load_replay
+#: refuses another. 2: the first with a schema (records of lf3pm before it have none).
+SCHEMA = 2
+
+
+class ReplayRecordError(Lf3pmError):
+    """A cached replay record written by another schema."""
 
 
 class ReplayTask(NamedTuple):
@@ -50,7 +59,7 @@ def write_plan(trajectory, csv: Path, replays: Path, prefix: str) -> None:
     and must never score an old plan's replay as the new one's."""
     data = trajectory.csv_bytes()
     if csv.exists() and csv.read_bytes() != data:
-        stale = re.compile(re.escape(prefix) + r"[a-z]+(?:-[a-z]+)?_\d+\.json")  # method[-odometry]_seed
+        stale = re.compile(re.escape(prefix) + r"[a-z]+(?:-[\w.]+)?_\d+\.json")  # method[-odometry]_seed
         for path in replays.glob(f"{glob.escape(prefix)}*.json"):
             if stale.fullmatch(path.name):
                 path.unlink()
@@ -61,12 +70,12 @@ def write_plan(trajectory, csv: Path, replays: Path, prefix: str) -> None:
 
 def run_replays(tasks: list, workers: int, step) -> None:
     """Runs the tasks whose JSON is missing, ``workers`` at a time, calling
-    step(label, total, advance=1, restart=False) as they end. A LIO replay saved
-    before replays recorded their rest gets it added (rest_task)."""
+    step(label, total, advance=1, restart=False) as they end. A JSON of another schema
+    (SCHEMA) is refused in one line (load_replay) before any replay runs."""
+    for task in tasks:
+        if task.path.exists():
+            load_replay(task.path)
     todo = [(replay_task, t) for t in tasks if not t.path.exists()]
-    todo += [
-        (rest_task, t) for t in tasks if t.method == "lio" and t.path.exists() and "rest" not in load_replay(t.path)
-    ]
     label = f"replays ({len(tasks) - len(todo)} of {len(tasks)} done before)"
     step(label, len(todo), 0, restart=True)
     if not todo:
@@ -99,8 +108,16 @@ def _run(job) -> None:
 
 
 def load_replay(path) -> dict:
-    """A finished replay's summary (replay_task's JSON)."""
-    return json.loads(open(path, encoding="utf-8").read())
+    """A finished replay's summary (replay_task's JSON); ReplayRecordError for one written
+    by another schema (an older lf3pm's: delete it to replay it again)."""
+    record = json.loads(open(path, encoding="utf-8").read())
+    schema = record.get("schema") if isinstance(record, dict) else None
+    if schema != SCHEMA:
+        raise ReplayRecordError(
+            f"{path}: a replay record of schema {schema if schema is not None else 'none (before schemas)'}, "
+            f"not {SCHEMA}: delete it (or its folder) to replay it with this lf3pm"
+        )
+    return record
 
 
 def replay_summary(runs: list) -> dict:
@@ -133,6 +150,7 @@ def replay_task(task) -> None:
     errors = np.asarray(result.errors)
     every = max(1, int(round(result.params["rate"])))
     record = {
+        "schema": SCHEMA,
         "ape_rmse": result.ape["rmse"],
         "ape_median": result.ape["median"],
         "ape_max": result.ape["max"],
@@ -148,20 +166,6 @@ def replay_task(task) -> None:
     if result.rest:
         record["rest"] = result.rest
     path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(path) as fp:
-        fp.write(json.dumps(record).encode())
-
-
-def rest_task(task) -> None:
-    """Adds the ``rest`` (replay_rest: what the LIO did while the sensor stood still)
-    to a LIO replay's JSON saved without it: bitwise what the replay saw, for a tenth
-    of its time."""
-    from lf3pm.replays.replay import replay_rest
-
-    case, csv, _, seed, path, options = task
-    world, _ = _case_map(case)
-    record = load_replay(path)
-    record["rest"] = replay_rest(world, csv, case.sensor, seed, threads=1, **options)
     with atomic_write(path) as fp:
         fp.write(json.dumps(record).encode())
 

@@ -1,19 +1,23 @@
 """Child process of lf3pm.replays.lio: runs one LiDAR-inertial odometry (GenZ-LIO,
-or DLIO or LIO-SAM from evalio) on the scans the parent streams to it, so that the
-odometry's OpenMP runtime, its console output and a crash stay out of the caller's process.
+or DLIO or LIO-SAM from evalio, or a plugin's) on the scans the parent streams to it, so
+that the odometry's OpenMP runtime, its console output and a crash stay out of the
+caller's process, and so that lf3pm (BSD) never imports GenZ-LIO (GPL-2.0-only) itself.
 
-Run as a script (no lf3pm import): ``python _lio_worker.py REPLY_FD``.
-Protocol, pickled objects: on stdin ("config", odometry, sensor_range, threads,
-settings, lidar), then ("scan", points, begin, end, offsets, imu) per scan and
-("done", imu) with the IMU samples after the last scan; on REPLY_FD ("ready",
-version) or ("error", message), then one ("poses", [(pose, time, status), ...],
-seconds) per scan and one after "done": the poses the odometry finished with that
-message, in scan order, each with the time it refers to (GenZ-LIO and DLIO one per
-scan; LIO-SAM two scans late, the last two at "done"). ``lidar``: {"beams": the
-beams' elevations (rad), lowest first, or None for a non-repetitive sensor;
-"columns": rays per beam and scan}.
+Run as a script: ``python _lio_worker.py REPLY_FD``; lf3pm's own odometries run without
+importing lf3pm. Protocol, pickled objects: on stdin ("config", worker, key,
+sensor_range, threads, settings, lidar, paths), then ("scan", points, begin, end,
+offsets, imu) per scan and ("done", imu) with the IMU samples after the last scan; on
+REPLY_FD ("ready", version) or ("error", message), then one ("poses", [(pose, time,
+status), ...], seconds) per scan and one after "done": the poses the odometry finished
+with that message, in scan order, each with the time it refers to (GenZ-LIO and DLIO one
+per scan; LIO-SAM two scans late, the last two at "done"). ``worker``: "module:Class" of
+the class to run (lf3pm.replays.adapters: the interface), this module's own classes by
+``lf3pm.replays._lio_worker``; ``paths``: the parent's sys.path, where a plugin's module
+is found. ``lidar``: {"beams": the beams' elevations (rad), lowest first, or None for a
+non-repetitive sensor; "columns": rays per beam and scan}.
 """
 
+import importlib
 import os
 import pickle
 import sys
@@ -90,12 +94,16 @@ class GenZ:
         return []
 
 
-class Dlio:
-    """DLIO (Direct LiDAR-Inertial Odometry) as evalio compiles it. Each scan is a
-    LidarMeasurement stamped at its first return, the returns carrying their offsets
-    from it (ns); DLIO deskews the scan to its median return time and its pose is the
-    sensor's there (the state it reports after the scan)."""
+class _Evalio:
+    """An odometry as evalio compiles it (``PIPELINE``, in evalio.pipelines), fed by
+    :meth:`_cloud`: each scan a LidarMeasurement stamped at its first return, the returns
+    carrying their offsets from it (ns) and the fields of ``_DTYPE``. evalio leaves unset
+    parameters uninitialised: every parameter is set, the settings over its defaults."""
 
+    PIPELINE = ""
+    LABEL = ""
+    #: Settings that are not the pipeline's parameters (the subclass takes them out).
+    EXTRA = ()
     _DTYPE = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("t", "<u4")])
 
     def __init__(self, sensor_range, threads, settings, lidar):
@@ -104,21 +112,43 @@ class Dlio:
         from evalio._cpp import helpers
 
         self.types, self.helpers = types, helpers
-        self.version = f"{evalio.__version__} (DLIO {pipelines.DLIO.version()})"
-        self.pipeline = pipelines.DLIO()
-        unknown = sorted(set(settings) - set(pipelines.DLIO.default_params()))
+        pipeline = getattr(pipelines, self.PIPELINE)
+        self.version = f"{evalio.__version__} ({self.LABEL} {pipeline.version()})"
+        self.pipeline = pipeline()
+        defaults = pipeline.default_params()
+        unknown = sorted(set(settings) - set(defaults) - set(self.EXTRA))
         if unknown:
-            raise ValueError(
-                f"unknown DLIO parameter(s) {', '.join(unknown)}; known: "
-                f"{', '.join(sorted(pipelines.DLIO.default_params()))}"
-            )
-        # evalio leaves unset fields uninitialised: every parameter is set.
-        self.settings = {**pipelines.DLIO.default_params(), **settings}
+            known = ", ".join([*self.EXTRA, *sorted(defaults)])
+            raise ValueError(f"unknown {self.LABEL} parameter(s) {', '.join(unknown)}; known: {known}")
+        self.defaults = dict(defaults)
+        self.fields = _fields(helpers, self._DTYPE)
+
+    def _cloud(self, points, offsets):
+        """The scan as ``_DTYPE`` rows: its points and their offsets (ns)."""
+        data = np.empty(len(points), self._DTYPE)
+        data["x"], data["y"], data["z"] = points.T
+        data["t"] = np.round(offsets * 1e9).astype(np.uint32)
+        return data
+
+    def finish(self, imu):
+        return []
+
+
+class Dlio(_Evalio):
+    """DLIO (Direct LiDAR-Inertial Odometry) as evalio compiles it. DLIO deskews each
+    scan to its median return time and its pose is the sensor's there (the state it
+    reports after the scan)."""
+
+    PIPELINE, LABEL = "DLIO", "DLIO"
+
+    def __init__(self, sensor_range, threads, settings, lidar):
+        super().__init__(sensor_range, threads, settings, lidar)
+        types = self.types
+        self.settings = {**self.defaults, **settings}
         self.pipeline.set_params(self.settings)
         self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, 9.81])))
         self.pipeline.set_imu_T_lidar(types.SE3.identity())
         self.pipeline.initialize()
-        self.fields = _fields(helpers, self._DTYPE)
         self.first_imu = None
 
     def scan(self, points, begin, end, offsets, imu):
@@ -128,9 +158,7 @@ class Dlio:
         _add_imu(self.pipeline, types, imu)
         if len(points) == 0:
             return [(None, end, "skipped: too few points")]
-        data = np.empty(len(points), self._DTYPE)
-        data["x"], data["y"], data["z"] = points.T
-        data["t"] = np.round(offsets * 1e9).astype(np.uint32)
+        data = self._cloud(points, offsets)
         self.pipeline.add_lidar(_measurement(self.helpers, types, self.fields, data, begin))
         estimates = self.pipeline.saved_estimates()
         median = _median_time(begin, data["t"])  # DLIO's scan time
@@ -142,9 +170,6 @@ class Dlio:
         # DLIO takes the IMU for still while it calibrates (imu_calib_time s from its first sample).
         calibrating = self.first_imu is None or median < self.first_imu + self.settings["imu_calib_time"]
         return [(pose, median, "initializing" if calibrating else "ok")]
-
-    def finish(self, imu):
-        return []
 
 
 @dataclass
@@ -160,7 +185,7 @@ class _Queued:
     turn: np.ndarray | None = None
 
 
-class LioSam:
+class LioSam(_Evalio):
     """LIO-SAM as evalio compiles it: LOAM edge and plane features of a ring-organised
     scan, matched to a keyframe map, in a factor graph with IMU preintegration (GTSAM).
 
@@ -183,29 +208,18 @@ class LioSam:
     LiDAR's. Gravity points down (evalio's ``ImuParams.down``): with it up, LIO-SAM took
     the still accelerometer for a 2 g bias and reset its preintegration every scan."""
 
+    PIPELINE, LABEL, EXTRA = "LioSAM", "LIO-SAM", ("imu_densities",)
     _DTYPE = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("t", "<u4"), ("ring", "u1")])
     TILT = np.radians(1.0)
 
     def __init__(self, sensor_range, threads, settings, lidar):
-        import evalio
-        from evalio import pipelines, types
-        from evalio._cpp import helpers
-
         if not lidar.get("beams"):
             raise ValueError("LIO-SAM needs a spinning sensor (rings of beams); use genz for a Livox one")
-        self.types, self.helpers = types, helpers
-        self.version = f"{evalio.__version__} (LIO-SAM {pipelines.LioSAM.version()})"
-        self.pipeline = pipelines.LioSAM()
+        super().__init__(sensor_range, threads, settings, lidar)
+        types = self.types
         settings = dict(settings)
         noise = settings.pop("imu_densities", {})
-        known = set(pipelines.LioSAM.default_params())
-        unknown = sorted(set(settings) - known)
-        if unknown:
-            raise ValueError(
-                f"unknown LIO-SAM parameter(s) {', '.join(unknown)}; known: imu_densities, {', '.join(sorted(known))}"
-            )
-        # evalio leaves unset fields uninitialised: every parameter is set.
-        self.pipeline.set_params({**pipelines.LioSAM.default_params(), "numberOfCores": int(threads), **settings})
+        self.pipeline.set_params({**self.defaults, "numberOfCores": int(threads), **settings})
         self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, -9.81]), **noise))
         self.pipeline.set_lidar_params(
             types.LidarParams(
@@ -221,7 +235,6 @@ class LioSam:
         self.pipeline.set_imu_T_lidar(types.SE3(types.SO3(qx=qx, qy=qy, qz=qz, qw=qw), np.zeros(3)))
         self.pipeline.initialize()
         self.beams = np.asarray(lidar["beams"], float)
-        self.fields = _fields(helpers, self._DTYPE)
         self.queue = []  # _Queued, in scan order
         self.pose = None  # the pose of the last scan LIO-SAM processed (None: none yet)
         self.imu_span = None  # (first, last) IMU time given
@@ -232,9 +245,7 @@ class LioSam:
         if len(points) == 0:  # not given to LIO-SAM, which reads a scan's last return
             self.queue.append(_Queued(begin, "skipped: too few points", False))
             return self._report()
-        data = np.empty(len(points), self._DTYPE)
-        data["x"], data["y"], data["z"] = points.T
-        data["t"] = np.round(offsets * 1e9).astype(np.uint32)
+        data = self._cloud(points, offsets)
         elevation = np.arctan2(points[:, 2], np.hypot(points[:, 0], points[:, 1]))
         data["ring"] = np.abs(elevation[:, None] - self.beams[None, :]).argmin(axis=1)
         self.pipeline.add_lidar(_measurement(self.helpers, self.types, self.fields, data, begin))
@@ -354,7 +365,17 @@ def _measurement(helpers, types, fields, data, begin):
     return helpers.pc2_to_evalio(meta, fields, data.tobytes())
 
 
-BACKENDS = {"genz": GenZ, "dlio": Dlio, "liosam": LioSam}
+def _worker_class(spec, paths):
+    """The class "module:Class" names: this module's own, or one imported with the
+    parent's sys.path."""
+    module, _, name = spec.partition(":")
+    if module == "lf3pm.replays._lio_worker":
+        return globals()[name]
+    sys.path.extend(path for path in paths if path not in sys.path)
+    target = importlib.import_module(module)
+    for part in name.split("."):
+        target = getattr(target, part)
+    return target
 
 
 def main(reply_fd: int) -> None:
@@ -365,9 +386,9 @@ def main(reply_fd: int) -> None:
         pickle.dump(message, replies, protocol=pickle.HIGHEST_PROTOCOL)
         replies.flush()
 
-    _, odometry, sensor_range, threads, settings, lidar = pickle.load(requests)
+    _, worker, odometry, sensor_range, threads, settings, lidar, paths = pickle.load(requests)
     try:
-        backend = BACKENDS[odometry](sensor_range, threads, settings, lidar)
+        backend = _worker_class(worker, paths)(sensor_range, threads, settings, lidar)
     except ImportError as err:
         send(
             (

@@ -37,7 +37,7 @@ Per scan k (scans.py; scan k ends at t_k, its rays fire over the period before):
 
 A scan with fewer than ``min_points`` points after downsampling, or whose
 registration keeps fewer inliers, is skipped: the estimate is the prior.
-Registration runs on ``threads`` threads (default 1: small_gicp reduces in
+Registration runs on ``registration_threads`` threads (1: small_gicp reduces in
 parallel, so only one thread is bit-for-bit reproducible; a study runs
 replays in parallel processes instead).
 """
@@ -50,28 +50,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS
+from lf3pm.config import DEFAULTS, LocalizationConfig
 from lf3pm.errors import Lf3pmError
 from lf3pm.pose import se3_exp, se3_log
-from lf3pm.replays.replay_result import Estimate
+from lf3pm.replays.replay_result import Estimate, MethodRun, library_versions, method_settings
 from lf3pm.sensors import Sensor
 from lf3pm.validation.mde import RegistrationTarget
 
-#: Scan voxel (m): a few thousand points from a VLP-16 scan, the order FAST-LIO's
-#: 0.5 m ``filter_size_surf`` keeps outdoors, denser for rooms.
-SCAN_VOXEL = 0.25
-#: Largest standard deviation (m) range noise may leave in a direction that still
-#: counts as constrained. With sigma = 1.5 cm it takes (sigma / bound)^2 = 2.25
-#: points perfectly aligned with a direction to constrain it. Measured: 1.9-2.4 mm
-#: in the worst direction of the boxes scene, 3.3 cm along a corridor's axis (the
-#: estimated normals at its wall-floor junctions carry a little information).
-DEGENERATE_STD = 0.01
-#: Correspondence gate (m) and iterations: small_gicp's usual values for
-#: registering a scan to a map from a prior good to a few tens of centimetres.
-MAX_CORRESPONDENCE_DISTANCE = 1.0
-MAX_ITERATIONS = 30
-#: Fewest points a registration may use (a smaller scan is not trusted).
-MIN_POINTS = 100
 _NOISE_TAG = 0x0D0E  # wheel-odometry noise: its own stream of the replay's seed
 
 
@@ -88,8 +73,8 @@ class WheelOdometry:
     differential-drive robots does).
     """
 
-    scale_error: float = 0.02
-    yaw_noise: float = 0.01
+    scale_error: float = DEFAULTS.localization.scale_error
+    yaw_noise: float = DEFAULTS.localization.yaw_noise
 
     def __post_init__(self):
         if not (math.isfinite(self.scale_error) and self.scale_error > -1):
@@ -192,33 +177,20 @@ def localize(
     scans,
     target: RegistrationTarget,
     sensor: Sensor,
+    settings: LocalizationConfig = DEFAULTS.localization,
     *,
-    odometry: WheelOdometry = WheelOdometry(),
     seed: int = DEFAULTS.scan.seed,
-    scan_voxel: float = SCAN_VOXEL,
-    degenerate_std: float = DEGENERATE_STD,
-    remap: bool = True,
-    max_correspondence_distance: float = MAX_CORRESPONDENCE_DISTANCE,
-    max_iterations: int = MAX_ITERATIONS,
-    min_points: int = MIN_POINTS,
-    threads: int = 1,
     progress=None,
 ) -> Estimate:
     """Localizes along ``scans`` (a ScanStream: its ``truth`` gives the start and
     the wheel odometry's true increments) on the prepared map ``target``
-    (module docstring). ``progress``, if given, is called as progress(done, total).
-    Returns the Estimate with per-scan degenerate directions and a report of
-    the registrations (converged count, the largest deviation per scan)."""
+    (module docstring) with ``settings``. ``progress``, if given, is called as
+    progress(done, total). Returns the Estimate with per-scan degenerate directions and
+    a report of the registrations (converged count, the largest deviation per scan)."""
     import small_gicp
 
-    if not (math.isfinite(scan_voxel) and scan_voxel >= 0):
-        raise Lf3pmError(f"the scan voxel must be >= 0 m, got {scan_voxel}")
-    if not (math.isfinite(degenerate_std) and degenerate_std > 0):
-        raise Lf3pmError(f"the degeneracy bound must be > 0 m, got {degenerate_std}")
-    if not (math.isfinite(max_correspondence_distance) and max_correspondence_distance > 0):
-        raise Lf3pmError(f"the correspondence distance must be > 0 m, got {max_correspondence_distance}")
-    if max_iterations < 1 or min_points < 1:
-        raise Lf3pmError("max_iterations and min_points must be >= 1")
+    odometry = WheelOdometry(settings.scale_error, settings.yaw_noise)
+    scan_voxel, min_points, degenerate_std = settings.scan_voxel, settings.min_points, settings.degenerate_std
     count = len(scans)
     truth = scans.truth
     steps = odometry.increments(truth, scans.period, seed)
@@ -248,9 +220,9 @@ def localize(
                 target.tree,
                 init_T_target_source=prior,
                 registration_type="PLANE_ICP",
-                max_correspondence_distance=max_correspondence_distance,
-                max_iterations=max_iterations,
-                num_threads=int(threads),
+                max_correspondence_distance=settings.max_correspondence_distance,
+                max_iterations=settings.max_iterations,
+                num_threads=int(settings.registration_threads),
             )
             if result.num_inliers < min_points:
                 skipped.append(k)
@@ -259,7 +231,7 @@ def localize(
                 found = degeneracy(np.asarray(result.H), source.points()[:, :3], sigma, degenerate_std)
                 directions[k], worst[k] = found.count, float(found.std[0])
                 T = np.asarray(result.T_target_source)
-                if remap and found.count:
+                if settings.remap and found.count:
                     twist = se3_log(np.linalg.inv(prior) @ T)  # (translation, rotation)
                     kept = found.remap(np.r_[twist[3:], twist[:3]])  # small_gicp's order
                     T = prior @ se3_exp(np.r_[kept[3:], kept[:3]])
@@ -278,6 +250,31 @@ def localize(
     )
 
 
-def localization_params(odometry: WheelOdometry, **settings) -> dict:
+def localization_params(settings: LocalizationConfig) -> dict:
     """The settings a localization replay records."""
-    return {"odometry": asdict(odometry), **settings, "registration": "small_gicp PLANE_ICP"}
+    odometry = WheelOdometry(settings.scale_error, settings.yaw_noise)
+    recorded = settings.model_dump(exclude={"scale_error", "yaw_noise", "registration_threads"})
+    return {"odometry": asdict(odometry), **recorded, "registration": "small_gicp PLANE_ICP"}
+
+
+class Localization:
+    """The ``localization`` replay method (lf3pm.replays.methods.ReplayMethod): the map
+    prepared for registration once, then :func:`localize` with ``settings``."""
+
+    name = "localization"
+    rest = 0.0
+    uses_odometry = False
+
+    def __init__(self, settings: LocalizationConfig = DEFAULTS.localization):
+        self.settings = settings
+
+    @classmethod
+    def from_params(cls, params: dict) -> Localization:
+        return cls(method_settings(cls.name, DEFAULTS.localization, params))
+
+    def prepare(self, map, threads: int, prepared: RegistrationTarget | None = None) -> RegistrationTarget:
+        return RegistrationTarget.for_map(map, prepared, threads)
+
+    def run(self, scans, motion, sensor: Sensor, seed: int, *, prepared, threads: int, progress=None) -> MethodRun:
+        run = localize(scans, prepared, sensor, self.settings, seed=seed, progress=progress)
+        return MethodRun(run, localization_params(self.settings), library_versions("small_gicp"))

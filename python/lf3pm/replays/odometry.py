@@ -15,38 +15,30 @@ frame, compared with the true pose at scan k's time (its last ray).
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS
-from lf3pm.errors import Lf3pmError
+from lf3pm.config import DEFAULTS, KissIcpConfig, validated
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
-from lf3pm.replays.replay_result import Estimate, ReplayResult, library_versions
+from lf3pm.replays.replay_result import Estimate, MethodRun, ReplayResult, library_versions, method_settings
 from lf3pm.scan.scans import ScanStream
 from lf3pm.sensors import Sensor, as_sensor
 from lf3pm.trajectory.sampling import LinearMotion
 
 
-def kiss_icp_config(
-    sensor: Sensor,
-    *,
-    voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
-    deskew: bool = False,
-    threads: int = DEFAULTS.scan.threads,
-):
-    """KISS-ICP configuration for ``sensor``: its range limits, ``deskew`` (on
-    for motion-distorted scans with per-point timestamps), ``voxel_size`` for
-    the local map (KISS-ICP's own choice for outdoor 100 m LiDARs is 1 m;
-    smaller suits rooms)."""
+def kiss_icp_config(sensor: Sensor, settings: KissIcpConfig = DEFAULTS.kiss_icp, threads: int = DEFAULTS.scan.threads):
+    """KISS-ICP configuration for ``sensor``: its range limits, ``settings.deskew`` (on
+    for motion-distorted scans with per-point timestamps), ``settings.voxel_size`` for
+    the local map (KISS-ICP's own choice for outdoor 100 m LiDARs is 1 m; smaller suits
+    rooms)."""
     from kiss_icp.config import KISSConfig
     from kiss_icp.config.config import DataConfig, MappingConfig, RegistrationConfig
 
     return KISSConfig(
-        data=DataConfig(max_range=sensor.max_range, min_range=sensor.min_range, deskew=bool(deskew)),
-        mapping=MappingConfig(voxel_size=float(voxel_size)),
+        data=DataConfig(max_range=sensor.max_range, min_range=sensor.min_range, deskew=bool(settings.deskew)),
+        mapping=MappingConfig(voxel_size=float(settings.voxel_size)),
         registration=RegistrationConfig(max_num_threads=int(threads)),
     )
 
@@ -55,25 +47,20 @@ def run_kiss_icp(
     scans,
     sensor: Sensor,
     initial_pose,
+    settings: KissIcpConfig = DEFAULTS.kiss_icp,
     *,
-    voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
-    deskew: bool = True,
-    min_points: int = DEFAULTS.kiss_icp.min_points,
     threads: int = DEFAULTS.scan.threads,
     progress=None,
 ) -> Estimate:
-    """KISS-ICP over ``scans`` (MovingScan objects, e.g. a ScanStream), anchored
-    at ``initial_pose`` (4 x 4, the true pose of the first scan). A scan with
-    fewer than ``min_points`` hits is not given to KISS-ICP (its estimate stays
+    """KISS-ICP with ``settings`` over ``scans`` (MovingScan objects, e.g. a ScanStream),
+    anchored at ``initial_pose`` (4 x 4, the true pose of the first scan). A scan with
+    fewer than ``settings.min_points`` hits is not given to KISS-ICP (its estimate stays
     where it was). ``progress``, if given, is called as progress(done, total).
     The Estimate's seconds are those spent in KISS-ICP."""
     from kiss_icp.kiss_icp import KissICP
 
-    if not (math.isfinite(voxel_size) and voxel_size > 0):
-        raise Lf3pmError(f"the KISS-ICP voxel size must be > 0, got {voxel_size}")
-    if min_points < 1:
-        raise Lf3pmError(f"min_points must be >= 1, got {min_points}")
-    odometry = KissICP(kiss_icp_config(sensor, voxel_size=voxel_size, deskew=deskew, threads=threads))
+    odometry = KissICP(kiss_icp_config(sensor, settings, threads))
+    min_points, deskew = settings.min_points, settings.deskew
     anchor = np.asarray(initial_pose, dtype=np.float64)
     estimate = np.empty((len(scans), 4, 4))
     hits = np.zeros(len(scans), dtype=np.int64)
@@ -94,6 +81,30 @@ def run_kiss_icp(
     return Estimate(poses=estimate, hits=hits, skipped=skipped, seconds=seconds)
 
 
+class KissIcpOdometry:
+    """The ``odometry`` replay method (lf3pm.replays.methods.ReplayMethod): KISS-ICP with
+    ``settings`` on the replay's scans."""
+
+    name = "odometry"
+    rest = 0.0
+    uses_odometry = False
+
+    def __init__(self, settings: KissIcpConfig = DEFAULTS.kiss_icp):
+        self.settings = settings
+
+    @classmethod
+    def from_params(cls, params: dict) -> KissIcpOdometry:
+        return cls(method_settings(cls.name, DEFAULTS.kiss_icp, params))
+
+    def prepare(self, map, threads: int, prepared=None):
+        return None
+
+    def run(self, scans, motion, sensor: Sensor, seed: int, *, prepared, threads: int, progress=None) -> MethodRun:
+        run = run_kiss_icp(scans, sensor, scans.truth[0], self.settings, threads=threads, progress=progress)
+        params = {"min_points": self.settings.min_points, "kiss_icp": kiss_icp_params(sensor, self.settings)}
+        return MethodRun(run, params, library_versions("kiss-icp"))
+
+
 def replay_odometry(
     map: Map | str,
     t,
@@ -103,8 +114,9 @@ def replay_odometry(
     rate: float = DEFAULTS.replay.rate,
     seed: int = DEFAULTS.scan.seed,
     noise: float | None = DEFAULTS.scan.noise,
-    voxel_size: float = DEFAULTS.kiss_icp.voxel_size,
-    min_points: int = DEFAULTS.kiss_icp.min_points,
+    kiss_icp: KissIcpConfig = DEFAULTS.kiss_icp,
+    voxel_size: float | None = None,
+    min_points: int | None = None,
     motion_distortion: bool = True,
     deskew: bool | None = None,
     threads: int = DEFAULTS.scan.threads,
@@ -119,10 +131,18 @@ def replay_odometry(
     the pose at its own firing time (scan k's rays spread over the 1/rate s
     ending at its time); False: each scan at one pose. ``deskew``: KISS-ICP's
     deskewing from the per-point timestamps (default: on exactly when
-    ``motion_distortion`` is). Others as :func:`run_kiss_icp`.
+    ``motion_distortion`` is). ``kiss_icp``: KISS-ICP's section, ``voxel_size`` and
+    ``min_points`` (None: the section's) over it. Others as :func:`run_kiss_icp`.
     Raises Lf3pmError for a malformed trajectory, a pose outside the map's x-y
     extent or bad parameters.
     """
+    given = {"voxel_size": voxel_size, "min_points": min_points}
+    deskew = bool(motion_distortion) if deskew is None else bool(deskew)
+    settings = validated(
+        KissIcpConfig,
+        "kiss_icp",
+        **{**kiss_icp.model_dump(), **{k: v for k, v in given.items() if v is not None}, "deskew": deskew},
+    )
     map, sensor = as_map(map), as_sensor(sensor)
     motion = LinearMotion(t, poses)
     # The map's x-y box is convex, so checking the given poses covers the interpolated ones.
@@ -131,25 +151,15 @@ def replay_odometry(
     scans = ScanStream(
         map, motion, sensor, rate=rate, seed=seed, noise=noise, distortion=motion_distortion, threads=threads
     )
-    deskew = bool(motion_distortion) if deskew is None else bool(deskew)
-    run = run_kiss_icp(
-        scans,
-        sensor,
-        scans.truth[0],
-        voxel_size=voxel_size,
-        deskew=deskew,
-        min_points=min_points,
-        threads=threads,
-        progress=progress,
-    )
+    run = run_kiss_icp(scans, sensor, scans.truth[0], settings, threads=threads, progress=progress)
     params = {
         "rate": float(rate),
         "seed": int(seed),
         "noise_stream": "scan index",
         "noise": scans.noise,
-        "min_points": min_points,
+        "min_points": settings.min_points,
         "motion_distortion": bool(motion_distortion),
-        "kiss_icp": kiss_icp_params(sensor, voxel_size, deskew),
+        "kiss_icp": kiss_icp_params(sensor, settings),
     }
     return ReplayResult.from_run(
         run,
@@ -163,11 +173,11 @@ def replay_odometry(
     )
 
 
-def kiss_icp_params(sensor: Sensor, voxel_size: float, deskew: bool) -> dict:
+def kiss_icp_params(sensor: Sensor, settings: KissIcpConfig) -> dict:
     """The KISS-ICP settings a replay records."""
     return {
-        "voxel_size": float(voxel_size),
+        "voxel_size": float(settings.voxel_size),
         "max_range": sensor.max_range,
         "min_range": sensor.min_range,
-        "deskew": bool(deskew),
+        "deskew": bool(settings.deskew),
     }

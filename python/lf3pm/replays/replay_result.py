@@ -7,9 +7,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from lf3pm.config import Section, validated
+from lf3pm.errors import Lf3pmError
 from lf3pm.replays.trajectory_metrics import ape_translation, rpe
 
 
@@ -28,6 +31,25 @@ class Estimate:
     degenerate_directions: np.ndarray | None = None
     report: dict = field(default_factory=dict)
     times: np.ndarray | None = None
+
+
+class MethodRun(NamedTuple):
+    """What a replay method's run gives: the Estimate, the parameters the replay records
+    under the method's name, and the versions of the libraries it used."""
+
+    estimate: Estimate
+    params: dict
+    versions: dict
+
+
+def method_settings(method: str, defaults: Section, params: dict) -> Section:
+    """``defaults`` (a replay method's settings section) updated by ``params``: Lf3pmError
+    naming an unknown parameter and the known ones, ConfigError a bad value."""
+    known = type(defaults).model_fields
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise Lf3pmError(f"unknown parameter(s) for {method}: {', '.join(unknown)}; known: {', '.join(known)}")
+    return validated(type(defaults), method, **{**defaults.model_dump(), **params})
 
 
 def library_versions(*packages: str) -> dict:
