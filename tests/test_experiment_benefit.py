@@ -27,13 +27,13 @@ def test_paired_comparison_by_hand():
         unguided_duration=[8] * 5,
     )
     ratios = guided / unguided  # 0.1, 2, 0.5, 0.1, 0.5
-    assert c["pairs"] == 5 and c["median_ratio"] == pytest.approx(np.median(ratios))
-    assert c["share_worse"] == pytest.approx(0.2)
-    assert c["failure_rate_guided"] == pytest.approx(0.2) and c["failure_rate_unguided"] == pytest.approx(0.2)
-    assert c["median_length_overhead"] == pytest.approx(0.0) and c["median_duration_overhead"] == pytest.approx(0.25)
-    assert c["wilcoxon_p"] == pytest.approx(wilcoxon(np.log(guided) - np.log(unguided)).pvalue)
-    lo, hi = c["median_ratio_ci95"]
-    assert lo <= c["median_ratio"] <= hi
+    assert c.pairs == 5 and c.median_ratio == pytest.approx(np.median(ratios))
+    assert c.share_worse == pytest.approx(0.2)
+    assert c.failure_rate_guided == pytest.approx(0.2) and c.failure_rate_unguided == pytest.approx(0.2)
+    assert c.median_length_overhead == pytest.approx(0.0) and c.median_duration_overhead == pytest.approx(0.25)
+    assert c.wilcoxon_p == pytest.approx(wilcoxon(np.log(guided) - np.log(unguided)).pvalue)
+    lo, hi = c.median_ratio_ci95
+    assert lo <= c.median_ratio <= hi
 
 
 def test_worse_beyond_noise_needs_a_difference_larger_than_the_seeds_spread():

@@ -18,6 +18,7 @@ For each start/goal pair i there is one error per plan, a_i (guided) and b_i
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -29,6 +30,37 @@ FAILURE_APE = 1.0
 #: one's beyond seed noise and by more than this (m): a centimetre, below which a
 #: localization error does not matter to a ground robot's planning.
 WORSE_MARGIN = 0.01
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Guided plans against their unguided twins over some pairs (:func:`compare`;
+    ``pairs`` 0: nothing to compare, every other field NaN; the overheads NaN where no
+    lengths or durations were given)."""
+
+    pairs: int
+    median_ratio: float = math.nan
+    median_ratio_ci95: tuple[float, float] = (math.nan, math.nan)
+    wilcoxon_p: float = math.nan
+    share_worse: float = math.nan
+    share_worse_beyond_noise: float = math.nan
+    share_worse_beyond_noise_and_margin: float = math.nan
+    failure_rate_guided: float = math.nan
+    failure_rate_unguided: float = math.nan
+    median_error_guided: float = math.nan
+    median_error_unguided: float = math.nan
+    median_length_overhead: float = math.nan
+    median_duration_overhead: float = math.nan
+
+    def to_json(self) -> dict:
+        return asdict(self) if self.pairs else {"pairs": 0}
+
+    @classmethod
+    def from_json(cls, d: dict) -> Comparison:
+        d = dict(d)
+        if "median_ratio_ci95" in d:
+            d["median_ratio_ci95"] = tuple(d["median_ratio_ci95"])
+        return cls(**d)
 
 
 def median_ratio_ci(ratios, *, draws: int = 2000, level: float = 0.95, seed: int = 0) -> tuple[float, float]:
@@ -81,7 +113,7 @@ def compare(
     unguided_seeds=None,
     failure: float = FAILURE_APE,
     seed: int = 0,
-) -> dict:
+) -> Comparison:
     """The paired comparison of the module docstring. Errors must be positive and finite;
     ``*_seeds``: each pair's per-seed errors (for the share worse beyond noise)."""
     a, b = np.asarray(guided, float), np.asarray(unguided, float)
@@ -90,24 +122,24 @@ def compare(
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and np.all(a > 0) and np.all(b > 0)):
         raise Lf3pmError("paired errors must be positive and finite")
     ratios = a / b
-    out = {
-        "pairs": int(a.size),
-        "median_ratio": float(np.median(ratios)) if a.size else math.nan,
-        "median_ratio_ci95": median_ratio_ci(ratios, seed=seed),
-        "wilcoxon_p": wilcoxon_p(a, b),
-        "share_worse": float(np.mean(ratios > 1.0)) if a.size else math.nan,
-        "share_worse_beyond_noise": (
+    out = dict(
+        pairs=int(a.size),
+        median_ratio=float(np.median(ratios)) if a.size else math.nan,
+        median_ratio_ci95=median_ratio_ci(ratios, seed=seed),
+        wilcoxon_p=wilcoxon_p(a, b),
+        share_worse=float(np.mean(ratios > 1.0)) if a.size else math.nan,
+        share_worse_beyond_noise=(
             worse_beyond_noise(guided_seeds, unguided_seeds) if guided_seeds is not None else math.nan
         ),
-        "share_worse_beyond_noise_and_margin": (
+        share_worse_beyond_noise_and_margin=(
             worse_beyond_noise(guided_seeds, unguided_seeds, WORSE_MARGIN) if guided_seeds is not None else math.nan
         ),
-        "failure_rate_guided": float(np.mean(a > failure)) if a.size else math.nan,
-        "failure_rate_unguided": float(np.mean(b > failure)) if a.size else math.nan,
-        "median_error_guided": float(np.median(a)) if a.size else math.nan,
-        "median_error_unguided": float(np.median(b)) if a.size else math.nan,
-    }
+        failure_rate_guided=float(np.mean(a > failure)) if a.size else math.nan,
+        failure_rate_unguided=float(np.mean(b > failure)) if a.size else math.nan,
+        median_error_guided=float(np.median(a)) if a.size else math.nan,
+        median_error_unguided=float(np.median(b)) if a.size else math.nan,
+    )
     for name, x, y in (("length", guided_length, unguided_length), ("duration", guided_duration, unguided_duration)):
         if x is not None:
             out[f"median_{name}_overhead"] = float(np.median(np.asarray(x, float) / np.asarray(y, float) - 1.0))
-    return out
+    return Comparison(**out)

@@ -60,17 +60,15 @@ def comparison(pairs: list[Pair], guidance: str, measure: Measure) -> Comparison
         return Comparison(0)
     guided = [pair.plans[guidance] for pair, _ in rows]
     unguided = [pair.plans[NONE] for pair, _ in rows]
-    return Comparison(
-        **compare(
-            [max(a.ape, APE_FLOOR) for _, (a, _) in rows],
-            [max(b.ape, APE_FLOOR) for _, (_, b) in rows],
-            guided_length=[p.length_m for p in guided],
-            unguided_length=[p.length_m for p in unguided],
-            guided_duration=[p.duration_s for p in guided],
-            unguided_duration=[p.duration_s for p in unguided],
-            guided_seeds=[list(a.ape_per_seed) for _, (a, _) in rows],
-            unguided_seeds=[list(b.ape_per_seed) for _, (_, b) in rows],
-        )
+    return compare(
+        [max(a.ape, APE_FLOOR) for _, (a, _) in rows],
+        [max(b.ape, APE_FLOOR) for _, (_, b) in rows],
+        guided_length=[p.length_m for p in guided],
+        unguided_length=[p.length_m for p in unguided],
+        guided_duration=[p.duration_s for p in guided],
+        unguided_duration=[p.duration_s for p in unguided],
+        guided_seeds=[list(a.ape_per_seed) for _, (a, _) in rows],
+        unguided_seeds=[list(b.ape_per_seed) for _, (_, b) in rows],
     )
 
 

@@ -27,6 +27,7 @@ from lf3pm.config import REPLAY_METHODS
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.guidance import UNGUIDED, Guidance
 from lf3pm.experiments.map_cases import MapCase
+from lf3pm.experiments.paired_stats import Comparison
 from lf3pm.experiments.replay_tasks import load_replay, replay_json
 
 #: The version of the records' JSON; written in every JSON the study caches.
@@ -376,36 +377,6 @@ class Measure:
 
 #: The measures the study compares plans by, in the report's order.
 MEASURES = (Measure(LOCALIZATION), Measure(LIO), Measure(LIO, steady_starts=True))
-
-
-@dataclass(frozen=True)
-class Comparison:
-    """Guided plans against their unguided twins over some pairs (paired_stats.compare;
-    ``pairs`` 0: nothing to compare, every other field NaN)."""
-
-    pairs: int
-    median_ratio: float = math.nan
-    median_ratio_ci95: tuple[float, float] = (math.nan, math.nan)
-    wilcoxon_p: float = math.nan
-    share_worse: float = math.nan
-    share_worse_beyond_noise: float = math.nan
-    share_worse_beyond_noise_and_margin: float = math.nan
-    failure_rate_guided: float = math.nan
-    failure_rate_unguided: float = math.nan
-    median_error_guided: float = math.nan
-    median_error_unguided: float = math.nan
-    median_length_overhead: float = math.nan
-    median_duration_overhead: float = math.nan
-
-    def to_json(self) -> dict:
-        return asdict(self) if self.pairs else {"pairs": 0}
-
-    @classmethod
-    def from_json(cls, d: dict) -> Comparison:
-        d = dict(d)
-        if "median_ratio_ci95" in d:
-            d["median_ratio_ci95"] = tuple(d["median_ratio_ci95"])
-        return cls(**d)
 
 
 @dataclass(frozen=True)
