@@ -94,6 +94,7 @@ def run(
                         tasks.append(ReplayTask(case, str(folder.root / plan.csv), method, seed, path, options))
         step(f"{case.name}: {len(drawn)} pairs planned", len(cases))
     run_replays(tasks, workers, step)
+    seconds = time.perf_counter() - started  # the runtime the report states: to the replays' end
     pairs, replay_seconds = with_replays(folder, pairs, lio_runs, lio_names, seeds)
     comparisons = analysis.comparisons(pairs, [c.name for c in cases], names, lio_names[1:])
     fit, predictors = localization_error_fit(folder.root, cases, pairs, seeds=seeds, pair_seed=pair_seed, step=step)
@@ -110,7 +111,7 @@ def run(
     summary = Summary(
         seeds=seeds,
         pair_seed=pair_seed,
-        runtime_s=time.perf_counter() - started,
+        runtime_s=seconds,
         lio_guidance=tuple(lio_names),
         lio_runs=lio_runs,
         odometry_names=odometry_names(lio_runs),
