@@ -5,7 +5,7 @@ caller's process, and so that lf3pm (BSD) never imports GenZ-LIO (GPL-2.0-only) 
 
 Run as a script: ``python _lio_worker.py REPLY_FD``; lf3pm's own odometries run without
 importing lf3pm. Protocol, pickled objects: on stdin ("config", worker, key,
-sensor_range, threads, settings, lidar, paths), then ("scan", points, begin, end,
+sensor_range, threads, settings, lidar, paths, install), then ("scan", points, begin, end,
 offsets, imu) per scan and ("done", imu) with the IMU samples after the last scan; on
 REPLY_FD ("ready", version) or ("error", message), then one ("poses", [(pose, time,
 status), ...], seconds) per scan and one after "done": the poses the odometry finished
@@ -13,8 +13,9 @@ with that message, in scan order, each with the time it refers to (GenZ-LIO and 
 per scan; LIO-SAM two scans late, the last two at "done"). ``worker``: "module:Class" of
 the class to run (lf3pm.replays.adapters: the interface), this module's own classes by
 ``lf3pm.replays._lio_worker``; ``paths``: the parent's sys.path, where a plugin's module
-is found. ``lidar``: {"beams": the beams' elevations (rad), lowest first, or None for a
-non-repetitive sensor; "columns": rays per beam and scan}.
+is found; ``install``: what to do when it does not import. ``lidar``: {"beams": the
+beams' elevations (rad), lowest first, or None for a non-repetitive sensor; "columns":
+rays per beam and scan}.
 """
 
 import importlib
@@ -386,17 +387,11 @@ def main(reply_fd: int) -> None:
         pickle.dump(message, replies, protocol=pickle.HIGHEST_PROTOCOL)
         replies.flush()
 
-    _, worker, odometry, sensor_range, threads, settings, lidar, paths = pickle.load(requests)
+    _, worker, odometry, sensor_range, threads, settings, lidar, paths, install = pickle.load(requests)
     try:
         backend = _worker_class(worker, paths)(sensor_range, threads, settings, lidar)
     except ImportError as err:
-        send(
-            (
-                "error",
-                f"the {odometry} odometry is not installed ({err}); pip install 'lf3pm[lio]' "
-                "(wheels for Python 3.8-3.12)",
-            )
-        )
+        send(("error", f"the {odometry} odometry is not installed ({err}): {install}"))
         return
     except (ValueError, TypeError) as err:
         send(("error", str(err)))

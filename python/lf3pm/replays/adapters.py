@@ -46,6 +46,8 @@ class Odometry:
     licence: ClassVar[str]
     #: "module:Class" of the worker-side class.
     worker: ClassVar[str]
+    #: What to do when the worker cannot import it (None: pip install its package).
+    install: ClassVar[str | None] = None
     #: Its settings: lf3pm's defaults, overridden by what a caller passes to run_lio.
     Settings: ClassVar[type[Section]] = NoSettings
     #: Whether it needs a spinning sensor (rings of beams: a range image).
@@ -55,6 +57,10 @@ class Odometry:
     loses: ClassVar[dict] = {}
     #: The sensors ``auto`` picks it for, by whether they spin (lf3pm's own only).
     auto_for: ClassVar[tuple] = ()
+
+    @classmethod
+    def install_hint(cls) -> str:
+        return cls.install or f"pip install {cls.package}"
 
     @classmethod
     def runs_on(cls, sensor: Sensor) -> bool:
@@ -91,3 +97,4 @@ class EvalioOdometry(Odometry):
 
     package = "evalio"
     version = "0.6.1"
+    install = "pip install 'lf3pm[lio]'"

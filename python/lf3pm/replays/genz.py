@@ -69,6 +69,7 @@ class GenZ(Odometry):
     version = "0.1.1"
     licence = "GPL-2.0-only"
     worker = f"{WORKER_MODULE}:GenZ"
+    install = "pip install 'lf3pm[lio]' (wheels for Python 3.8-3.12)"
     Settings = GenzSettings
     auto_for = (False,)
     #: The version lf3pm's build of GenZ-LIO reports (third_party/genz_lio); PyPI's wheel

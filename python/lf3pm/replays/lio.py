@@ -210,6 +210,7 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, s
                 settings,
                 lidar_geometry(sensor),
                 list(sys.path),
+                spec.install_hint(),
             )
         )
         _, version = reply("while starting")

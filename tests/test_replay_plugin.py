@@ -1,0 +1,213 @@
+"""A third-party odometry through the entry-point group ``lf3pm.odometries``, as a package
+installs it: a folder on PYTHONPATH holding the plugin's module and its dist-info (the
+entry point) runs under ``lf3pm replay --method lio --odometry NAME``, ``lf3pm config``
+and replay_seeds with no change to lf3pm; a plugin that does not import or is not an
+Odometry adapter, or whose odometry is not installed, is one line and exit status 2."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
+
+from lf3pm.scenes import build_scene
+from lf3pm.trajectory.trajectory import Trajectory
+
+#: The plugin: one file (docs/api.md shows the same), an odometry that holds the first pose.
+PLUGIN = '''
+"""A toy odometry for lf3pm: it holds the first pose (a stand-in for a real one)."""
+
+import numpy as np
+from pydantic import Field
+
+from lf3pm.config import Section
+from lf3pm.replays.adapters import Odometry
+
+
+class ToySettings(Section):
+    """The toy's settings."""
+
+    drift: float = Field(0.0, ge=0, description="Metres the estimate moves along x per scan.")
+
+
+class Toy(Odometry):
+    key = "toy"
+    name = "Toy odometry"
+    package = "toy-odometry"
+    version = "0.1"
+    licence = "MIT"
+    worker = "toy_odometry:ToyWorker"
+    Settings = ToySettings
+
+
+class ToyWorker:
+    """Runs in lf3pm's LIO worker process: one pose per scan, at the scan's end."""
+
+    def __init__(self, sensor_range, threads, settings, lidar):
+        self.version = "0.1"
+        self.drift = settings["drift"]
+        self.scans = 0
+
+    def scan(self, points, begin, end, offsets, imu):
+        pose = np.eye(4)
+        pose[0, 3] = self.drift * self.scans
+        self.scans += 1
+        return [(pose, end, "ok")]
+
+    def finish(self, imu):
+        return []
+'''
+
+
+def install(folder, name, module, source, entry):
+    """A package ``name`` in ``folder`` as pip leaves one: its module and a dist-info
+    whose entry_points.txt registers ``entry`` (``key = module:Attr``) as an odometry."""
+    folder.mkdir(exist_ok=True)
+    (folder / f"{module}.py").write_text(textwrap.dedent(source))
+    info = folder / f"{name.replace('-', '_')}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[lf3pm.odometries]\n{entry}\n")
+    return folder
+
+
+def run(folder, *args):
+    """``python *args`` with the plugin folder on PYTHONPATH, as an installed package is found."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(folder), os.environ.get("PYTHONPATH", "")]))
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """The boxes scene as a map file and a 2 s trajectory across it (CSV)."""
+    folder = tmp_path_factory.mktemp("replay")
+    np.save(folder / "boxes.npy", build_scene("boxes").points)
+    spline = CubicSpline([0.0, 1.0, 2.0], [[-2.0, 0.0, 0.0], [-1.2, 0.3, 0.3], [-0.4, 0.4, 0.0]], bc_type="clamped")
+    Trajectory(coefficients=np.transpose(spline.c[::-1], (1, 0, 2)).copy(), durations=np.diff(spline.x)).to_csv(
+        folder / "traj.csv"
+    )
+    return folder
+
+
+@pytest.fixture(scope="module")
+def toy(tmp_path_factory):
+    return install(
+        tmp_path_factory.mktemp("site") / "site", "toy-odometry", "toy_odometry", PLUGIN, "toy = toy_odometry:Toy"
+    )
+
+
+def test_a_plugin_odometry_runs_under_lf3pm_replay(files, toy):
+    done = run(
+        toy,
+        "-m",
+        "lf3pm",
+        "replay",
+        files / "traj.csv",
+        "--map",
+        files / "boxes.npy",
+        "--method",
+        "lio",
+        "--odometry",
+        "toy",
+        "--json",
+    )
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    first = out["runs"][0]
+    assert out["odometry"] == "toy" and first["report"]["odometry"] == "Toy odometry"
+    assert first["versions"]["toy-odometry"] == "0.1" and first["params"]["lio"]["options"] == {"odometry": "toy"}
+    assert first["report"]["params"]["settings"] == {"drift": 0.0} and first["scans"] == 21
+    # It holds the first pose: its error is the distance from there.
+    truth, estimate = np.array(first["truth_xyz"]), np.array(first["estimate_xyz"])
+    np.testing.assert_allclose(estimate, np.repeat(truth[:1], len(truth), axis=0), atol=1e-9)
+    # lf3pm config takes its name too.
+    config = files / "toy.yaml"
+    config.write_text("replay: {method: lio, odometry: toy}\n")
+    done = run(toy, "-m", "lf3pm", "config", "--config", config)
+    assert done.returncode == 0 and "odometry: toy" in done.stdout, done.stderr
+
+
+def test_a_plugin_odometry_runs_in_replay_seeds_with_its_settings(files, toy):
+    """What the studies call: replay_seeds over two seeds, the plugin's settings passed
+    as the built-in odometries' are (its section validates them)."""
+    script = f"""
+import json, lf3pm
+series = lf3pm.replay_seeds({str(files / "boxes.npy")!r}, {str(files / "traj.csv")!r}, "vlp16", "lio", seeds=2,
+                            odometry="toy", drift=0.01)
+runs = [[r.seed, r.report["odometry"], r.report["params"]["settings"], r.rest["drift_m"]] for r in series.results]
+print(json.dumps(runs))
+try:
+    lf3pm.replay({str(files / "boxes.npy")!r}, {str(files / "traj.csv")!r}, "vlp16", "lio", odometry="toy", drift=-1.0)
+except lf3pm.Lf3pmError as err:
+    print(err)
+"""
+    done = run(toy, "-c", script)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.strip().splitlines()
+    runs = json.loads(lines[-2])
+    # The 2 s rest is 20 scans: 0.2 m of drift at 0.01 m per scan.
+    assert [r[:3] for r in runs] == [[0, "Toy odometry", {"drift": 0.01}], [1, "Toy odometry", {"drift": 0.01}]]
+    assert runs[0][3] == pytest.approx(0.2)
+    assert lines[-1] == "toy.drift must be greater than or equal to 0, got -1.0"
+
+
+BROKEN = """
+raise ImportError("a dependency of the plugin is missing")
+"""
+NOT_AN_ADAPTER = '''
+class Wrong:
+    """Not an lf3pm Odometry."""
+'''
+MISSING_PACKAGE = PLUGIN.replace('worker = "toy_odometry:ToyWorker"', 'worker = "toy_odometry_backend:Worker"')
+
+
+@pytest.mark.parametrize(
+    "source, attribute, message",
+    [
+        (
+            BROKEN,
+            "Bad",
+            "odometry plugin bad (bad_odometry:Bad) does not import: "
+            "ImportError: a dependency of the plugin is missing",
+        ),
+        (
+            NOT_AN_ADAPTER,
+            "Wrong",
+            "odometry plugin bad (bad_odometry:Wrong): <class 'bad_odometry.Wrong'> "
+            "is not a subclass of lf3pm.replays.adapters.Odometry",
+        ),
+    ],
+    ids=["import-error", "wrong-interface"],
+)
+def test_a_bad_plugin_is_one_line_naming_it(files, tmp_path, source, attribute, message):
+    bad = install(tmp_path / "site", "bad-odometry", "bad_odometry", source, f"bad = bad_odometry:{attribute}")
+    done = run(bad, "-m", "lf3pm", "replay", files / "traj.csv", "--map", files / "boxes.npy", "--method", "lio")
+    assert done.returncode == 2 and done.stderr.strip() == f"lf3pm: error: {message}"
+
+
+def test_a_plugin_whose_odometry_is_not_installed_is_one_line(files, tmp_path):
+    """The worker process imports the odometry's worker class; a missing package is one
+    line naming the odometry (as for GenZ-LIO or evalio without lf3pm[lio])."""
+    missing = install(tmp_path / "site", "toy-odometry", "toy_odometry", MISSING_PACKAGE, "toy = toy_odometry:Toy")
+    done = run(
+        missing,
+        "-m",
+        "lf3pm",
+        "replay",
+        files / "traj.csv",
+        "--map",
+        files / "boxes.npy",
+        "--method",
+        "lio",
+        "--odometry",
+        "toy",
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "lf3pm: error: the toy odometry is not installed (No module named 'toy_odometry_backend'): "
+        "pip install toy-odometry"
+    ]
