@@ -4,7 +4,7 @@ machine, in one run.
 
 Builds the native core once into build/bench-native (CMake, about a minute on 2 cores;
 reused while up to date), then times each build in a child process on the same work:
-indexing the 3.36 M-point town of bench_evaluate.py (plane fits), one VLP-16 scan on it
+indexing the 3.36 M-point town of bench_maps.py (plane fits), one VLP-16 scan on it
 (casting alone, and cast + k-NN association + metric, one thread), 64 R2 SOLM cells of
 the gobi scene (Mid-70, 2 threads) and the 206 m trajectory of bench_planner_backend.py
 (omni and car). Prints a table of medians (the best of --rounds interleaved runs) and each
@@ -79,7 +79,7 @@ def child(level: str, repeat: int) -> None:
     import hashlib
 
     import numpy as np
-    from bench_evaluate import town_map
+    from bench_maps import town
     from bench_planner_backend import scenario
 
     import lf3pm
@@ -101,7 +101,7 @@ def child(level: str, repeat: int) -> None:
             seconds.append(time.perf_counter() - start)
         return float(np.median(seconds)), out
 
-    points = town_map()
+    points, _ = town()
     out = {"level": level}
     out["index"], world = median(lambda: lf3pm.load_map(points, threads=1), max(1, repeat // 5))
     sensor = lf3pm.get_sensor("vlp16")
