@@ -6,9 +6,11 @@ Odometry adapter, or whose odometry is not installed, is one line and exit statu
 
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,50 +19,9 @@ from scipy.interpolate import CubicSpline
 from lf3pm.scenes import build_scene
 from lf3pm.trajectory.trajectory import Trajectory
 
-#: The plugin: one file (docs/api.md shows the same), an odometry that holds the first pose.
-PLUGIN = '''
-"""A toy odometry for lf3pm: it holds the first pose (a stand-in for a real one)."""
-
-import numpy as np
-from pydantic import Field
-
-from lf3pm.config import Section
-from lf3pm.replays.adapters import Odometry
-
-
-class ToySettings(Section):
-    """The toy's settings."""
-
-    drift: float = Field(0.0, ge=0, description="Metres the estimate moves along x per scan.")
-
-
-class Toy(Odometry):
-    key = "toy"
-    name = "Toy odometry"
-    package = "toy-odometry"
-    version = "0.1"
-    licence = "MIT"
-    worker = "toy_odometry:ToyWorker"
-    Settings = ToySettings
-
-
-class ToyWorker:
-    """Runs in lf3pm's LIO worker process: one pose per scan, at the scan's end."""
-
-    def __init__(self, sensor_range, threads, settings, lidar):
-        self.version = "0.1"
-        self.drift = settings["drift"]
-        self.scans = 0
-
-    def scan(self, points, begin, end, offsets, imu):
-        pose = np.eye(4)
-        pose[0, 3] = self.drift * self.scans
-        self.scans += 1
-        return [(pose, end, "ok")]
-
-    def finish(self, imu):
-        return []
-'''
+#: The plugin: docs/api.md's example, one file (an odometry whose estimate drifts along x).
+API_DOC = Path(__file__).resolve().parents[1] / "docs" / "api.md"
+PLUGIN = re.search(r"```python\n# toy_odometry.py\n(.*?)```", API_DOC.read_text(), re.S).group(1)
 
 
 def install(folder, name, module, source, entry):
@@ -121,7 +82,7 @@ def test_a_plugin_odometry_runs_under_lf3pm_replay(files, toy):
     assert out["odometry"] == "toy" and first["report"]["odometry"] == "Toy odometry"
     assert first["versions"]["toy-odometry"] == "0.1" and first["params"]["lio"]["options"] == {"odometry": "toy"}
     assert first["report"]["params"]["settings"] == {"drift": 0.0} and first["scans"] == 21
-    # It holds the first pose: its error is the distance from there.
+    # Without drift it holds the first pose: its error is the distance from there.
     truth, estimate = np.array(first["truth_xyz"]), np.array(first["estimate_xyz"])
     np.testing.assert_allclose(estimate, np.repeat(truth[:1], len(truth), axis=0), atol=1e-9)
     # lf3pm config takes its name too.
