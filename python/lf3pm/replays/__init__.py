@@ -1,8 +1,9 @@
 """Replays of planned trajectories (docs/replay.md; plural: :func:`lf3pm.replay` is the
 function): a trajectory as a continuous :class:`Motion` over the map's ground, the
-simulated stream (scans, IMU) along it, and a state estimator on it: localization on
-the prior map (localization.py), a LiDAR-inertial odometry (lio.py, imu.py) or KISS-ICP
-(odometry.py), scored by evo's APE / RPE (:class:`ReplayResult`).
+simulated stream (scans, IMU) along it, and a state estimator on it, a replay method
+(methods.py: localization on the prior map, localization.py; a LiDAR-inertial odometry,
+lio.py, one of registry.py's; KISS-ICP, odometry.py), scored by evo's APE / RPE
+(:class:`ReplayResult`).
 
 - :func:`replay` one seed; :func:`replay_seeds` consecutive seeds with the medians;
   :func:`replay_bag` the simulated stream as a ROS 2 bag;

@@ -350,8 +350,9 @@ class Lio:
         for run_lio (an odometry's name checked against the registry here)."""
         own = {k: v for k, v in params.items() if k in IMU_PARAMS}
         options = {k: v for k, v in params.items() if k not in IMU_PARAMS}
-        if "odometry" in options:
-            registry.check_name(options["odometry"])
+        named = options.get("odometry")
+        if named is not None:
+            registry.check_name(named)
         return cls(validated(ReplayConfig, "replay", **{**DEFAULTS.replay.model_dump(), **own}), options)
 
     @property
