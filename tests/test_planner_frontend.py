@@ -12,6 +12,7 @@ from scipy.sparse.csgraph import dijkstra
 import lf3pm
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid, Space
 from lf3pm.planner.cost_map import cost_from_solm, cost_from_values
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import search_path
@@ -58,7 +59,7 @@ def random_maze(seed, layers, ny=14, nx=17, blocked=0.3):
 
 
 def grid(nx, ny, res=0.5, x0=-2.0, y0=1.0):
-    return SimpleNamespace(x0=x0, y0=y0, res=res, nx=nx, ny=ny)
+    return Grid.plane(x0, y0, res, nx, ny)
 
 
 def world(g, cell, layers):
@@ -274,7 +275,7 @@ def test_composite_cost_is_the_worse_of_its_parts_each_relative_to_its_median():
     degenerate = np.zeros(q_n.shape, bool)
     degenerate[2, 3, 3] = True
     arrays = {"q_n": q_n, "q_min": q_min, "degenerate": degenerate}
-    solm = SimpleNamespace(grid_spec=SimpleNamespace(space="se2"), channel=arrays.__getitem__)
+    solm = SimpleNamespace(grid_spec=SimpleNamespace(space=Space.SE2), channel=arrays.__getitem__)
     layer = cost_from_solm(solm, "q_n_q_min")
     usable = np.isfinite(q_n) & np.isfinite(q_min) & ~degenerate
     # float64 reference: each part over its own median of usable-for-it cells, the larger taken

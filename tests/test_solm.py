@@ -11,6 +11,7 @@ import pytest
 import lf3pm
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 from lf3pm.io import write_points
 from lf3pm.metric import eval_params
 from lf3pm.planner.esdf import Esdf
@@ -142,7 +143,7 @@ def test_occupied_cells_equal_a_cell_by_cell_reference(res):
     bottom = rng.uniform(0.0, 1.0, (ny, nx))
     top = bottom + rng.uniform(0.0, 0.8, (ny, nx))
     bottom[0, 0] = np.inf  # an unknown cell is never occupied
-    occupied = occupied_cells(points, 0.0, 0.0, res, bottom, top)
+    occupied = occupied_cells(points, Grid.plane(0.0, 0.0, res, nx, ny), bottom, top)
     reference = np.zeros_like(occupied)
     for j, i in np.ndindex(*occupied.shape):
         inside = (
@@ -164,7 +165,7 @@ def test_a_slope_is_ground_and_a_pole_on_it_is_not():
     pole = np.array([(4.55, 0.35, 0.25 * 4.55 + z) for z in np.arange(0.3, 1.2, 0.05)])
     world = lf3pm.load_map(np.vstack([slope, pole]))
     grid = make_grid(world, "r2", 1.0, bounds=(0, -2, 8, 2), height=1.0)
-    ground = column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny)
+    ground = column_minimum(world.points, grid)
     occupied = grid_occupancy(world.points, grid, ground, 0.3, 0.2)
     k = occupancy_factor(grid)
     assert {tuple(c) for c in np.argwhere(occupied)} == {(int((0.35 + 2) * k), int(4.55 * k))}

@@ -68,10 +68,11 @@ def test_the_crop_margin_holds_what_a_tile_sees(town):
 
 
 def _job(town):
+    from lf3pm.config import ScanConfig, SolmConfig
     from lf3pm.solm.tiles import make_job
 
     world, sensor, grid = town
-    return make_job(sensor, grid, tile=8, noise=sensor.range_noise_sigma)
+    return make_job(sensor, grid, ScanConfig(noise=sensor.range_noise_sigma), solm=SolmConfig(tile=8))
 
 
 def test_crop_build_equals_the_whole_map_build_bitwise(town, whole, tmp_path):

@@ -28,6 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Space
 from lf3pm.limits import clip, excerpt, load_yaml, read_text_file
 
 _MAP = _core.MapParams()
@@ -43,7 +44,7 @@ MAX_THREADS = 1024
 
 #: The SOLM's state spaces (lf3pm.solm.grid) and the replay's state estimators (the names
 #: YAML and the CLI take; lf3pm.replays.methods.METHODS holds the methods by these names).
-SPACES = ("r2", "se2", "r3")
+SPACES = tuple(space.value for space in Space)
 REPLAY_METHODS = ("localization", "lio", "odometry")
 #: The lio replay's odometries lf3pm ships (YAML and the CLI take these and any a plugin
 #: registers: lf3pm.replays.registry); ``auto`` picks by the sensor.
@@ -78,6 +79,9 @@ MAX_RES = 1000.0
 #: channels then take 24 GB, what a large workstation can still hold for the planner,
 #: and a build of that many poses takes days on a cluster (docs/scale.md).
 MAX_CELLS_CEILING = 1_000_000_000
+#: The largest SOLM tile edge (cells): a tile is a chunk, held whole in memory by every
+#: read and write.
+MAX_TILE = 1024
 
 #: Sensor height above the local ground (m) of a ground robot: a LiDAR on a small
 #: wheeled base. SOLM grids and the replay's motion take it by default.
@@ -194,7 +198,7 @@ class MdeConfig(Section):
 class SolmConfig(Section):
     """The SOLM grid and build."""
 
-    space: Literal[SPACES] = Field("r2", description="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z).")
+    space: Space = Field(Space.R2, description="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z).")
     res: float = Field(0.5, gt=0, le=MAX_RES, description="Cell size (m).")
     yaw_bins: int = Field(36, ge=1, le=3600, description="Yaw bins (se2).")
     yaw_reuse: bool = Field(
@@ -222,6 +226,26 @@ class SolmConfig(Section):
         20_000_000,
         ge=1,
         description="Build maps of more points than this tile by tile, each tile on its crop (docs/scale.md).",
+    )
+    tile: int = Field(
+        32,
+        ge=1,
+        le=MAX_TILE,
+        description="Tile (and Zarr chunk) edge in cells; a tile holds every yaw bin or z level.",
+    )
+    occupancy_res: float = Field(
+        0.1,
+        gt=0,
+        le=MAX_RES,
+        description="Target edge of the occupancy layer's cells (m): a thin obstacle's position is known "
+        "to within it (ground robots; the SOLM's cells split into k x k, solm/occupancy.py).",
+    )
+    max_occupancy_cells: int = Field(
+        1 << 20,
+        ge=1,
+        le=MAX_CELLS_CEILING,
+        description="Most occupancy cells (the planner's ESDF over them builds in ~3 s and 0.5 GB); "
+        "larger grids get coarser ones, down to the SOLM's own.",
     )
 
 
@@ -299,21 +323,52 @@ class GuidanceConfig(Section):
     localization unchanged (docs/lio.md).
     """
 
-    metric: Literal[COST_CHANNELS] = Field("q_n", description="SOLM channel guiding the plan (none: shortest path).")
+    metric: Literal[COST_CHANNELS] = Field(
+        "q_n",
+        description="SOLM channel guiding the plan: q_n, q_min, q_max, step_norm, q_n_q_min (the worse of q_n "
+        "and q_min per cell) or none (shortest path).",
+    )
     weight: float = Field(
         3.0,
         ge=0,
         le=1e6,
-        description="lambda: an edge through cells of cost c costs length (1 + lambda c); a median cell has c = 1.",
+        description="lambda: an edge through cells of cost c costs length (1 + lambda c); a median cell has c = 1 "
+        "(docs/benefit.md).",
     )
-    power: float = Field(1.0, gt=0, le=10, description="Exponent applied to the channel (over its median).")
+    power: float = Field(
+        1.0,
+        gt=0,
+        le=10,
+        description="Exponent applied to the channel (over its median) before the weight (docs/benefit.md).",
+    )
     turn_radius: float = Field(
         2.0,
         ge=0,
         le=100,
-        description="The front end prices a turn of the sensor as the arc a "
-        "point this far from its axis travels (m per rad; "
-        "docs/lio.md).",
+        description="A turn of the sensor costs the arc a point this far from its axis travels (m per rad; "
+        "docs/benefit.md, docs/lio.md).",
+    )
+
+
+class GroundConfig(Section):
+    """The smooth ground a replayed ground robot drives on (lf3pm.replays.ground)."""
+
+    cell: float = Field(
+        0.25,
+        gt=0,
+        le=MAX_RES,
+        description="Column grid (m): several map points per column for maps sampled every 5-10 cm.",
+    )
+    smoothing: float = Field(
+        0.5, gt=0, le=100, description="Gaussian sigma (m): half the footprint of a small wheeled base (about 1 m)."
+    )
+    max_step: float = Field(
+        0.25,
+        gt=0,
+        le=100,
+        description="Largest height change between neighbouring columns that is still ground (m): 0.25 m over "
+        "a 0.25 m cell is a 45 degree slope, steeper than a wheeled robot drives; a box side or a wall "
+        "jumps by more.",
     )
 
 
@@ -439,13 +494,13 @@ class GobiConfig(Section):
 class SceneConfig(Section):
     """`lf3pm scene` and lf3pm.build_scene."""
 
-    seed: int = _seed("the scene's randomness")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="Seed of the scene's randomness (0 to 2^63 - 1).")
 
 
 class Config(Section):
     """Every section; what ``--config FILE.yaml`` holds (any subset)."""
 
-    sensor: str = Field("vlp16", min_length=1, description="Sensor preset name or YAML file.")
+    sensor: str = Field("vlp16", min_length=1, description="Sensor preset name or YAML file (see `lf3pm sensors`).")
     map: MapConfig = MapConfig()
     scan: ScanConfig = ScanConfig()
     metric: MetricConfig = MetricConfig()
@@ -453,6 +508,7 @@ class Config(Section):
     solm: SolmConfig = SolmConfig()
     robot: RobotConfig = RobotConfig()
     guidance: GuidanceConfig = GuidanceConfig()
+    ground: GroundConfig = GroundConfig()
     replay: ReplayConfig = ReplayConfig()
     localization: LocalizationConfig = LocalizationConfig()
     kiss_icp: KissIcpConfig = KissIcpConfig()
@@ -502,6 +558,30 @@ def validated(section: type[Section], where: str = "", flags: dict | None = None
         return section(**values)
     except ValidationError as err:
         raise ConfigError(describe(err, where, flags)) from None
+
+
+def configured(config: Config | None, sections: tuple[str, ...], what: str, **parameters) -> Config:
+    """``config`` (None: the defaults) with ``parameters`` (field names of ``sections``,
+    which share none) set in their sections and validated there: ConfigError naming
+    ``section.name`` for a bad value, Lf3pmError naming ``what`` for a name no section
+    holds. How an entry point taking a Config whole also takes its fields by name."""
+    config = DEFAULTS if config is None else config
+    if not isinstance(config, Config):
+        raise Lf3pmError(f"{what}: config must be an lf3pm.config.Config, got {type(config).__name__}")
+    owner = {name: section for section in sections for name in type(getattr(config, section)).model_fields}
+    unknown = sorted(set(parameters) - set(owner))
+    if unknown:
+        raise Lf3pmError(
+            f"{what} has no parameter {unknown[0]!r}; it takes the fields of the "
+            f"{', '.join(sections)} sections of lf3pm.config"
+        )
+    updates = {}
+    for section in sections:
+        given = {name: value for name, value in parameters.items() if owner[name] == section}
+        if given:
+            current = getattr(config, section)
+            updates[section] = validated(type(current), section, **{**current.model_dump(), **given})
+    return config.model_copy(update=updates) if updates else config
 
 
 def check_threads(threads) -> int:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,17 @@ class GridField:
 
         object.__setattr__(self, "values", values)
         object.__setattr__(self, "_core", _core.GridField(values, float(self.x0), float(self.y0), float(self.res)))
+
+    @classmethod
+    def on(cls, grid: Grid, values) -> GridField:
+        """``values`` over the cells of ``grid``."""
+        return cls(values, grid.x0, grid.y0, grid.res)
+
+    @property
+    def grid(self) -> Grid:
+        """The R2 grid of the values' cells."""
+        ny, nx = self.values.shape[-2:]
+        return Grid.plane(self.x0, self.y0, self.res, nx, ny)
 
     @property
     def yaw_bins(self) -> int:

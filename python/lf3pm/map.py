@@ -23,9 +23,6 @@ from lf3pm.config import DEFAULTS, MapConfig, check_threads, validated
 from lf3pm.errors import MapError, PoseError
 from lf3pm.io import load_points, voxel_downsample
 
-#: The index's defaults (C++ MapParams, through lf3pm.config).
-_DEFAULT = MapConfig()
-
 
 @dataclass(frozen=True)
 class Map:
@@ -150,33 +147,23 @@ def as_map(map, threads: int = DEFAULTS.scan.threads) -> Map:
 
 def load_map(
     source,
+    config: MapConfig = DEFAULTS.map,
     *,
-    voxel: float | None = None,
-    cell_size: float = _DEFAULT.cell_size,
-    knn: int = _DEFAULT.knn,
-    plane_threshold: float = _DEFAULT.plane_threshold,
-    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance,
     threads: int = DEFAULTS.scan.threads,
     progress: Callable[[str], None] | None = None,
+    **parameters,
 ) -> Map:
-    """Reads a map file (or takes an N x 3 array) and indexes it.
+    """Reads a map file (or takes an N x 3 array) and indexes it, with the map section
+    ``config`` (:class:`lf3pm.config.MapConfig`), whose fields may also be given by
+    name (validated there).
 
     ``voxel`` downsamples the map first (one centroid per voxel); ``cell_size``
     0 lets the index choose its voxel edge from the point spacing; the association
-    parameters are FAST-LIO's (:class:`lf3pm.config.MapConfig`, which validates them).
-    ``progress``, if given, is called with what is being done as each phase starts
-    (reading the file, indexing its points): a large map takes tens of seconds.
+    parameters are FAST-LIO's. ``progress``, if given, is called with what is being
+    done as each phase starts (reading the file, indexing its points): a large map
+    takes tens of seconds.
     """
-    points = load_map_points(
-        source,
-        voxel=voxel,
-        cell_size=cell_size,
-        knn=knn,
-        plane_threshold=plane_threshold,
-        max_neighbor_distance=max_neighbor_distance,
-        threads=threads,
-        progress=progress,
-    )
+    points = load_map_points(source, config, threads=threads, progress=progress, **parameters)
     if progress is not None:
         progress(f"indexing {points.size:,} points of {points.source}")
     return points.indexed(threads)
@@ -234,26 +221,19 @@ def _sha256(points: np.ndarray) -> str:
 
 def load_map_points(
     source,
+    config: MapConfig = DEFAULTS.map,
     *,
-    voxel: float | None = None,
-    cell_size: float = _DEFAULT.cell_size,
-    knn: int = _DEFAULT.knn,
-    plane_threshold: float = _DEFAULT.plane_threshold,
-    max_neighbor_distance: float = _DEFAULT.max_neighbor_distance,
     threads: int = DEFAULTS.scan.threads,
     progress: Callable[[str], None] | None = None,
+    **parameters,
 ) -> MapPoints:
     """Reads a map as :func:`load_map` does, without indexing it whole (:class:`MapPoints`);
     its hash is load_map's, so a SOLM store accepts either."""
-    config = validated(
-        MapConfig,
-        "map",
-        voxel=voxel,
-        cell_size=cell_size,
-        knn=knn,
-        plane_threshold=plane_threshold,
-        max_neighbor_distance=max_neighbor_distance,
-    )
+    if not isinstance(config, MapConfig):
+        raise MapError(f"a map's config is an lf3pm.config.MapConfig, got {type(config).__name__}")
+    if parameters:
+        config = validated(MapConfig, "map", **{**config.model_dump(), **parameters})
+    voxel = config.voxel
     threads = check_threads(threads)
     if progress is not None:
         progress(f"reading {os.fspath(source) if isinstance(source, (str, os.PathLike)) else 'the map array'}")

@@ -15,7 +15,7 @@ from lf3pm.calibration import (
     predict_mde,
     withheld_reason,
 )
-from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, scan_params, validated
+from lf3pm.config import DEFAULTS, Config, MetricConfig, configured, scan_params
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, as_sensor
@@ -105,18 +105,14 @@ def evaluate(
     map: Map | str,
     pose,
     sensor: Sensor | str = DEFAULTS.sensor,
+    config: Config | None = None,
     *,
-    seed: int = DEFAULTS.scan.seed,
-    noise: float | None = DEFAULTS.scan.noise,
-    dof: int = DEFAULTS.metric.dof,
-    w1: float = DEFAULTS.metric.w1,
-    scan_voxel: float = DEFAULTS.scan.scan_voxel,
-    association: str = DEFAULTS.metric.association,
-    threads: int = DEFAULTS.scan.threads,
     observations: bool = False,
-    clearance: float = DEFAULTS.scan.clearance,
+    **parameters,
 ) -> Evaluation:
-    """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric.
+    """Simulates ``sensor`` at ``pose`` on ``map`` and returns the metric, with the scan
+    and metric sections of ``config`` (lf3pm.config.Config; default: the defaults),
+    whose fields may also be given by name (``seed=3, dof=3``; validated there).
 
     pose: (x, y, z, yaw), (x, y, z, qw, qx, qy, qz) or a 4 x 4 sensor-to-world
     matrix. noise: Gaussian range noise sigma in metres (default: the sensor's),
@@ -125,9 +121,8 @@ def evaluate(
     FAST-LIO's scan downsampling (0 = off). association: "knn" (default) is
     FAST-LIO's: the k nearest map points of every hit and their plane; "surfel"
     reuses the precomputed plane of the map point the ray hit (faster, but its
-    residuals are smaller: see docs/metric.md). The parameters are validated by
-    :class:`lf3pm.config.ScanConfig` and :class:`~lf3pm.config.MetricConfig`. With
-    observations=True the result carries A (m x dof), b (m) and the hit points.
+    residuals are smaller: see docs/metric.md). With observations=True the result
+    carries A (m x dof), b (m) and the hit points.
     predicted_mde (with a 10-90 % interval) comes from the packaged calibration
     (see lf3pm.calibration) when the query matches the conditions it was fitted
     under (its sensor, default noise, dof 6, k-NN association, no scan
@@ -137,14 +132,14 @@ def evaluate(
     sensors; None at a degenerate pose). Either is None too outside the range of
     the predictor its fit saw; ``predicted_*_withheld`` says why a prediction is
     None, in one line (docs/validation.md), and is None where it is given.
-    A pose outside the map's x-y extent or within ``clearance`` m of a map point
-    raises PoseError.
+    A pose outside the map's x-y extent or within the scan section's ``clearance`` m of
+    a map point raises PoseError.
     """
-    scan = validated(ScanConfig, "scan", noise=noise, seed=seed, scan_voxel=scan_voxel, threads=threads)
-    metric = validated(MetricConfig, "metric", dof=dof, association=association, w1=w1)
+    config = configured(config, ("scan", "metric"), "evaluate", **parameters)
+    scan, metric = config.scan, config.metric
     map, sensor = as_map(map), as_sensor(sensor)
     matrix = pose_matrix(pose)
-    map.check_pose(matrix, clearance)
+    map.check_pose(matrix, scan.clearance)
     params = metric.core(scan.core(sensor))
     obs = None
     if observations:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.grid import Grid
 from lf3pm.map import Map
 
 #: Points binned at a time by column_minimum: its temporaries stay near 50 MB, not
@@ -13,34 +14,30 @@ from lf3pm.map import Map
 _CHUNK = 1 << 20
 
 
-def _binned(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: int):
-    """Chunk by chunk, the (row, column, z) of the points inside the (ny, nx) columns of
-    edge ``cell`` from (x0, y0)."""
+def _binned(points: np.ndarray, grid: Grid):
+    """Chunk by chunk, the (row, column, z) of the points inside the columns of ``grid``."""
     for start in range(0, len(points), _CHUNK):
         part = points[start : start + _CHUNK]
-        ij = np.floor((part[:, :2] - [x0, y0]) / cell).astype(np.int64)
-        inside = (ij[:, 0] >= 0) & (ij[:, 0] < nx) & (ij[:, 1] >= 0) & (ij[:, 1] < ny)
-        yield ij[inside, 1], ij[inside, 0], part[inside, 2]
+        ix, iy = grid.columns(part[:, 0], part[:, 1])
+        inside = grid.holds(ix, iy)
+        yield iy[inside], ix[inside], part[inside, 2]
 
 
-def column_minimum(points: np.ndarray, x0: float, y0: float, cell: float, nx: int, ny: int) -> np.ndarray:
-    """Lowest z of the points in each (ny, nx) column of edge ``cell`` from (x0, y0);
-    inf where a column holds no point."""
-    ground = np.full((ny, nx), np.inf)
-    for j, i, z in _binned(points, x0, y0, cell, nx, ny):
+def column_minimum(points: np.ndarray, grid: Grid) -> np.ndarray:
+    """Lowest z of the points in each column (cell) of ``grid``, (ny, nx); inf where a
+    column holds no point."""
+    ground = np.full(grid.plane_shape, np.inf)
+    for j, i, z in _binned(points, grid):
         np.minimum.at(ground, (j, i), z)
     return ground
 
 
-def occupied_cells(
-    points: np.ndarray, x0: float, y0: float, cell: float, bottom: np.ndarray, top: np.ndarray
-) -> np.ndarray:
-    """(ny, nx) bool: the columns of edge ``cell`` from (x0, y0) that hold a map point
-    between ``bottom`` and ``top`` ((ny, nx) arrays, metres; inf or NaN: never). Exact:
-    a point off every column's centre (a thin pole, a bush's stem) still marks its own."""
-    ny, nx = bottom.shape
-    occupied = np.zeros((ny, nx), bool)
-    for j, i, z in _binned(points, x0, y0, cell, nx, ny):
+def occupied_cells(points: np.ndarray, grid: Grid, bottom: np.ndarray, top: np.ndarray) -> np.ndarray:
+    """(ny, nx) bool: the columns of ``grid`` that hold a map point between ``bottom``
+    and ``top`` ((ny, nx) arrays, metres; inf or NaN: never). Exact: a point off every
+    column's centre (a thin pole, a bush's stem) still marks its own."""
+    occupied = np.zeros(grid.plane_shape, bool)
+    for j, i, z in _binned(points, grid):
         hit = (z >= bottom[j, i]) & (z <= top[j, i])
         occupied[j[hit], i[hit]] = True
     return occupied

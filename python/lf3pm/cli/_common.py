@@ -15,7 +15,7 @@ from rich.console import Console
 from rich.text import Text
 
 from lf3pm.atomic import check_replaceable
-from lf3pm.config import Config, help_with_default, load_config
+from lf3pm.config import DEFAULTS, Config, help_with_default, load_config
 from lf3pm.errors import Lf3pmError, one_line, one_line_warning
 
 app = typer.Typer(
@@ -111,10 +111,16 @@ def _probe(path: Path, where: Path, failure: str) -> None:
     os.remove(probe)
 
 
-def option(path: str, *names: str, help: str | None = None, **kwargs):
+def option(path: str, *names: str, help: str | None = None, with_default: bool = True, **kwargs):
     """The option for config parameter ``path`` (lf3pm.config): None unless given, so that
-    ``--config FILE.yaml`` and then the default apply; its help names the default."""
-    return typer.Option(None, *names, help=help_with_default(path, help), **kwargs)
+    ``--config FILE.yaml`` and then the default apply; its help is the parameter's
+    description (``help``: a command's own text, where the parameter means more there)
+    with its default (not ``with_default``: a default derived from other parameters,
+    which the description states)."""
+    if not with_default:
+        section, _, name = path.rpartition(".")
+        help = help or type(getattr(DEFAULTS, section) if section else DEFAULTS).model_fields[name].description
+    return typer.Option(None, *names, help=help_with_default(path, help) if with_default else help, **kwargs)
 
 
 CONFIG_OPTION = typer.Option(
@@ -153,25 +159,6 @@ MAP_PATHS = {
     "plane_threshold": "map.plane_threshold",
     "max_neighbor_distance": "map.max_neighbor_distance",
 }
-
-
-def map_options(config: Config) -> dict:
-    """load_map's keywords from the config."""
-    m = config.map
-    return {
-        "voxel": m.voxel,
-        "cell_size": m.cell_size,
-        "knn": m.knn,
-        "plane_threshold": m.plane_threshold,
-        "max_neighbor_distance": m.max_neighbor_distance,
-        "threads": config.scan.threads,
-    }
-
-
-def scan_options(config: Config) -> dict:
-    """The scan keywords of evaluate, mde and build_solm from the config."""
-    s = config.scan
-    return {"seed": s.seed, "noise": s.noise, "scan_voxel": s.scan_voxel, "threads": s.threads}
 
 
 @contextmanager

@@ -19,9 +19,7 @@ from lf3pm.cli._common import (
     configure,
     console,
     map_loading,
-    map_options,
     option,
-    scan_options,
     user_errors,
 )
 
@@ -31,7 +29,7 @@ def evaluate(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map (.pcd .ply .las .laz .npy .npz)."),
     pose: tuple[float, float, float, float] = typer.Option(..., help="Sensor pose X Y Z YAW (m, rad)."),
     config: Path | None = CONFIG_OPTION,
-    sensor: str | None = option("sensor", help="Sensor preset name or YAML file (see `lf3pm sensors`)."),
+    sensor: str | None = option("sensor"),
     seed: int | None = option("scan.seed"),
     noise: float | None = option("scan.noise"),
     dof: int | None = option("metric.dof"),
@@ -58,17 +56,8 @@ def evaluate(
 
         check_output(save_observations)
         with map_loading() as progress:
-            world = load_map(map_path, **map_options(cfg), progress=progress)
-        result = run_evaluate(
-            world,
-            pose,
-            cfg.sensor,
-            **scan_options(cfg),
-            dof=cfg.metric.dof,
-            w1=cfg.metric.w1,
-            association=cfg.metric.association,
-            observations=save_observations is not None,
-        )
+            world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=progress)
+        result = run_evaluate(world, pose, cfg.sensor, cfg, observations=save_observations is not None)
         if save_observations is not None:
             obs = result.observations
             with atomic_write(save_observations) as fp:
@@ -137,7 +126,7 @@ def mde(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     pose: tuple[float, float, float, float] = typer.Option(..., help="True sensor pose X Y Z YAW (m, rad)."),
     config: Path | None = CONFIG_OPTION,
-    sensor: str | None = option("sensor", help="Sensor preset name or YAML file."),
+    sensor: str | None = option("sensor"),
     trials: int | None = option("mde.trials"),
     sigma_t: float | None = option("mde.sigma_t"),
     sigma_r: float | None = option("mde.sigma_r"),
@@ -156,15 +145,19 @@ def mde(
         from lf3pm.validation import mde as run_mde
 
         with map_loading() as progress:
-            world = load_map(map_path, **map_options(cfg), progress=progress)
+            world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=progress)
+        scan, disturbance = cfg.scan, cfg.mde
         result = run_mde(
             world,
             pose,
             cfg.sensor,
-            trials=cfg.mde.trials,
-            sigma_t=cfg.mde.sigma_t,
-            sigma_r_deg=cfg.mde.sigma_r,
-            **scan_options(cfg),
+            trials=disturbance.trials,
+            sigma_t=disturbance.sigma_t,
+            sigma_r_deg=disturbance.sigma_r,
+            seed=scan.seed,
+            noise=scan.noise,
+            scan_voxel=scan.scan_voxel,
+            threads=scan.threads,
         )
         out = result.to_dict()
         if as_json:

@@ -53,14 +53,15 @@ def sensors():
 @app.command()
 def info(
     map_path: Path = typer.Argument(..., metavar="MAP"),
-    map_voxel: float | None = typer.Option(None, help="Voxel-downsample the map first (m)."),
+    map_voxel: float | None = option("map.voxel"),
 ):
     """Load and index a map; print its size, extent and index statistics."""
     with user_errors():
         from lf3pm.map import load_map
 
+        settings = configure(None, locals(), {"map_voxel": "map.voxel"}).map
         with map_loading() as progress:
-            world = load_map(map_path, voxel=map_voxel, progress=progress)
+            world = load_map(map_path, settings, progress=progress)
         console.print_json(json.dumps(world.describe()))
 
 
@@ -70,7 +71,7 @@ def scene(
     output: Path | None = typer.Option(
         None, "-o", "--output", metavar="MAP.pcd", help="Map file to write (format by suffix; .pcd is binary)."
     ),
-    seed: int | None = option("scene.seed", help="Seed of the scene's randomness (0 to 2^63 - 1)."),
+    seed: int | None = option("scene.seed"),
     list_scenes: bool = typer.Option(False, "--list", help="List the scenes and exit."),
 ):
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""

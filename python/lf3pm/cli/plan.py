@@ -53,37 +53,20 @@ def plan(
         ..., "-o", "--out", metavar="TRAJ.csv", help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."
     ),
     config: Path | None = CONFIG_OPTION,
-    robot: str | None = option("robot.kind", help="omni, diff (differential drive) or car."),
-    metric: str | None = option(
-        "guidance.metric",
-        help="SOLM channel guiding the plan: q_n, q_min, "
-        "q_max, step_norm, q_n_q_min (the worse of q_n "
-        "and q_min per cell) or none.",
-    ),
-    weight: float | None = option(
-        "guidance.weight",
-        help="lambda: an edge through cells of cost c costs "
-        "length (1 + lambda c); a median cell has c = 1 "
-        "(docs/benefit.md).",
-    ),
-    power: float | None = option(
-        "guidance.power", help="Exponent applied to the channel (over its median) before the weight (docs/benefit.md)."
-    ),
-    turn_radius: float | None = option(
-        "guidance.turn_radius",
-        help="A turn of the sensor costs the arc a point this far from its axis travels (m per rad; docs/benefit.md).",
-    ),
-    vmax_lon: float | None = option("robot.vmax_lon", help="Longitudinal speed limit (m/s)."),
-    vmax_lat: float | None = option("robot.vmax_lat", help="Lateral speed limit (m/s; omni)."),
-    vmax_norm: float | None = typer.Option(
-        None, help="Limit on the speed |v| (m/s; omni; default max(vmax-lon, vmax-lat), inf: none)."
-    ),
-    wmax: float | None = option("robot.wmax", help="Yaw rate limit (rad/s)."),
-    amax_lon: float | None = option("robot.amax_lon", help="Longitudinal (tangential) acceleration limit (m/s^2)."),
-    amax_lat: float | None = option("robot.amax_lat", help="Lateral (centripetal) acceleration limit (m/s^2)."),
-    alpha_max: float | None = option("robot.alpha_max", help="Yaw acceleration limit (rad/s^2)."),
-    min_turn_radius: float | None = option("robot.min_turn_radius", help="Minimum turning radius (m; car)."),
-    r_safe: float | None = option("robot.r_safe", help="Clearance beyond the SOLM's robot radius (m)."),
+    robot: str | None = option("robot.kind"),
+    metric: str | None = option("guidance.metric"),
+    weight: float | None = option("guidance.weight"),
+    power: float | None = option("guidance.power"),
+    turn_radius: float | None = option("guidance.turn_radius"),
+    vmax_lon: float | None = option("robot.vmax_lon"),
+    vmax_lat: float | None = option("robot.vmax_lat"),
+    vmax_norm: float | None = option("robot.vmax_norm", with_default=False),
+    wmax: float | None = option("robot.wmax"),
+    amax_lon: float | None = option("robot.amax_lon"),
+    amax_lat: float | None = option("robot.amax_lat"),
+    alpha_max: float | None = option("robot.alpha_max"),
+    min_turn_radius: float | None = option("robot.min_turn_radius"),
+    r_safe: float | None = option("robot.r_safe"),
     png: Path | None = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
     map_path: Path | None = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan's summary as JSON."),

@@ -14,9 +14,9 @@ from lf3pm.cli._common import (
     console,
     err_console,
     map_loading,
-    map_options,
     option,
     progress_bar,
+    section_paths,
     user_errors,
 )
 
@@ -29,7 +29,7 @@ def solm_build(
     map_path: Path = typer.Argument(..., metavar="MAP", help="Point-cloud map."),
     out: Path = typer.Option(..., "-o", "--out", help="Output Zarr store (resumed if it exists)."),
     config: Path | None = CONFIG_OPTION,
-    sensor: str | None = option("sensor", help="Sensor preset name or YAML file."),
+    sensor: str | None = option("sensor"),
     space: str | None = option("solm.space"),
     res: float | None = option("solm.res"),
     yaw_bins: int | None = option("solm.yaw_bins"),
@@ -59,24 +59,20 @@ def solm_build(
     with user_errors():
         paths = {
             "sensor": "sensor",
-            "seed": "scan.seed",
-            "noise": "scan.noise",
-            "threads": "scan.threads",
-            **{
-                name: f"solm.{name}"
-                for name in (
-                    "space",
-                    "res",
-                    "yaw_bins",
-                    "yaw_reuse",
-                    "ray_stride",
-                    "height",
-                    "bounds",
-                    "robot_radius",
-                    "max_cells",
-                    "crop_above",
-                )
-            },
+            **section_paths("scan", "seed", "noise", "threads"),
+            **section_paths(
+                "solm",
+                "space",
+                "res",
+                "yaw_bins",
+                "yaw_reuse",
+                "ray_stride",
+                "height",
+                "bounds",
+                "robot_radius",
+                "max_cells",
+                "crop_above",
+            ),
         }
         cfg = configure(config, locals(), paths)
         check_output(out, folder=True)
@@ -84,20 +80,11 @@ def solm_build(
         from lf3pm.sensors import get_sensor
         from lf3pm.solm import build_solm, make_grid
 
-        grid_config = cfg.solm
         lidar = get_sensor(cfg.sensor)
         with map_loading() as progress:
-            world = load_map_points(map_path, **map_options(cfg), progress=progress)
-            grid = make_grid(
-                world,
-                grid_config.space,
-                grid_config.res,
-                bounds=grid_config.bounds,
-                yaw_bins=grid_config.yaw_bins,
-                height=grid_config.height,
-                max_cells=grid_config.max_cells,
-            )
-            if engine == "local" and not crop and world.size <= grid_config.crop_above:
+            world = load_map_points(map_path, cfg.map, threads=cfg.scan.threads, progress=progress)
+            grid = make_grid(world, config=cfg.solm)
+            if engine == "local" and not crop and world.size <= cfg.solm.crop_above:
                 progress(f"indexing {world.size:,} points of {map_path}")
                 world = world.indexed(cfg.scan.threads)  # what build_solm would do, here with its line
         with progress_bar() as step:
@@ -106,28 +93,12 @@ def solm_build(
                 step(f"SOLM {grid.space} {grid.shape} cells", total, cells)
 
             result = build_solm(
-                world,
-                lidar,
-                grid,
-                out,
-                seed=cfg.scan.seed,
-                noise=cfg.scan.noise,
-                robot_radius=grid_config.robot_radius,
-                yaw_reuse=grid_config.yaw_reuse,
-                ray_stride=grid_config.ray_stride,
-                threads=cfg.scan.threads,
-                association=cfg.metric.association,
-                w1=cfg.metric.w1,
-                crop=crop,
-                crop_above=grid_config.crop_above,
-                engine=engine,
-                address=address,
-                progress=advance,
+                world, lidar, grid, out, cfg, crop=crop, engine=engine, address=address, progress=advance
             )
         if result["on_crops"] and engine == "local" and not crop:
             err_console.print(
                 f"{map_path}: {world.size:,} points, more than --crop-above "
-                f"{grid_config.crop_above:,}: built tile by tile on crops",
+                f"{cfg.solm.crop_above:,}: built tile by tile on crops",
                 highlight=False,
             )
         console.print(

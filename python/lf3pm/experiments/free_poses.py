@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from lf3pm.grid import Grid
 from lf3pm.map import Map
 from lf3pm.terrain import body_blocked, column_minimum
 
@@ -19,16 +20,16 @@ class GroundGrid:
 
     def __init__(self, world: Map):
         lower, upper = world.bounds
-        self.lower = lower[:2]
-        self.nx, self.ny = np.floor((upper[:2] - lower[:2]) / GROUND_CELL).astype(int) + 1
-        self.z = column_minimum(world.points, lower[0], lower[1], GROUND_CELL, self.nx, self.ny)
+        nx, ny = np.floor((upper[:2] - lower[:2]) / GROUND_CELL).astype(int) + 1
+        self.grid = Grid.plane(lower[0], lower[1], GROUND_CELL, int(nx), int(ny))
+        self.z = column_minimum(world.points, self.grid)
 
     def height(self, x: float, y: float) -> float:
         """Ground z under (x, y), or inf where the map has no point in that column."""
-        i, j = np.floor((np.array([x, y]) - self.lower) / GROUND_CELL).astype(int)
-        if not (0 <= i < self.nx and 0 <= j < self.ny):
+        cell = self.grid.cell_of(x, y)
+        if cell is None:
             return math.inf
-        return float(self.z[j, i])
+        return float(self.z[cell[1], cell[0]])
 
 
 def random_free_poses(

@@ -101,7 +101,7 @@ def cost_from_solm(
 ) -> CostLayer:
     """The cost layer of ``solm``'s ``channel`` (shape (ny, nx) for r2, (yaw_bins,
     ny, nx) for se2), raised to ``power``, with the SOLM's degenerate mask capped."""
-    if solm.grid_spec.space not in ("r2", "se2"):
+    if not solm.grid_spec.space.ground:
         raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {solm.grid_spec.space}")
     if channel == "none":
         return cost_from_values(np.zeros(solm.grid_spec.shape), "none")

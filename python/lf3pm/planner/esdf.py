@@ -82,6 +82,7 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 from lf3pm.grid_field import GridField, bilinear
 
 _FAR = 1.0e3  # metres: the clamp of +-inf values in grid_field()
@@ -94,9 +95,9 @@ _BLOCKED_HEADSTART = 1.0  # cells blocked centres start below what they need (st
 
 
 class Esdf:
-    """Signed distance field over the cells x0 + (i + 0.5) res, y0 + (j + 0.5) res.
+    """Signed distance field over the cells of an R2 :class:`lf3pm.grid.Grid`.
 
-    Attributes: ``x0, y0, res, nx, ny``; ``values`` (ny, nx) float64 metres at the
+    Attributes: ``grid`` (and its ``x0, y0, res, nx, ny``); ``values`` (ny, nx) float64 metres at the
     cells' centres, the clearance of a round body of ``body_radius`` (the distance
     less the radius); ``obstacle`` and ``unknown`` (ny, nx) bool masks;
     ``unknown_policy``; ``field_res``, the edge of the cells the field itself is
@@ -119,8 +120,8 @@ class Esdf:
         self.body_radius = float(body_radius)
         self.obstacle = np.asarray(obstacle, dtype=bool)
         self.unknown = np.asarray(unknown, dtype=bool)
-        self.ny, self.nx = self.obstacle.shape
-        self.x0, self.y0, self.res = float(x0), float(y0), float(res)
+        ny, nx = self.obstacle.shape
+        self.grid = Grid.plane(float(x0), float(y0), float(res), nx, ny)
         self.unknown_policy = unknown_policy
         # The field: (values, cell edge) on a grid from (x0, y0); the centres' values by default.
         self._field, self.field_res = (np.asarray(values, dtype=np.float64), self.res) if field is None else field
@@ -172,7 +173,7 @@ class Esdf:
         radius. The SOLM's own cells are not traversable where its ``obstacle`` mask
         is set (se2: in any yaw bin; the body is round, so all bins agree)."""
         g = solm.grid_spec
-        if g.space not in ("r2", "se2"):
+        if not g.space.ground:
             raise Lf3pmError(f"the planner needs an r2 or se2 SOLM, got {g.space}")
         obstacle, unknown = solm_masks(solm)
         if unknown_policy not in UNKNOWN_POLICIES:
@@ -181,22 +182,27 @@ class Esdf:
             )
         occupied, k = solm.occupancy()
         radius = float(solm.attrs["robot_radius"])
+        cells = g.refined(k)
         fine = cls.from_mask(
             occupied,
-            g.x0,
-            g.y0,
-            g.res / k,
+            cells.x0,
+            cells.y0,
+            cells.res,
             unknown=np.kron(unknown, np.ones((k, k), bool)),
             unknown_policy=unknown_policy,
             body_radius=radius,
         )
         return cls(None, obstacle, unknown, g.x0, g.y0, g.res, unknown_policy, radius, field=(fine.values, fine.res))
 
+    x0 = property(lambda self: self.grid.x0)
+    y0 = property(lambda self: self.grid.y0)
+    res = property(lambda self: self.grid.res)
+    nx = property(lambda self: self.grid.nx)
+    ny = property(lambda self: self.grid.ny)
+
     def centres(self) -> tuple[np.ndarray, np.ndarray]:
         """(x, y) of the cells' centres, arrays of shape (ny, nx)."""
-        xs = self.x0 + (np.arange(self.nx) + 0.5) * self.res
-        ys = self.y0 + (np.arange(self.ny) + 0.5) * self.res
-        return tuple(np.meshgrid(xs, ys))
+        return self.grid.centres()
 
     def distance(self, x, y):
         """Bilinear interpolation of the field at (x, y), vectorised: (clearance,

@@ -28,6 +28,7 @@ import numpy as np
 from lf3pm import _core, libm
 from lf3pm.config import DEFAULTS, core_struct
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.poses import cell_on_grid, format_pose
@@ -59,7 +60,7 @@ class GraphPath:
 def search_path(
     cost,
     traversable,
-    grid_geometry,
+    grid: Grid | Esdf,
     start,
     goal,
     *,
@@ -75,11 +76,13 @@ def search_path(
     shape (ny, nx) (r2) or (yaw_bins, ny, nx) (se2). ``traversable``: a bool
     array of shape (ny, nx) or the cost's shape, or an :class:`Esdf` whose
     cells at least ``r_safe`` metres from blocked ones are traversable (errors
-    then say why a start or goal is blocked). ``grid_geometry``: anything with
-    x0, y0, res, nx, ny (a SolmGrid, an Esdf). ``weight``: lambda.
+    then say why a start or goal is blocked). ``grid``: the cells' :class:`Grid` (a
+    SolmGrid), or an :class:`Esdf` on them. ``weight``: lambda.
     """
     values = cost.filled if isinstance(cost, CostLayer) else np.asarray(cost, dtype=np.float64)
-    g = grid_geometry
+    g = grid.grid if isinstance(grid, Esdf) else grid
+    if not isinstance(g, Grid):
+        raise Lf3pmError(f"search_path needs the cells' lf3pm.grid.Grid, got {type(grid).__name__}")
     nx, ny, res = int(g.nx), int(g.ny), float(g.res)
     if values.ndim == 2:
         values = values[None]
@@ -136,8 +139,7 @@ def search_path(
     cell, k = np.divmod(path, layers)
     iy, ix = np.divmod(cell, nx)
     cells = np.stack([ix, iy, k], axis=1)
-    x = g.x0 + (ix + 0.5) * res
-    y = g.y0 + (iy + 0.5) * res
+    x, y = g.centre(ix, iy)
     return GraphPath(
         cells,
         np.stack([x, y, _yaws(x, y, k, step, layers, start, goal)], axis=1),

@@ -214,15 +214,11 @@ def _cost_field(cost, esdf: Esdf) -> GridField | None:
     if cost is None or isinstance(cost, GridField):
         field = cost
     elif isinstance(cost, CostLayer):
-        field = None if cost.channel == "none" else GridField(cost.filled, esdf.x0, esdf.y0, esdf.res)
+        field = None if cost.channel == "none" else GridField.on(esdf.grid, cost.filled)
     else:
-        field = GridField(np.asarray(cost, dtype=np.float64), esdf.x0, esdf.y0, esdf.res)
+        field = GridField.on(esdf.grid, np.asarray(cost, dtype=np.float64))
     if field is not None:
-        if field.values.shape[-2:] != (esdf.ny, esdf.nx) or (field.x0, field.y0, field.res) != (
-            esdf.x0,
-            esdf.y0,
-            esdf.res,
-        ):
+        if not field.grid.same_cells(esdf.grid):
             raise Lf3pmError(f"cost grid {field.values.shape} does not match the ESDF's ({esdf.ny}, {esdf.nx})")
         if np.any(field.values < 0):
             raise Lf3pmError("cost must be >= 0")
@@ -231,7 +227,7 @@ def _cost_field(cost, esdf: Esdf) -> GridField | None:
 
 def _check_end(name: str, pose, esdf: Esdf, field: GridField, clearance: float) -> None:
     x, y = float(pose[0]), float(pose[1])
-    ix, iy = cell_on_grid(esdf, name, pose)
+    ix, iy = cell_on_grid(esdf.grid, name, pose)
     d = float(field.sample(x, y)[0])
     if d < clearance:
         reason = esdf.blocked_reason(ix, iy) or esdf.clearance_reason(d, clearance)

@@ -98,7 +98,7 @@ class Planner:
     for every (start, goal, metric) query."""
 
     def __init__(self, solm: Solm, *, unknown_policy: str = "obstacle"):
-        if solm.grid_spec.space == "r3":
+        if not solm.grid_spec.space.ground:
             raise Lf3pmError("planning needs an r2 or se2 SOLM (ground robots); this one is r3")
         self.solm = solm
         self.esdf = Esdf.from_solm(solm, unknown_policy=unknown_policy)
@@ -138,7 +138,7 @@ class Planner:
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")
         layer = self.cost_layer(metric, power)
-        cost = None if metric == "none" else GridField(layer.filled, self.esdf.x0, self.esdf.y0, self.esdf.res)
+        cost = None if metric == "none" else GridField.on(self.esdf.grid, layer.filled)
         piece_length, corners, turn_price = 2.0, False, 0.0
         if robot.kind == "car" and robot.min_turn_radius > 0:
             path = search_car_path(

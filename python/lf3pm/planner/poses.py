@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 
 
 def as_pose(value, name: str) -> np.ndarray:
@@ -15,20 +16,19 @@ def as_pose(value, name: str) -> np.ndarray:
     return pose
 
 
-def grid_cell(grid, x: float, y: float) -> tuple[int, int] | None:
-    """(ix, iy) of the cell of ``grid`` (x0, y0, res, nx, ny: an Esdf, a SolmGrid) that holds
-    (x, y), or None when (x, y) lies off the grid."""
-    ix, iy = int(np.floor((x - grid.x0) / grid.res)), int(np.floor((y - grid.y0) / grid.res))
-    return (ix, iy) if 0 <= ix < grid.nx and 0 <= iy < grid.ny else None
+def grid_cell(grid: Grid, x: float, y: float) -> tuple[int, int] | None:
+    """``grid.cell_of(x, y)``: (ix, iy) of the cell holding (x, y), or None off the grid."""
+    return grid.cell_of(x, y)
 
 
-def cell_on_grid(grid, name: str, pose) -> tuple[int, int]:
-    """:func:`grid_cell` of ``pose``'s x, y, or a one-line error naming ``name`` and the grid's extent."""
-    cell = grid_cell(grid, float(pose[0]), float(pose[1]))
+def cell_on_grid(grid: Grid, name: str, pose) -> tuple[int, int]:
+    """(ix, iy) of the cell of ``grid`` holding ``pose``'s x, y, or a one-line error naming
+    ``name`` and the grid's extent."""
+    cell = grid.cell_of(float(pose[0]), float(pose[1]))
     if cell is None:
+        xmin, ymin, xmax, ymax = grid.bounds
         raise Lf3pmError(
-            f"{name} {format_pose(pose)} lies outside the grid x [{grid.x0:.2f}, "
-            f"{grid.x0 + grid.nx * grid.res:.2f}], y [{grid.y0:.2f}, {grid.y0 + grid.ny * grid.res:.2f}]"
+            f"{name} {format_pose(pose)} lies outside the grid x [{xmin:.2f}, {xmax:.2f}], y [{ymin:.2f}, {ymax:.2f}]"
         )
     return cell
 

@@ -7,8 +7,8 @@ it is undefined where a column is empty. A replay needs a ground whose second
 derivative is bounded, because the sensor's vertical acceleration along a path
 is ``v^T Hess(g) v + grad(g) . a``. The surface here is built in four steps:
 
-1. column minimum on a ``cell`` grid over the region the path covers (plus a
-   margin for the smoothing);
+1. column minimum on a grid of ``cell`` columns over the region the path covers
+   (plus a margin for the smoothing);
 2. ground = the cells reached by steps of at most ``max_step`` between
    neighbouring columns from the columns under most of the path (a plateau behind
    a wall -- a box top, a roof -- is no ground, nor is the ceiling a column reads
@@ -23,6 +23,7 @@ is ``v^T Hess(g) v + grad(g) . a``. The surface here is built in four steps:
 The Gaussian rounds the ground off: on a hump or a dip the surface departs
 from the column minimum. ``deviation`` measures by how much along the path,
 so a caller can state what the sensor's height above the map really was.
+The three parameters are lf3pm.config.GroundConfig's (the ``ground`` section).
 """
 
 from __future__ import annotations
@@ -32,34 +33,39 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lf3pm.config import DEFAULTS, GroundConfig, validated
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 from lf3pm.terrain import column_minimum
 
-#: Column grid (m): several map points per column for maps sampled every 5-10 cm.
-GROUND_CELL = 0.25
-#: Gaussian sigma (m): half the footprint of a small wheeled base (about 1 m).
-GROUND_SMOOTHING = 0.5
-#: Largest height change between neighbouring columns that is still ground (m):
-#: a 0.25 m cell rising 0.25 m is a 45 degree slope, steeper than a wheeled
-#: robot drives; a box side or a wall jumps by more.
-GROUND_MAX_STEP = 0.25
+#: The ground section's defaults, by their former names.
+GROUND_CELL = DEFAULTS.ground.cell
+GROUND_SMOOTHING = DEFAULTS.ground.smoothing
+GROUND_MAX_STEP = DEFAULTS.ground.max_step
 
 
 @dataclass(frozen=True)
 class SmoothGround:
     """A C2 ground surface over an axis-aligned region (see the module docstring).
 
-    ``spline`` is a scipy ``RectBivariateSpline`` in (x, y); ``region`` is
-    (xmin, ymin, xmax, ymax) of its grid; ``raw`` the column minimum on that grid
-    ((ny, nx), NaN off the ground), kept to measure the smoothing's deviation.
+    ``spline`` is a scipy ``RectBivariateSpline`` in (x, y); ``grid`` the columns'
+    grid; ``raw`` the column minimum on it ((ny, nx), NaN off the ground), kept to
+    measure the smoothing's deviation; ``config`` the parameters it was built with.
     """
 
     spline: object
-    region: tuple
-    cell: float
-    smoothing: float
-    max_step: float
+    grid: Grid
+    config: GroundConfig
     raw: np.ndarray
+
+    @property
+    def region(self) -> tuple:
+        """(xmin, ymin, xmax, ymax) of the columns."""
+        return self.grid.bounds
+
+    cell = property(lambda self: self.grid.res)
+    smoothing = property(lambda self: self.config.smoothing)
+    max_step = property(lambda self: self.config.max_step)
 
     def height(self, x, y) -> np.ndarray:
         """g(x, y) for arrays x, y of equal shape."""
@@ -75,41 +81,42 @@ class SmoothGround:
         """g(x, y) minus the column minimum of the cell under each (x, y) (NaN
         where that column is not ground): positive where the sensor rides higher
         above the map than asked, negative lower."""
-        x0, y0 = self.region[:2]
-        ny, nx = self.raw.shape
-        i = np.clip(np.floor((np.asarray(x, float) - x0) / self.cell).astype(int), 0, nx - 1)
-        j = np.clip(np.floor((np.asarray(y, float) - y0) / self.cell).astype(int), 0, ny - 1)
-        return self.height(x, y) - self.raw[j, i]
+        return self.height(x, y) - self.raw[self.grid.cell(x, y)]
 
 
 def smooth_ground(
     points: np.ndarray,
     path_xy: np.ndarray,
+    config: GroundConfig = DEFAULTS.ground,
     *,
-    cell: float = GROUND_CELL,
-    smoothing: float = GROUND_SMOOTHING,
-    max_step: float = GROUND_MAX_STEP,
+    cell: float | None = None,
+    smoothing: float | None = None,
+    max_step: float | None = None,
 ) -> SmoothGround:
-    """The smooth ground under ``path_xy`` (N, 2) from the map ``points`` (M, 3).
+    """The smooth ground under ``path_xy`` (N, 2) from the map ``points`` (M, 3), with
+    the ground section ``config``; ``cell``, ``smoothing`` and ``max_step`` given by
+    name override its own (validated there).
 
-    Raises Lf3pmError for non-positive parameters or when no map point lies
-    under the path's region.
+    Raises Lf3pmError for parameters out of range or when no map point lies under
+    the path's region.
     """
     from scipy.interpolate import RectBivariateSpline
     from scipy.ndimage import distance_transform_edt, gaussian_filter
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    for name, value in (("ground cell", cell), ("ground smoothing", smoothing), ("ground max step", max_step)):
-        if not (math.isfinite(value) and value > 0):
-            raise Lf3pmError(f"the {name} must be > 0 m, got {value}")
+    given = {"cell": cell, "smoothing": smoothing, "max_step": max_step}
+    given = {name: value for name, value in given.items() if value is not None}
+    if given:
+        config = validated(GroundConfig, "ground", **{**config.model_dump(), **given})
+    cell, smoothing, max_step = config.cell, config.smoothing, config.max_step
     path_xy = np.asarray(path_xy, dtype=np.float64)
     # The Gaussian reaches 3 sigma; the spline needs 4 nodes per axis.
     margin = 3.0 * smoothing + 2.0 * cell
     lo, hi = path_xy.min(axis=0) - margin, path_xy.max(axis=0) + margin
     nx, ny = (max(4, int(math.ceil(v))) for v in (hi - lo) / cell)
-    x0, y0 = float(lo[0]), float(lo[1])
-    raw = column_minimum(points, x0, y0, cell, nx, ny)
+    grid = Grid.plane(float(lo[0]), float(lo[1]), cell, nx, ny)
+    raw = column_minimum(points, grid)
     known = np.isfinite(raw)
     if not known.any():
         raise Lf3pmError("no map point lies under the trajectory: there is no ground to drive on")
@@ -125,8 +132,7 @@ def smooth_ground(
     cols = np.concatenate([b[d <= max_step] for _, b, d in pairs])
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(nx * ny, nx * ny))
     _, label = connected_components(graph, directed=False)
-    ij = np.floor((path_xy - lo) / cell).astype(int)
-    on_path = index[np.clip(ij[:, 1], 0, ny - 1), np.clip(ij[:, 0], 0, nx - 1)]
+    on_path = index[grid.cell(path_xy[:, 0], path_xy[:, 1])]
     # The robot drives on one connected surface: the component under most of the path. A
     # column the floor left empty in a sparse scan reads the ceiling above it, and its own
     # component (the ceiling's) is no ground: it takes the nearest ground column's height.
@@ -136,17 +142,8 @@ def smooth_ground(
     surface = gaussian_filter(
         _nearest_fill(filled, ground, distance_transform_edt), smoothing / cell, mode="nearest", truncate=3.0
     )
-    xs = x0 + (np.arange(nx) + 0.5) * cell
-    ys = y0 + (np.arange(ny) + 0.5) * cell
-    spline = RectBivariateSpline(xs, ys, surface.T, kx=3, ky=3, s=0)
-    return SmoothGround(
-        spline=spline,
-        region=(x0, y0, x0 + nx * cell, y0 + ny * cell),
-        cell=float(cell),
-        smoothing=float(smoothing),
-        max_step=float(max_step),
-        raw=np.where(ground, raw, np.nan),
-    )
+    spline = RectBivariateSpline(grid.xs(), grid.ys(), surface.T, kx=3, ky=3, s=0)
+    return SmoothGround(spline=spline, grid=grid, config=config, raw=np.where(ground, raw, np.nan))
 
 
 def _nearest_fill(values: np.ndarray, keep: np.ndarray, distance_transform_edt) -> np.ndarray:

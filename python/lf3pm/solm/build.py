@@ -3,7 +3,6 @@ resumable (see store.py)."""
 
 from __future__ import annotations
 
-import math
 import numbers
 import os
 import warnings
@@ -13,16 +12,15 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm import __version__
-from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, SolmConfig, validated
+from lf3pm.config import Config, configured
 from lf3pm.errors import Lf3pmError, StorageError
+from lf3pm.grid import Space
 from lf3pm.map import Map, MapPoints
 from lf3pm.sensors import Sensor, as_sensor
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.occupancy import grid_occupancy, occupancy_factor
 from lf3pm.solm.store import (
     CHANNELS,
-    MAX_TILE,
-    TILE,
     check_new_store,
     chunk_path,
     open_or_create,
@@ -48,8 +46,8 @@ def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
     (on an even sample of at most STRAY_CHUNK) covers less than half of it. The line
     names the grid cells that hold that box as the ``--bounds`` to build with
     instead; None otherwise."""
-    origin, res = np.array([grid.x0, grid.y0]), grid.res
-    end = origin + res * np.array([grid.nx, grid.ny])
+    origin, res = np.array(grid.origin), grid.res
+    end = np.array(grid.bounds[2:])
     lo, hi = np.percentile(points[:: max(1, len(points) // STRAY_CHUNK), :2], STRAY_PERCENTILES, axis=0)
     if np.prod(np.clip(np.minimum(hi, end) - np.maximum(lo, origin), 0, None)) >= 0.5 * np.prod(end - origin):
         return None
@@ -59,9 +57,9 @@ def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
     for first in range(0, len(points), STRAY_CHUNK):
         xy = points[first : first + STRAY_CHUNK, :2]
         outside += int(np.count_nonzero(np.any((xy < box_lo) | (xy > box_hi), axis=1)))
-        ij = np.floor((xy - origin) / res)
-        ij = ij[np.all((ij >= 0) & (ij < [grid.nx, grid.ny]), axis=1)].astype(np.int64)
-        filled[ij[:, 1] * grid.nx + ij[:, 0]] = True
+        ix, iy = grid.columns(xy[:, 0], xy[:, 1])
+        inside = grid.holds(ix, iy)
+        filled[iy[inside] * grid.nx + ix[inside]] = True
     if filled.sum() >= filled.size / 2:
         return None
     bounds = " ".join(f"{round(v, 6):g}" for v in (*box_lo, *box_hi))
@@ -74,46 +72,43 @@ def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
     )
 
 
+#: The sections of the configuration a build reads.
+SECTIONS = ("scan", "metric", "solm")
+#: The solm section's parameters that make the grid (make_grid), which a build takes whole.
+GRID_FIELDS = ("space", "res", "yaw_bins", "height", "bounds", "max_cells")
+
+
 def build_solm(
     world: Map | MapPoints,
-    sensor: Sensor,
+    sensor: Sensor | str,
     grid: SolmGrid,
     out: Path,
+    config: Config | None = None,
     *,
-    seed: int = DEFAULTS.scan.seed,
-    noise: float | None = DEFAULTS.scan.noise,
-    robot_radius: float = DEFAULTS.solm.robot_radius,
-    floor_clearance: float = DEFAULTS.solm.floor_clearance,
-    association: str = DEFAULTS.metric.association,
-    w1: float = DEFAULTS.metric.w1,
-    threads: int = DEFAULTS.scan.threads,
-    yaw_reuse: bool = DEFAULTS.solm.yaw_reuse,
-    ray_stride: int = DEFAULTS.solm.ray_stride,
-    tile: int = TILE,
     max_tiles: int | None = None,
     crop: bool = False,
-    crop_above: int = DEFAULTS.solm.crop_above,
     engine: str = "local",
     address: str | None = None,
     progress=None,
+    **parameters,
 ) -> dict:
     """Builds (or resumes) the SOLM of ``world`` (a Map, or MapPoints: a map not indexed
-    whole, built on crops) for ``sensor`` (a Sensor or a preset name) on ``grid`` into the
-    Zarr store ``out``. Cell c (linear index over the
-    channel's shape) uses noise stream c, so results do not depend on tiling or resumption.
-    ``yaw_reuse`` (se2 only) scans each yaw sector once and sums sector Grams
-    per bin (yaw_reuse.py): about 2F+1 times faster, approximate (docs/solm.md).
-    ``ray_stride`` K casts every K-th azimuth column of the pattern and scales
-    the Gram up (ray_thinning.py): about K times faster, approximate.
-    ``tile`` is the tile (and Zarr chunk) edge in cells; ``max_tiles`` stops
-    after that many tiles (for tests of resumption). ``crop``: compute each tile on
-    its own crop of the map (tiles.py; the store is bitwise the same); MapPoints of at
-    most ``crop_above`` points are indexed whole instead, unless ``crop``, and larger
-    ones are built on crops. ``engine``:
-    "local" (this process, ``threads`` workers) or "ray" (one Ray task per tile on the
-    cluster at ``address``, None: a local one; each task indexes only its tile's crop;
-    cluster.py). The parameters are validated by lf3pm.config's ScanConfig,
-    MetricConfig and SolmConfig."""
+    whole, built on crops) for ``sensor`` (a Sensor or a preset name) on ``grid``
+    (make_grid) into the Zarr store ``out``, with the scan, metric and solm sections of
+    ``config`` (lf3pm.config.Config; default: the defaults), whose fields may also be
+    given by name (``seed=3, ray_stride=4``; lf3pm.config.configured). Cell c (linear index
+    over the channel's shape) uses noise stream c, so results do not depend on tiling or
+    resumption. Of the solm section: ``yaw_reuse`` (SE2 only) scans each yaw sector once
+    and sums sector Grams per bin (yaw_reuse.py): about 2F+1 times faster, approximate
+    (docs/solm.md); ``ray_stride`` K casts every K-th azimuth column of the pattern and
+    scales the Gram up (ray_thinning.py): about K times faster, approximate; ``tile`` is
+    the tile (and Zarr chunk) edge in cells; MapPoints of at most ``crop_above`` points
+    are indexed whole, unless ``crop``, and larger ones are built on crops.
+    ``max_tiles`` stops after that many tiles (for tests of resumption). ``crop``:
+    compute each tile on its own crop of the map (tiles.py; the store is bitwise the
+    same). ``engine``: "local" (this process, the scan section's ``threads`` workers) or
+    "ray" (one Ray task per tile on the cluster at ``address``, None: a local one; each
+    task indexes only its tile's crop; cluster.py)."""
     if not isinstance(world, (Map, MapPoints)):
         raise Lf3pmError(f"build_solm needs a map (lf3pm.load_map), got {type(world).__name__}")
     if not isinstance(grid, SolmGrid):
@@ -124,35 +119,23 @@ def build_solm(
         raise Lf3pmError(f"progress must be a function (cells, total), got {type(progress).__name__}")
     if max_tiles is not None and not (_integer(max_tiles) and max_tiles >= 0):
         raise Lf3pmError(f"max_tiles must be None or an integer >= 0, got {max_tiles!r}")
-    scan = validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
-    metric = validated(MetricConfig, "metric", association=association, w1=w1)
-    layout = validated(
-        SolmConfig, "solm", robot_radius=robot_radius, yaw_reuse=yaw_reuse, ray_stride=ray_stride, crop_above=crop_above
-    )
+    grid_given = [name for name in GRID_FIELDS if name in parameters]
+    if grid_given:
+        raise Lf3pmError(
+            f"build_solm takes {grid_given[0]} from its grid: give it to make_grid (lf3pm.make_grid), not to build_solm"
+        )
+    config = configured(config, SECTIONS, "build_solm", **parameters)
+    scan, metric, layout = config.scan, config.metric, config.solm
     if engine not in ENGINES:
         raise Lf3pmError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     sensor = as_sensor(sensor)
-    if not (isinstance(floor_clearance, numbers.Real) and math.isfinite(floor_clearance) and floor_clearance >= 0):
-        raise Lf3pmError(f"floor clearance must be a number >= 0 m, got {floor_clearance!r}")
-    if not (_integer(tile) and 1 <= tile <= MAX_TILE):
-        raise Lf3pmError(f"tile must be an integer from 1 to {MAX_TILE}, got {tile!r}")
-    if layout.yaw_reuse and grid.space != "se2":
+    tile = layout.tile
+    if layout.yaw_reuse and grid.space is not Space.SE2:
         raise Lf3pmError("yaw reuse applies to se2 grids only")
     hint = stray_points_warning(world.points, grid)
     if hint is not None:
         warnings.warn(hint, UserWarning, stacklevel=2)
-    job = make_job(
-        sensor,
-        grid,
-        tile=tile,
-        noise=scan.noise_for(sensor),
-        seed=scan.seed,
-        metric=metric,
-        robot_radius=layout.robot_radius,
-        floor_clearance=floor_clearance,
-        yaw_reuse=layout.yaw_reuse,
-        ray_stride=layout.ray_stride,
-    )
+    job = make_job(sensor, grid, scan, metric, layout)
     attrs = {
         "lf3pm_version": __version__,
         "grid": grid.to_dict(),
@@ -173,15 +156,15 @@ def build_solm(
         "yaw_reuse": layout.yaw_reuse,
         "ray_stride": layout.ray_stride,
     }
-    ground_robot = grid.space != "r3"
+    ground_robot = grid.space.ground
     if ground_robot:
-        attrs["occupancy_factor"] = occupancy_factor(grid)
+        attrs["occupancy_factor"] = occupancy_factor(grid, layout)
     if engine == "ray":
         from lf3pm.solm.cluster import connect
 
         check_new_store(out)
         connect(address)  # an unreachable cluster fails before the store is touched
-    ground = column_minimum(world.points, grid.x0, grid.y0, grid.res, grid.nx, grid.ny) if ground_robot else None
+    ground = column_minimum(world.points, grid) if ground_robot else None
     group = open_or_create(out, attrs, grid.shape, ground_robot, tile)
     done = read_array(group, "done")
     ty_n, tx_n = tiles_shape(grid.ny, grid.nx, tile)
@@ -222,7 +205,7 @@ def build_solm(
             depth -= 1
 
     if ground_robot:
-        occupied = grid_occupancy(world.points, grid, ground, job.robot_radius, job.floor_clearance)
+        occupied = grid_occupancy(world.points, grid, ground, job.robot_radius, job.floor_clearance, layout)
         with storing(out / "ground_z"):
             group["ground_z"][...] = np.where(np.isfinite(ground), ground, np.nan).astype(np.float32)
         with storing(out / "occupied"):

@@ -8,6 +8,7 @@ import numpy as np
 
 from lf3pm.atomic import atomic_write
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Space
 from lf3pm.solm.reader import Solm
 
 REDUCTIONS = ("min", "mean", "max")
@@ -57,7 +58,8 @@ def draw_heat_map(
 
     g = solm.grid_spec
     layer = reduced(solm, channel, reduce)
-    extent = (g.x0, g.x0 + g.nx * g.res, g.y0, g.y0 + g.ny * g.res)
+    xmin, ymin, xmax, ymax = g.bounds
+    extent = (xmin, xmax, ymin, ymax)
     if map_points is not None:
         step = max(1, len(map_points) // 300_000)
         ax.scatter(
@@ -92,7 +94,7 @@ def draw_heat_map(
         label=f"{channel} (lower = better localization)" if channel.startswith("q") else channel,
         shrink=0.85,
     )
-    how = "" if g.space == "r2" else f", {reduce} over {'yaw' if g.space == 'se2' else 'z'}"
+    how = "" if g.space is Space.R2 else f", {reduce} over {'yaw' if g.space is Space.SE2 else 'z'}"
     ax.set_title(
         f"SOLM {channel}{how}: {g.space}, {g.res} m, sensor {solm.attrs['sensor']} (black: obstacle, blank: unknown)",
         fontsize=9,

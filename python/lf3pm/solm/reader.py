@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.errors import CorruptStoreError, Lf3pmError
+from lf3pm.grid import Space
 from lf3pm.grid_field import axis_weights, bilinear
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.store import CHANNELS, MASKS, QUOTED, read_array
@@ -77,10 +78,10 @@ class Solm:
         """Cell-centre coordinates as arrays of the channels' shape: (x, y) for r2,
         (x, y, yaw) for se2, (x, y, z) for r3."""
         g = self.grid_spec
-        if g.space == "r2":
+        if g.space is Space.R2:
             y, x = np.meshgrid(g.ys(), g.xs(), indexing="ij")
             return x, y
-        third = g.yaws() if g.space == "se2" else np.asarray(g.z_levels)
+        third = g.yaws() if g.space is Space.SE2 else np.asarray(g.z_levels)
         t, y, x = np.meshgrid(third, g.ys(), g.xs(), indexing="ij")
         return x, y, t
 
@@ -93,11 +94,11 @@ class Solm:
         g = self.grid_spec
         x, y, yaw, *z = _coordinates(x=x, y=y, yaw=yaw, **({} if z is None else {"z": z}))
         data = self.channel(channel).astype(np.float64)
-        if g.space == "r2":
+        if g.space is Space.R2:
             data = data[None]  # one layer: the same code, no third axis
             k0 = k1 = np.zeros(np.broadcast(x, y).shape, dtype=np.int64)
             tk, step, fk = 0.0, 1.0, 0.0
-        elif g.space == "se2":
+        elif g.space is Space.SE2:
             step = 2 * math.pi / g.yaw_bins
             f = np.mod(yaw, 2 * math.pi) / step
             ik = np.floor(f).astype(int)
@@ -118,7 +119,7 @@ class Solm:
         b, bx, by = plane(k1)
         value = (1 - tk) * a + tk * b
         grad = np.stack([(1 - tk) * ax + tk * bx, (1 - tk) * ay + tk * by, (b - a) / step * fk], axis=-1)
-        return value, (grad[..., :2] if g.space == "r2" else grad)
+        return value, (grad[..., :2] if g.space is Space.R2 else grad)
 
 
 def _coordinates(**named) -> list[np.ndarray]:

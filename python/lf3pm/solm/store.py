@@ -24,10 +24,6 @@ from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
 
 CHANNELS = ("q_min", "q_n", "q_max", "sigma1", "step_norm", "m")
 MASKS = ("obstacle", "unknown", "degenerate")
-#: Default cells per tile edge (x and y); a tile holds every yaw bin or z level.
-TILE = 32
-#: The largest tile edge: a tile is a chunk, held whole in memory by every read and write.
-MAX_TILE = 1024
 #: Characters of an underlying error quoted in a one-line message.
 QUOTED = 80
 

@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.config import DEFAULTS, MetricConfig, core_struct, scan_params
+from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, SolmConfig, core_struct, scan_params
+from lf3pm.grid import Space
 from lf3pm.map import Map, MapPoints
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.ray_thinning import thin_rays
@@ -72,33 +73,28 @@ class TileJob:
 def make_job(
     sensor,
     grid: SolmGrid,
-    *,
-    tile: int,
-    noise: float,
-    seed: int = DEFAULTS.scan.seed,
+    scan: ScanConfig = DEFAULTS.scan,
     metric: MetricConfig = DEFAULTS.metric,
-    robot_radius: float = DEFAULTS.solm.robot_radius,
-    floor_clearance: float = DEFAULTS.solm.floor_clearance,
-    yaw_reuse: bool = DEFAULTS.solm.yaw_reuse,
-    ray_stride: int = DEFAULTS.solm.ray_stride,
+    solm: SolmConfig = DEFAULTS.solm,
 ) -> TileJob:
-    """The job of a build (values as given: build_solm validates them): the sensor's rays,
-    thinned by ``ray_stride`` and, under ``yaw_reuse``, laid out in yaw sectors."""
-    sectors = sector_layout(sensor, grid.yaw_bins) if yaw_reuse else None
-    rays, ray_weight = thin_rays(sensor.directions if sectors is None else sectors[0], ray_stride)
+    """The job of a build with these sections (build_solm): the sensor's rays, thinned by
+    the solm section's ``ray_stride`` and, under ``yaw_reuse``, laid out in yaw sectors;
+    the noise the scan section's or the sensor's."""
+    sectors = sector_layout(sensor, grid.yaw_bins) if solm.yaw_reuse else None
+    rays, ray_weight = thin_rays(sensor.directions if sectors is None else sectors[0], solm.ray_stride)
     return TileJob(
         grid=grid,
-        tile=tile,
+        tile=solm.tile,
         rays=rays,
         sector_half_width=None if sectors is None else sectors[1],
         ray_weight=ray_weight,
         min_range=float(sensor.min_range),
         max_range=float(sensor.max_range),
-        noise=float(noise),
-        seed=int(seed),
+        noise=float(scan.noise_for(sensor)),
+        seed=int(scan.seed),
         metric=metric,
-        robot_radius=float(robot_radius),
-        floor_clearance=float(floor_clearance),
+        robot_radius=float(solm.robot_radius),
+        floor_clearance=float(solm.floor_clearance),
     )
 
 
@@ -178,7 +174,7 @@ def write_tile(group, job: TileJob, ty: int, tx: int, arrays: dict[str, np.ndarr
     """Writes a tile's arrays into the store's chunks (not its done flag); returns its cell
     count. A failed write (a full disk, an I/O error) is a StorageError naming the chunk."""
     ys_, xs_ = job.slices(ty, tx)
-    r2 = job.grid.space == "r2"
+    r2 = job.grid.space is Space.R2
     region = (slice(None),) * (0 if r2 else 1) + (ys_, xs_)
     chunk = (0,) * (0 if r2 else 1) + (ty, tx)  # a tile is one chunk of every array
     for name, values in arrays.items():

@@ -15,6 +15,7 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS, GuidanceConfig
 from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
+from lf3pm.grid import Space
 from lf3pm.pose import pose_matrix
 from lf3pm.view import layers
 from lf3pm.view.inputs import ViewInputs, check_host, check_port
@@ -139,7 +140,7 @@ class ViewApp:
             )
             self.channel = gui.add_dropdown("channel", tuple(layers.CHANNELS), initial_value="q_n")
             self.min_yaw = self.layer = None
-            if g.space == "se2":
+            if g.space is Space.SE2:
                 self.min_yaw = gui.add_checkbox("min over yaw", initial_value=True)
                 self.layer = gui.add_slider(
                     "yaw (deg)",
@@ -150,7 +151,7 @@ class ViewApp:
                     disabled=True,
                 )
                 self.min_yaw.on_update(lambda event: self._guarded(self._solm_changed, event.client))
-            elif g.space == "r3":
+            elif g.space is Space.R3:
                 self.layer = gui.add_slider("height level", min=0, max=len(g.z_levels) - 1, step=1, initial_value=0)
             self.colorbar = gui.add_image(np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8), label="colour bar")
         self.channel.on_update(lambda event: self._guarded(self._solm_changed, event.client))
@@ -161,7 +162,7 @@ class ViewApp:
     def _solm_index(self) -> int | None:
         """The layer the controls select: None for the minimum over yaw."""
         g = self.inputs.solm.grid_spec
-        if g.space == "se2":
+        if g.space is Space.SE2:
             self.layer.disabled = bool(self.min_yaw.value)
             return None if self.min_yaw.value else round(self.layer.value / (360 / g.yaw_bins)) % g.yaw_bins
         return int(self.layer.value) if self.layer is not None else None
@@ -234,7 +235,7 @@ class ViewApp:
         solm = self.inputs.solm
         if not xy and solm is not None:
             g = solm.grid_spec
-            xy.append(np.array([[g.x0, g.y0], [g.x0 + g.nx * g.res, g.y0 + g.ny * g.res]]))
+            xy.append(np.reshape(g.bounds, (2, 2)))
         if not xy:
             lo, hi = self.inputs.world.bounds
             return (float(lo[0]), float(lo[1])), (float(hi[0]), float(hi[1]))
@@ -309,11 +310,12 @@ class ViewApp:
         """The ground under (x, y): the SOLM's ground height there, else the map's lowest
         points nearby."""
         solm = self.inputs.solm
-        if solm is not None and solm.grid_spec.space != "r3":  # an R3 SOLM stores no ground
+        if solm is not None and solm.grid_spec.space.ground:  # an R3 SOLM stores no ground
             if self._ground is None:
                 self._ground = solm.channel("ground_z").astype(np.float64)
             g = solm.grid_spec
-            inside = g.x0 <= x < g.x0 + g.nx * g.res and g.y0 <= y < g.y0 + g.ny * g.res
+            xmin, ymin, xmax, ymax = g.bounds
+            inside = xmin <= x < xmax and ymin <= y < ymax
             z = float(self._ground[g.cell(x, y)[-2:]]) if inside else math.nan
             if math.isfinite(z):
                 return z
@@ -343,7 +345,7 @@ class ViewApp:
         solm = self.inputs.solm
         height = solm.grid_spec.height if solm is not None else 1.0
         yaw = 0.0
-        if solm is not None and solm.grid_spec.space == "se2":
+        if solm is not None and solm.grid_spec.space is Space.SE2:
             index = self._solm_index()
             if index is None:  # the best yaw at this cell
                 values = solm.query(
@@ -354,7 +356,7 @@ class ViewApp:
                 index = int(np.nanargmin(values)) if np.isfinite(values).any() else 0
             yaw = float(solm.grid_spec.yaws()[index])
         z = self.ground_height(*xy) + height
-        if solm is not None and solm.grid_spec.space == "r3":  # the level shown, in the map's frame
+        if solm is not None and solm.grid_spec.space is Space.R3:  # the level shown, in the map's frame
             z = float(solm.grid_spec.z_levels[self._solm_index() or 0])
         pose = (xy[0], xy[1], z, yaw)
         with self._busy(client, "evaluating", f"cell ({xy[0]:.1f}, {xy[1]:.1f})"):
@@ -379,7 +381,7 @@ class ViewApp:
         elif result.predicted_localization_error_withheld is not None:
             text.append(f"- predicted localization error withheld: {result.predicted_localization_error_withheld}")
         if solm is not None:
-            stored = float(solm.query(xy[0], xy[1], yaw=yaw, z=z if solm.grid_spec.space == "r3" else None)[0])
+            stored = float(solm.query(xy[0], xy[1], yaw=yaw, z=z if solm.grid_spec.space is Space.R3 else None)[0])
             text.append(
                 f"- SOLM q_n here {stored:.4g} (interpolated)"
                 if math.isfinite(stored)

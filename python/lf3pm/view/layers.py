@@ -14,6 +14,7 @@ from lf3pm.calibration import (
     predict_localization_error,
 )
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Space
 from lf3pm.solm import Solm
 
 #: The SOLM channels the page offers, with what the colour bar says of each.
@@ -69,7 +70,7 @@ def solm_values(solm: Solm, channel: str, layer: int | None = None) -> np.ndarra
         raise Lf3pmError(f"unknown channel {channel!r}; the viewer shows {', '.join(CHANNELS)}")
     data = solm.channel("q_n" if channel == "predicted_error" else channel).astype(np.float64)
     if data.ndim == 3:
-        if layer is None and solm.grid_spec.space == "se2":
+        if layer is None and solm.grid_spec.space is Space.SE2:
             with np.errstate(all="ignore"):
                 finite = np.where(np.isfinite(data), data, np.inf)
                 data = np.min(finite, axis=0)
@@ -96,7 +97,7 @@ def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
     values = solm_values(solm, channel, layer)
     g = solm.grid_spec
     ys, xs = np.meshgrid(g.ys(), g.xs(), indexing="ij")
-    if g.space == "r3":  # its levels are heights in the map's frame
+    if g.space is Space.R3:  # its levels are heights in the map's frame
         z = np.full(values.shape, g.z_levels[int(layer or 0)])
     else:
         ground = solm.channel("ground_z").astype(np.float64)
