@@ -60,6 +60,22 @@ def test_table_for_odometry(files):
     assert "replay: odometry, mid70, 11 scans at 5 Hz" in done.stdout and "APE" in done.stdout
 
 
+def test_the_methods_settings_come_from_the_config_file(files, tmp_path):
+    """--config FILE.yaml sets the method's section (here localization's), which the run
+    records and uses: the same figures as the API given the same settings."""
+    config = tmp_path / "loc.yaml"
+    config.write_text("localization: {scan_voxel: 0.3, yaw_noise: 0.02, max_iterations: 20}\n")
+    done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--config", config, "--json")
+    assert done.exit_code == 0, done.output
+    run = json.loads(done.stdout.strip().splitlines()[-1])["runs"][0]
+    recorded = run["params"]["localization"]
+    assert (recorded["scan_voxel"], recorded["odometry"]["yaw_noise"], recorded["max_iterations"]) == (0.3, 0.02, 20)
+    same = lf3pm.replay(
+        str(files / "boxes.npy"), str(files / "traj.csv"), scan_voxel=0.3, yaw_noise=0.02, max_iterations=20
+    )
+    assert run["ape"]["rmse"] == same.ape["rmse"]
+
+
 BAD_CSV = {
     "malformed": "t,x,y,yaw,vx,vy,omega\n0,-2,0,0,0,0,0\n1,-1,zero,0,0,0,0\n",
     "missing": "t,x,y,yaw\n0,-2,0,0\n1,-1,0,0\n",

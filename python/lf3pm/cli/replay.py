@@ -81,8 +81,9 @@ def replay_command(
         # The method and its odometry checked before the map loads: a name, a pair of
         # odometry and sensor refused or warned about.
         registry.check_name(run.odometry, "--odometry" if odometry is not None else "replay.odometry")
+        chosen = METHODS[run.method].from_config(cfg)  # its settings: the configuration's
         options = {}
-        if METHODS[run.method].uses_odometry:
+        if chosen.uses_odometry:
             options = {"odometry": run.odometry}
             registry.choose_odometry(run.odometry, lidar)
         elif odometry is not None:
@@ -100,11 +101,10 @@ def replay_command(
                 world,
                 motion,
                 lidar,
-                run.method,
+                chosen,
                 run.seeds,
                 scan.seed,
                 **common,
-                **options,
                 progress=lambda s, done, total: step(f"{run.method} replay, seed {s}", total, restart=done == 1),
             )
             bag_info = (

@@ -355,6 +355,11 @@ class Lio:
             registry.check_name(named)
         return cls(validated(ReplayConfig, "replay", **{**DEFAULTS.replay.model_dump(), **own}), options)
 
+    @classmethod
+    def from_config(cls, config) -> Lio:
+        """The method of a whole configuration: its replay section, and its odometry."""
+        return cls(config.replay, {"odometry": registry.check_name(config.replay.odometry)})
+
     @property
     def rest(self) -> float:
         return self.settings.rest

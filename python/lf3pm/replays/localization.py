@@ -272,6 +272,10 @@ class Localization:
     def from_params(cls, params: dict) -> Localization:
         return cls(method_settings(cls.name, DEFAULTS.localization, params))
 
+    @classmethod
+    def from_config(cls, config) -> Localization:
+        return cls(config.localization)
+
     def prepare(self, map, threads: int, prepared: RegistrationTarget | None = None) -> RegistrationTarget:
         return RegistrationTarget.for_map(map, prepared, threads)
 

@@ -24,6 +24,7 @@ from lf3pm.replays.replay_result import MethodRun
 class ReplayMethod(Protocol):
     """A state estimator a replay runs. Made from its settings section
     (``from_params``: the section's defaults updated by a caller's keyword parameters),
+    or from a whole :class:`lf3pm.config.Config` (``from_config``: its section of it),
     it is prepared once per map (``prepare``: what it keeps of the map across seeds, e.g.
     the localization's registration target; ``prepared`` one made before, checked) and
     run on one seed's scan stream (``run``), which it consumes, giving a
@@ -39,6 +40,9 @@ class ReplayMethod(Protocol):
     @classmethod
     def from_params(cls, params: dict) -> ReplayMethod: ...
 
+    @classmethod
+    def from_config(cls, config) -> ReplayMethod: ...
+
     def prepare(self, map, threads: int, prepared=None) -> object: ...
 
     def run(self, scans, motion, sensor, seed: int, *, prepared, threads: int, progress=None) -> MethodRun: ...
@@ -48,9 +52,15 @@ class ReplayMethod(Protocol):
 METHODS: dict[str, type[ReplayMethod]] = {method.name: method for method in (Localization, Lio, KissIcpOdometry)}
 
 
-def replay_method(name: str, params: dict | None = None) -> ReplayMethod:
-    """The method ``name`` made from ``params`` (its settings); Lf3pmError for an unknown
-    method or parameter, ConfigError for a bad value."""
+def replay_method(name: str | ReplayMethod, params: dict | None = None) -> ReplayMethod:
+    """The method ``name`` made from ``params`` (its settings), or ``name`` itself when it
+    is a method already made; Lf3pmError for an unknown method or parameter (or
+    parameters given to a method already made), ConfigError for a bad value."""
+    if not isinstance(name, str):
+        if params:
+            given = ", ".join(params)
+            raise Lf3pmError(f"the {name.name} method is made already: give its settings there, not {given}")
+        return name
     if name not in METHODS:
         raise Lf3pmError(f"unknown method {name!r}; use one of {', '.join(METHODS)}")
     return METHODS[name].from_params(dict(params or {}))

@@ -96,6 +96,10 @@ class KissIcpOdometry:
     def from_params(cls, params: dict) -> KissIcpOdometry:
         return cls(method_settings(cls.name, DEFAULTS.kiss_icp, params))
 
+    @classmethod
+    def from_config(cls, config) -> KissIcpOdometry:
+        return cls(config.kiss_icp)
+
     def prepare(self, map, threads: int, prepared=None):
         return None
 

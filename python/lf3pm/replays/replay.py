@@ -42,7 +42,7 @@ def replay(
     map: Map | str,
     motion_or_csv,
     sensor: Sensor | str = DEFAULTS.sensor,
-    method: str = DEFAULTS.replay.method,
+    method: str | ReplayMethod = DEFAULTS.replay.method,
     seed: int = DEFAULTS.scan.seed,
     *,
     rate: float = DEFAULTS.replay.rate,
@@ -53,8 +53,10 @@ def replay(
     progress=None,
     **params,
 ) -> ReplayResult:
-    """Replays a trajectory with ``method`` (module docstring) and scores it.
+    """Replays a trajectory with ``method`` and scores it.
 
+    ``method``: a name of methods.METHODS, made from ``params``, or a method made
+    already (e.g. ``METHODS[name].from_config(config)``, ``Localization(section)``).
     ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion`, the
     CSV ``lf3pm plan`` writes, or a planner Trajectory or Plan (the sensor
     ``height`` m above the smooth ground).
@@ -105,7 +107,7 @@ def replay_seeds(
     map: Map | str,
     motion_or_csv,
     sensor: Sensor | str = DEFAULTS.sensor,
-    method: str = DEFAULTS.replay.method,
+    method: str | ReplayMethod = DEFAULTS.replay.method,
     seeds: int = DEFAULTS.replay.seeds,
     seed: int = DEFAULTS.scan.seed,
     *,
@@ -119,11 +121,12 @@ def replay_seeds(
     """:func:`replay` on seeds ``seed`` .. ``seed + seeds - 1`` (what ``lf3pm replay
     --seeds`` runs): the map, the motion and the registration target prepared once, and
     the median of each reported figure. ``progress(seed, done, total)`` after each scan."""
-    run = validated(ReplayConfig, "replay", method=method, seeds=seeds, rate=rate, height=height)
+    chosen = replay_method(method, params)
+    run = validated(ReplayConfig, "replay", method=chosen.name, seeds=seeds, rate=rate, height=height)
     validated(ScanConfig, "scan", noise=noise, seed=seed, threads=threads)
     map = as_map(map, threads)
     motion = _motion(motion_or_csv, map, run.height)
-    target = replay_method(method, params).prepare(map, threads)  # the map prepared once for every seed
+    target = chosen.prepare(map, threads)  # the map prepared once for every seed
     results = []
     for s in range(seed, seed + run.seeds):
         tick = None if progress is None else (lambda done, total, s=s: progress(s, done, total))
@@ -132,7 +135,7 @@ def replay_seeds(
                 map,
                 motion,
                 sensor,
-                method,
+                chosen,
                 s,
                 rate=run.rate,
                 height=run.height,
@@ -140,7 +143,6 @@ def replay_seeds(
                 target=target,
                 threads=threads,
                 progress=tick,
-                **params,
             )
         )
     return ReplaySeries(results=results, median=median_figures(results))
