@@ -36,6 +36,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Grid
 from lf3pm.planner.cost_map import cost_from_solm
 from lf3pm.planner.esdf import Esdf
 from lf3pm.planner.graph_search import search_path
@@ -175,7 +176,7 @@ def main() -> None:
     args = parser.parse_args()
     n = args.size
     trav, cost, angle = synthetic_map(n)
-    grid = type("Grid", (), dict(x0=0.0, y0=0.0, res=RES, nx=n, ny=n))
+    grid = Grid.plane(0.0, 0.0, RES, n, n)
     print(f"map {n} x {n}, res {RES} m, {100 * (1 - trav.mean()):.1f} % blocked, lambda {WEIGHT}")
     if args.car_only:
         car_cases(trav, cost, angle, args.boxes)
