@@ -7,7 +7,8 @@ Top-level API (docs/api.md; imported lazily so that light modules such as
 - :func:`lf3pm.evaluate` -- simulate a scan at a pose and compute the metric.
 - :func:`lf3pm.get_sensor` / :func:`lf3pm.list_sensors` -- LiDAR models.
 - :func:`lf3pm.make_grid`, :func:`lf3pm.build_solm`, :class:`lf3pm.Solm` -- build a
-  Static Observation Loss Map over a grid, then open, read and query it.
+  Static Observation Loss Map over a grid (:class:`lf3pm.Grid`, its space a
+  :class:`lf3pm.Space`), then open, read and query it.
 - :class:`lf3pm.Planner`, :class:`lf3pm.Robot` -- plan trajectories on a SOLM.
 - :func:`lf3pm.replay` -- replay a trajectory through localization, a LIO or an
   odometry on simulated scans and score it (:class:`lf3pm.ReplayResult`);
@@ -29,6 +30,8 @@ _LAZY = {
     "Sensor": "lf3pm.sensors",
     "Solm": "lf3pm.solm",
     "SolmGrid": "lf3pm.solm",
+    "Grid": "lf3pm.grid",
+    "Space": "lf3pm.grid",
     "make_grid": "lf3pm.solm",
     "build_solm": "lf3pm.solm",
     "Planner": "lf3pm.planner.plan",

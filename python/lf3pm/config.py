@@ -309,18 +309,12 @@ class RobotConfig(Section):
 
 
 class GuidanceConfig(Section):
-    """How a SOLM channel guides the planner (docs/benefit.md).
-
-    The shipped guidance was chosen by a tuning run of the benefit study on its own maps
-    (pairs disjoint from the reported ones): q_n predicts a plan's localization APE best
-    (Spearman 0.81-0.83 over 240-288 plans) and APE grows as its mean to the power
-    0.93-0.94, so the power 1 makes the cost proportional to the predicted error; of the
-    weights and powers tried, lambda = 3 was worse than no guidance on the fewest at-risk
-    pairs (2 of 21). The turn radius prices the sensor's turns: at 2 m (a 90 degree turn
-    costs as much as 3.1 m of travel through the same views) the guided omni plans drop
-    the marginal swings that cost a LiDAR-inertial odometry with a narrow sensor its
-    track: LIO error along them 0.12 of the unguided plans' against 0.15 at 0.5 m,
-    localization unchanged (docs/lio.md).
+    """How a SOLM channel guides the planner: an edge through cells of cost c (the channel
+    over its median, to ``power``) costs its length times (1 + ``weight`` c), and a turn
+    of the sensor the arc a point ``turn_radius`` from its axis travels. q_n, power 1:
+    localization error grows about in proportion to q_n, so the cost is proportional to
+    the predicted error. The measurements behind the defaults: docs/design.md, "Default
+    guidance"; docs/benefit.md, docs/lio.md.
     """
 
     metric: Literal[COST_CHANNELS] = Field(

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lf3pm.config import COST_CHANNELS, DEFAULTS
+from lf3pm.config import COST_CHANNELS, DEFAULTS, GuidanceConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid_field import GridField
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
@@ -123,17 +123,27 @@ class Planner:
         goal,
         *,
         robot: Robot = Robot(),
-        metric: str = DEFAULTS.guidance.metric,
-        weight: float = DEFAULTS.guidance.weight,
-        power: float = DEFAULTS.guidance.power,
+        guidance: GuidanceConfig = DEFAULTS.guidance,
         rho_T: float = 1.0,
         heuristic: bool = True,
-        turn_radius: float = DEFAULTS.guidance.turn_radius,
+        metric: str | None = None,
+        weight: float | None = None,
+        power: float | None = None,
+        turn_radius: float | None = None,
     ) -> Plan:
-        """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot``, guided by ``metric``
-        (``none``: shortest and fastest only) raised to ``power``, with trade-off ``weight``
-        (lambda). ``turn_radius``: the front end prices a turn of the sensor as the arc a
-        point this far from the rotation axis travels (m per rad; graph_search.py)."""
+        """Plans from ``start`` to ``goal`` (x, y, yaw) for ``robot`` with the guidance
+        section ``guidance`` (lf3pm.config.GuidanceConfig): guided by its ``metric``
+        (``none``: shortest and fastest only) raised to its ``power``, with trade-off
+        ``weight`` (lambda); its ``turn_radius`` prices a turn of the sensor as the arc a
+        point this far from the rotation axis travels (m per rad; graph_search.py). Those
+        four given by name (not None) override the section's, validated by it."""
+        if not isinstance(guidance, GuidanceConfig):
+            raise Lf3pmError(f"guidance must be an lf3pm.config.GuidanceConfig, got {type(guidance).__name__}")
+        given = dict(metric=metric, weight=weight, power=power, turn_radius=turn_radius)
+        given = {name: value for name, value in given.items() if value is not None}
+        if given:
+            guidance = validated(GuidanceConfig, "guidance", **{**guidance.model_dump(), **given})
+        metric, weight, power, turn_radius = guidance.metric, guidance.weight, guidance.power, guidance.turn_radius
         start, goal = as_pose(start, "start"), as_pose(goal, "goal")
         if not (math.isfinite(rho_T) and rho_T > 0):
             raise Lf3pmError(f"rho_T must be a positive number, got {rho_T}")

@@ -443,15 +443,7 @@ class ViewApp:
                 self._planner = Planner(self.inputs.solm)
             g = self.guidance
             plans = {
-                "default guidance": self._planner.plan(
-                    start,
-                    goal,
-                    robot=self.robot,
-                    metric=g.metric,
-                    weight=g.weight,
-                    power=g.power,
-                    turn_radius=g.turn_radius,
-                ),
+                "default guidance": self._planner.plan(start, goal, robot=self.robot, guidance=g),
                 "none (shortest)": self._planner.plan(start, goal, robot=self.robot, metric="none"),
             }
         lines, out = [], {}
