@@ -172,3 +172,16 @@ def test_a_plugin_whose_odometry_is_not_installed_is_one_line(files, tmp_path):
         "lf3pm: error: the toy odometry is not installed (No module named 'toy_odometry_backend'): "
         "pip install toy-odometry"
     ]
+
+
+def test_lf3pm_s_own_entry_points_and_a_name_taken(tmp_path):
+    """lf3pm's odometries declared as entry points (pyproject.toml) are the registry's own,
+    not a clash; another package's odometry under one of their names is refused."""
+    own = install(tmp_path / "own", "lf3pm-own", "unused_module", "", "genz = lf3pm.replays.genz:GenZ")
+    assert run(own, "-m", "lf3pm", "config").returncode == 0
+    clash = PLUGIN.replace('key = "toy"', 'key = "genz"')
+    taken = install(tmp_path / "taken", "toy-odometry", "toy_odometry", clash, "genz = toy_odometry:Toy")
+    done = run(taken, "-m", "lf3pm", "config")
+    assert done.returncode == 2 and done.stderr.strip() == (
+        "lf3pm: error: odometry plugin genz (toy_odometry:Toy): the name 'genz' is taken by lf3pm.replays.genz"
+    )

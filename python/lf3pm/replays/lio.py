@@ -51,7 +51,8 @@ def runs_on(odometry: str, sensor: Sensor) -> bool:
 
 def __getattr__(name):
     """ODOMETRIES (the registered odometries by key) and LOSES ((key, spinning): the
-    warning), read from the registry when asked for."""
+    warning), read from the registry when asked for: the names callers that index by key
+    used before registry.py (the benefit study, tests/test_hostile_inputs.py)."""
     if name == "ODOMETRIES":
         return dict(registry.odometries())
     if name == "LOSES":
