@@ -185,3 +185,18 @@ def test_lf3pm_s_own_entry_points_and_a_name_taken(tmp_path):
     assert done.returncode == 2 and done.stderr.strip() == (
         "lf3pm: error: odometry plugin genz (toy_odometry:Toy): the name 'genz' is taken by lf3pm.replays.genz"
     )
+
+
+def test_register_checks_an_adapter_in_process():
+    from lf3pm.replays import registry
+    from lf3pm.replays.adapters import Odometry
+    from lf3pm.replays.genz import GenZ
+
+    class Unfinished(Odometry):
+        key = "unfinished"
+
+    with pytest.raises(registry.PluginError, match=r"Unfinished does not set name, package, version, licence, worker"):
+        registry.register(Unfinished)
+    with pytest.raises(registry.PluginError, match="is not a subclass of lf3pm.replays.adapters.Odometry"):
+        registry.register(object)
+    assert registry.register(GenZ) is GenZ and "unfinished" not in registry.odometries()

@@ -34,9 +34,11 @@ class PluginError(Lf3pmError):
     """An odometry plugin that cannot be imported or is not an Odometry adapter."""
 
 
-def register(adapter, source: str = "lf3pm") -> type[Odometry]:
-    """Adds ``adapter`` (an Odometry subclass) to the registry under its ``key``, as an
-    entry point does; PluginError naming ``source`` for anything else or a name taken."""
+def register(adapter) -> type[Odometry]:
+    """Adds ``adapter`` (an Odometry subclass) to this process's registry under its
+    ``key``, as an entry point does; PluginError naming it for anything else or a name
+    taken."""
+    source = f"{getattr(adapter, '__module__', '?')}:{getattr(adapter, '__qualname__', repr(adapter))}"
     _add(odometries(), adapter, source)
     return adapter
 
