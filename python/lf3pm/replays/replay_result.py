@@ -228,10 +228,9 @@ def estimate_times(run: Estimate, scans) -> tuple[np.ndarray, np.ndarray]:
 
 #: Over the last REST_WINDOW s of a rest, an estimate moving faster than REST_SPEED_LIMIT
 #: (m/s) hands the trajectory a velocity error: its APE then measures the odometry's
-#: start, not the trajectory. Steady rests of GenZ-LIO and DLIO move at most 0.03 m/s
-#: with noisy scans and IMU, mm/s without noise (bench/lio_rest.py); a sensor that
-#: carries 0.05 m/s into the plan is 5 cm off after its first second, more than the
-#: whole APE of a good LIO run (docs/lio.md, "A still sensor").
+#: start, not the trajectory. A sensor that carries 0.05 m/s into the plan is 5 cm off
+#: after its first second, more than the whole APE of a good LIO run; steady rests move
+#: slower (docs/lio.md, "A still sensor", has the measurements).
 REST_SPEED_LIMIT = 0.05
 REST_WINDOW = 0.5
 
