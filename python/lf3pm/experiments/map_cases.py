@@ -7,6 +7,7 @@ from pathlib import Path
 
 from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Space
 
 
 @dataclass(frozen=True)
@@ -17,13 +18,14 @@ class MapCase:
     file in the shared data folder. ``zones``: {"start": (xmin, ymin, xmax, ymax),
     "goal": ...} for files (scenes bring their own). Pairs are at least
     ``min_distance`` m apart; with ``both_ways`` every other pair runs goal to start.
-    ``r_safe``: the robots' clearance beyond the SOLM's robot radius.
+    ``r_safe``: the robots' clearance beyond the SOLM's robot radius. ``space`` may be
+    given by its name.
     """
 
     name: str
     source: str
     sensor: str
-    space: str
+    space: Space
     res: float
     pairs: int = 0
     robots: tuple = ("omni", "diff")
@@ -37,6 +39,9 @@ class MapCase:
     min_distance: float = 10.0
     both_ways: bool = False
     r_safe: float = DEFAULTS.robot.r_safe
+
+    def __post_init__(self):
+        object.__setattr__(self, "space", Space(self.space))
 
 
 def case_source(case: MapCase):

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.grid import Space
+
 #: A pose is at risk at q_n >= RISK_FACTOR x the map's median q_n (or degenerate).
 RISK_FACTOR = 10.0
 #: A pair is at risk when this share of its unguided plan's poses is.
@@ -33,7 +35,7 @@ def map_median(solm) -> float:
     SOLM over each cell's best heading (module docstring)."""
     q = np.asarray(solm.channel("q_n"), dtype=np.float64)
     q = np.where(np.isfinite(q) & ~np.asarray(solm.channel("degenerate")).astype(bool), q, np.inf)
-    if solm.grid_spec.space == "se2":
+    if solm.grid_spec.space is Space.SE2:
         q = q.min(axis=0)
     q = q[np.isfinite(q)]
     return float(np.median(q)) if q.size else float("nan")
@@ -43,7 +45,7 @@ def risk_share(solm, trajectory, *, rate: float = RISK_RATE) -> float:
     """The share of ``trajectory``'s poses (sampled at ``rate`` Hz) that are at risk
     on ``solm`` (module docstring)."""
     s = trajectory.sample(rate)
-    cell = solm.grid_spec.cell(s["x"], s["y"], s["yaw"] if solm.grid_spec.space == "se2" else None)
+    cell = solm.grid_spec.cell(s["x"], s["y"], s["yaw"] if solm.grid_spec.space is Space.SE2 else None)
     q = np.asarray(solm.channel("q_n"), dtype=np.float64)[cell]
     degenerate = np.asarray(solm.channel("degenerate")).astype(bool)[cell]
     risky = degenerate | (q >= RISK_FACTOR * map_median(solm))  # NaN (not evaluated): not at risk

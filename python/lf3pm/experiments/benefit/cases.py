@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from lf3pm.experiments.map_cases import MapCase
+from lf3pm.grid import Space
 
 #: The reduced Gobi scene of the demo (experiments/gobi.py): town and open desert.
 _GOBI = {
@@ -29,7 +30,7 @@ CASES = (
         "tunnel",
         "scene:tunnel",
         "vlp16",
-        "r2",
+        Space.R2,
         0.5,
         8,
         ray_stride=4,
@@ -38,13 +39,13 @@ CASES = (
         min_distance=30.0,
     ),
     MapCase(
-        "orientation", "scene:orientation", "mid70", "se2", 1.0, 8, yaw_reuse=True, ray_stride=4, min_distance=20.0
+        "orientation", "scene:orientation", "mid70", Space.SE2, 1.0, 8, yaw_reuse=True, ray_stride=4, min_distance=20.0
     ),
     MapCase(
         "gobi",
         "scene:gobi",
         "mid70",
-        "se2",
+        Space.SE2,
         1.0,
         8,
         yaw_reuse=True,
@@ -54,14 +55,16 @@ CASES = (
         zones={"start": (-8.0, -8.0, 8.0, 8.0), "goal": (30.0, -20.0, 45.0, 20.0)},
         min_distance=25.0,
     ),
-    MapCase("houses", "scene:houses", "vlp16", "r2", 0.5, 8, ray_stride=4, both_ways=True, min_distance=20.0),
+    MapCase("houses", "scene:houses", "vlp16", Space.R2, 0.5, 8, ray_stride=4, both_ways=True, min_distance=20.0),
     # The room's halves join through gaps that leave the body 0.28 m on each side.
-    MapCase("boxes", "scene:boxes", "vlp16", "r2", 0.25, 6, ray_stride=4, both_ways=True, min_distance=8.0, r_safe=0.2),
+    MapCase(
+        "boxes", "scene:boxes", "vlp16", Space.R2, 0.25, 6, ray_stride=4, both_ways=True, min_distance=8.0, r_safe=0.2
+    ),
     MapCase(
         "street",
         "outdoor_urban64_2021-10-26-16-21-29-468.pcd",
         "vlp16",
-        "r2",
+        Space.R2,
         1.5,
         6,
         ray_stride=4,
@@ -75,7 +78,7 @@ CASES = (
         "room",
         "indoor_pcl_room_scan1.pcd",
         "vlp16",
-        "r2",
+        Space.R2,
         0.25,
         4,
         ray_stride=4,
@@ -90,7 +93,7 @@ CASES = (
         "corridor",
         "scene:corridor",
         "mid70",
-        "se2",
+        Space.SE2,
         0.5,
         8,
         yaw_reuse=True,
@@ -98,7 +101,7 @@ CASES = (
         both_ways=True,
         min_distance=30.0,
     ),
-    MapCase("field", "scene:field", "mid70", "se2", 1.0, 8, yaw_reuse=True, ray_stride=4, min_distance=60.0),
+    MapCase("field", "scene:field", "mid70", Space.SE2, 1.0, 8, yaw_reuse=True, ray_stride=4, min_distance=60.0),
 )
 
 #: `--quick`: two small maps, one pair each, one seed (the test suite's run).

@@ -39,7 +39,6 @@ from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN
 from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
 from lf3pm.experiments.risk import AT_RISK_SHARE, RISK_FACTOR, at_risk, risk_share
-from lf3pm.planner.poses import grid_cell
 from lf3pm.replays.replay_result import REST_SPEED_LIMIT
 
 
@@ -217,14 +216,12 @@ def _solm_means(planner, plan) -> dict:
 
 def _draw(planner, zone, robot, rng, tries: int = 200):
     """A random traversable cell centre inside ``zone`` (None if none found)."""
-    g = planner.esdf
-    free = g.traversable(robot.r_safe)
+    free, grid = planner.esdf.traversable(robot.r_safe), planner.esdf.grid
     xmin, ymin, xmax, ymax = zone
     for _ in range(tries):
-        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
-        cell = grid_cell(g, x, y)
+        cell = grid.cell_of(rng.uniform(xmin, xmax), rng.uniform(ymin, ymax))
         if cell is not None and free[cell[1], cell[0]]:
-            return g.x0 + (cell[0] + 0.5) * g.res, g.y0 + (cell[1] + 0.5) * g.res
+            return grid.centre(*cell)
     return None
 
 
