@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import lf3pm
+from lf3pm.config import ScanConfig, SolmConfig
 from lf3pm.solm import build_solm, make_grid
 from lf3pm.solm.store import CHANNELS
 from lf3pm.solm.tiles import crop_margin, make_job
@@ -45,7 +46,7 @@ def main() -> None:
     sensor = lf3pm.get_sensor("vlp16")
     cx, cy, h = 0.0, 0.0, args.size / 2
     grid = make_grid(world, "r2", args.res, bounds=(cx - h, cy - h, cx + h, cy + h))
-    job = make_job(sensor, grid, tile=args.tile, noise=0.0)
+    job = make_job(sensor, grid, ScanConfig(noise=0.0), solm=SolmConfig(tile=args.tile))
     crop = world.crop(job.bounds(0, 0), crop_margin(job, world))
     tiles = int(np.ceil(grid.ny / args.tile) * np.ceil(grid.nx / args.tile))
     print(
