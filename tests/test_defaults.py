@@ -41,6 +41,7 @@ API = [
     (occupancy_factor, ["solm"]),
     (build_scene, ["scene"]),
     (Planner.plan, ["guidance"]),
+    (Planner.__init__, ["planner"]),
     (table1.run, ["table1", "mde"]),
     (correlation.run, ["", "correlation"]),
     (benefit.run, ["benefit"]),

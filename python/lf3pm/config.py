@@ -52,6 +52,8 @@ LIO_ODOMETRIES = ("auto", "genz", "dlio", "liosam")
 
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
+#: What the planner makes of a SOLM's unknown cells (no map under them; planner/esdf.py).
+UNKNOWN_POLICIES = ("obstacle", "free")
 COST_CHANNELS = ("q_n", "q_min", "q_max", "step_norm", "q_n_q_min", "none")
 #: Cost channels made of SOLM channels: each part relative to its own map median, the larger
 #: taken per cell (planner/cost_map.py).
@@ -344,6 +346,24 @@ class GuidanceConfig(Section):
     )
 
 
+class PlannerConfig(Section):
+    """The planner's front end on a SOLM (lf3pm.planner.Planner)."""
+
+    unknown: Literal[UNKNOWN_POLICIES] = Field(
+        "obstacle",
+        description="A SOLM's unknown cells (no map under them): obstacle (kept away from like one, not "
+        "traversable) or free ground.",
+    )
+    clearance_step: float = Field(
+        0.1,
+        gt=0,
+        le=10,
+        description="Most spacing of the clearance samples along a front-end path (m; quarter SOLM cells where "
+        "finer): beside a pole 0.3 m + r_safe away the field dips below two samples by under 1 cm, which "
+        "the optimiser's margin covers.",
+    )
+
+
 class GroundConfig(Section):
     """The smooth ground a replayed ground robot drives on (lf3pm.replays.ground)."""
 
@@ -502,6 +522,7 @@ class Config(Section):
     solm: SolmConfig = SolmConfig()
     robot: RobotConfig = RobotConfig()
     guidance: GuidanceConfig = GuidanceConfig()
+    planner: PlannerConfig = PlannerConfig()
     ground: GroundConfig = GroundConfig()
     replay: ReplayConfig = ReplayConfig()
     localization: LocalizationConfig = LocalizationConfig()

@@ -83,7 +83,7 @@ def plan(
         vehicle, guidance = Robot.from_config(cfg.robot), cfg.guidance
         metric = guidance.metric
         solm = Solm.open(solm_path)
-        result = Planner(solm).plan(start, goal, robot=vehicle, guidance=guidance)
+        result = Planner(solm, cfg.planner).plan(start, goal, robot=vehicle, guidance=guidance)
         # All or none: the figure first (the likelier to fail), then the CSV; a CSV that
         # cannot be written takes the new figure with it.
         if png is not None:

@@ -30,6 +30,8 @@ from lf3pm.experiments.replay_tasks import ReplayTask, load_replay, replay_json,
 from lf3pm.io import write_points
 from lf3pm.map import load_map
 from lf3pm.planner.plan import Planner
+from lf3pm.replays.lio import Lio
+from lf3pm.replays.localization import Localization
 from lf3pm.sensors import get_sensor
 from lf3pm.solm import Solm
 from lf3pm.trajectory.robots import Robot
@@ -38,7 +40,8 @@ from lf3pm.validation import RegistrationTarget
 from lf3pm.validation.trajectory_mde import mde_along
 
 PAPER = "paper (its Gobi figure): S = 43.66 guided by q_n against 64.98 by q_min"
-METHODS = ("localization", "lio")
+#: The replay methods the study compares (lf3pm.replays.methods), by their names.
+METHODS = (Localization.name, Lio.name)
 
 
 @dataclass(frozen=True)

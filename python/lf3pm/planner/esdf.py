@@ -51,10 +51,9 @@ How (lengths in cells; a lattice of k = 8 points per cell and axis, h = 1/k):
    decrease along the clamp (B lies in the grid, and a border row's free cells
    span it up to the edge), so the bound carries over.
 
-Measured against a brute force (bench/bench_esdf.py, seeded masks, in cells):
-the former field (distance between centres minus half a cell) was optimistic
-by up to 0.354 outside obstacles (at corners) and 0.5 inside; this one never is.
-Its pessimism 0.05-0.5 from an obstacle averages 0.21 on scattered boxes and
+Measured against a brute force (bench/bench_esdf.py, seeded masks, in cells; the
+field it replaced, and what that one let plans do: docs/planner_frontend.md):
+its pessimism 0.05-0.5 from an obstacle averages 0.21 on scattered boxes and
 0.24 on random cells (corners dominate; 0.03-0.06 along a straight wall), and
 0.03-0.1 on free centres (at most 0.39). Building it costs ~100 bytes and
 ~0.4 us per lattice point (0.35 s and 100 MB on 60 x 236 cells); above 2^21
@@ -81,13 +80,13 @@ from functools import cached_property
 import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter
 
+from lf3pm.config import UNKNOWN_POLICIES
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid import Grid
 from lf3pm.grid_field import GridField, bilinear
 
 _FAR = 1.0e3  # metres: the clamp of +-inf values in grid_field()
 
-UNKNOWN_POLICIES = ("obstacle", "free")
 
 _SUPERSAMPLE = 8  # lattice points per cell and axis (even: centres lie on it)
 _MAX_LATTICE = 1 << 21  # points (~100 bytes each at the peak); fewer per cell, down to 2, beyond
@@ -294,7 +293,7 @@ def _conservative_values(blocked: np.ndarray) -> np.ndarray:
     need = hull.interpolate(exact) - s + _corners(np.pad(gap, 1), np.maximum)
     # Step 3: a feasible start, then each parity class raised as far as it can go.
     correction = hull.centre_max(hull.cell_max(need)) + np.where(blocked, _BLOCKED_HEADSTART, 0.0)
-    for movable in (~blocked, blocked):  # more rounds were measured to change nothing
+    for movable in (~blocked, blocked):  # one round each: further rounds change nothing
         for parity in ((0, 0), (0, 1), (1, 0), (1, 1)):
             correction = _raise_class(correction, need, hull, parity, movable)
     return exact - correction

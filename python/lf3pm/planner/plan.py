@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lf3pm.config import COST_CHANNELS, DEFAULTS, GuidanceConfig, validated
+from lf3pm.config import COST_CHANNELS, DEFAULTS, GuidanceConfig, PlannerConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid_field import GridField
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
@@ -87,25 +87,24 @@ class Plan:
         return out
 
 
-#: Most spacing (m) of the front end's clearance samples: beside a pole 0.3 m + r_safe
-#: away the field between two samples dips below them by under 1 cm, which the
-#: optimiser's margin covers (0.25 m samples on 1 m cells: up to 3-5 cm).
-CLEARANCE_STEP = 0.1
-
-
 class Planner:
-    """Plans on one SOLM: the ESDF and cost layers are computed once and reused
-    for every (start, goal, metric) query."""
+    """Plans on one SOLM with the planner section ``config`` (lf3pm.config.PlannerConfig;
+    ``unknown_policy`` given overrides its ``unknown``): the ESDF and cost layers are
+    computed once and reused for every (start, goal, metric) query."""
 
-    def __init__(self, solm: Solm, *, unknown_policy: str = "obstacle"):
+    def __init__(self, solm: Solm, config: PlannerConfig = DEFAULTS.planner, *, unknown_policy: str | None = None):
         if not solm.grid_spec.space.ground:
             raise Lf3pmError("planning needs an r2 or se2 SOLM (ground robots); this one is r3")
-        self.solm = solm
-        self.esdf = Esdf.from_solm(solm, unknown_policy=unknown_policy)
+        if not isinstance(config, PlannerConfig):
+            raise Lf3pmError(f"a Planner's config is an lf3pm.config.PlannerConfig, got {type(config).__name__}")
+        if unknown_policy is not None:
+            config = validated(PlannerConfig, "planner", **{**config.model_dump(), "unknown": unknown_policy})
+        self.solm, self.config = solm, config
+        self.esdf = Esdf.from_solm(solm, unknown_policy=config.unknown)
         self._esdf_field = self.esdf.grid_field()
-        # Clearance samples along front-end paths, at most CLEARANCE_STEP apart (quarter SOLM
+        # Clearance samples along front-end paths, at most clearance_step apart (quarter SOLM
         # cells where finer), not every quarter of the ESDF's finer cells (slow).
-        self._sample_step = min(self.esdf.res / 4, CLEARANCE_STEP)
+        self._sample_step = min(self.esdf.res / 4, config.clearance_step)
         self._layers: dict[tuple, CostLayer] = {}
 
     def cost_layer(self, metric: str, power: float = DEFAULTS.guidance.power) -> CostLayer:
