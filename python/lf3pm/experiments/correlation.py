@@ -24,7 +24,7 @@ from scipy.stats import spearmanr
 from lf3pm import __version__
 from lf3pm.atomic import atomic_write
 from lf3pm.calibration import fit_calibration
-from lf3pm.config import DEFAULTS
+from lf3pm.config import DEFAULTS, CorrelationConfig, validated
 from lf3pm.experiments.data import shared_data_dir
 from lf3pm.experiments.free_poses import random_free_poses
 from lf3pm.map import load_map
@@ -89,15 +89,17 @@ def spearman(x, y) -> float:
 
 def run(
     out: Path,
+    config: CorrelationConfig = DEFAULTS.correlation,
     *,
-    poses_per_map: int = DEFAULTS.correlation.poses_per_map,
-    trials: int = DEFAULTS.correlation.trials,
     sensor: str = DEFAULTS.sensor,
-    seed: int = DEFAULTS.correlation.seed,
-    bootstrap: int = DEFAULTS.correlation.bootstrap,
     progress=None,
+    **parameters,
 ) -> dict:
-    """Runs the study and writes its files to ``out``; returns the summary."""
+    """Runs the study with the correlation section ``config`` (its fields also by name,
+    validated there) and writes its files to ``out``; returns the summary."""
+    if parameters:
+        config = validated(CorrelationConfig, "correlation", **{**config.model_dump(), **parameters})
+    poses_per_map, trials, seed, bootstrap = config.poses_per_map, config.trials, config.seed, config.bootstrap
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x434F52]))
     records = []

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
-from lf3pm.config import DEFAULTS
+from lf3pm.config import DEFAULTS, MdeConfig, Table1Config, validated
 from lf3pm.experiments.poses import poses_around_reference
 from lf3pm.map import load_map
 from lf3pm.metric import evaluate
@@ -38,15 +38,19 @@ PAPER_FINDING = (
 
 def run(
     out: Path,
+    config: Table1Config = DEFAULTS.table1,
     *,
-    poses: int = DEFAULTS.table1.poses,
-    trials: int = DEFAULTS.table1.trials,
-    sigma_t: float = DEFAULTS.mde.sigma_t,
-    sigma_r_deg: float = DEFAULTS.mde.sigma_r,
-    seed: int = DEFAULTS.table1.seed,
+    disturbance: MdeConfig = DEFAULTS.mde,
     progress=None,
+    **parameters,
 ) -> dict:
-    """Runs the experiment and writes its files to ``out``; returns the summary."""
+    """Runs the experiment with the table1 section ``config`` (its fields also by name,
+    validated there) and the mde section's disturbances, and writes its files to
+    ``out``; returns the summary."""
+    if parameters:
+        config = validated(Table1Config, "table1", **{**config.model_dump(), **parameters})
+    poses, trials, seed = config.poses, config.trials, config.seed
+    sigma_t, sigma_r_deg = disturbance.sigma_t, disturbance.sigma_r
     out.mkdir(parents=True, exist_ok=True)
     summary, rows = {}, []
     steps = len(SCENES) * len(SENSORS) * poses
