@@ -174,3 +174,24 @@ def test_no_configuration_default_is_written_twice():
         if (module, function, name) not in OTHER_MEANINGS
     ]
     assert not found, "defaults written outside lf3pm.config: " + "; ".join(found)
+
+
+def test_cli_help_is_written_once_in_the_configuration():
+    """An option's help is its parameter's description (lf3pm.config); a command passes a
+    text of its own only where the parameter means more there, never a copy of it."""
+    import ast
+    from pathlib import Path
+
+    copies = []
+    for path in sorted((Path(__file__).resolve().parents[1] / "python" / "lf3pm" / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "option" and node.args):
+                continue
+            texts = [k.value for k in node.keywords if k.arg == "help"]
+            if not (texts and isinstance(texts[0], ast.Constant) and isinstance(node.args[0], ast.Constant)):
+                continue
+            section, _, name = node.args[0].value.rpartition(".")
+            owner = getattr(DEFAULTS, section) if section else DEFAULTS
+            if texts[0].value.strip() == type(owner).model_fields[name].description.strip():
+                copies.append(f"{path.name}:{node.lineno} {node.args[0].value}")
+    assert not copies, "help copied from the configuration: " + ", ".join(copies)
