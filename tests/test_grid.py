@@ -17,8 +17,6 @@ from lf3pm.solm import SolmGrid, build_solm, make_grid
 
 ROOT = Path(__file__).resolve().parents[1] / "python" / "lf3pm"
 NAMES = {space.value for space in Space}
-#: Files whose owners still compare a space by its name (to move onto lf3pm.grid.Space).
-PENDING = {"experiments/risk.py"}
 
 
 def test_a_space_is_its_name_at_the_boundary():
@@ -59,8 +57,6 @@ def test_no_grid_space_name_is_compared_as_a_string():
     found = []
     for path in sorted(ROOT.rglob("*.py")):
         where = path.relative_to(ROOT).as_posix()
-        if where in PENDING:
-            continue
         for node in ast.walk(ast.parse(path.read_text())):
             if not isinstance(node, ast.Compare):
                 continue
