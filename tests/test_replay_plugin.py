@@ -116,6 +116,27 @@ except lf3pm.Lf3pmError as err:
     assert lines[-1] == "toy.drift must be greater than or equal to 0, got -1.0"
 
 
+def test_a_plugin_odometry_runs_in_a_study_s_replay_workers(files, toy, tmp_path):
+    """The studies' machinery (experiments.replay_tasks): replays in spawned worker
+    processes, each record saved as it ends, find the plugin as the parent does."""
+    script = f"""
+import json
+from pathlib import Path
+from lf3pm.experiments.map_cases import MapCase
+from lf3pm.experiments.replay_tasks import ReplayTask, load_replay, run_replays
+
+case = MapCase(name="boxes", source="scene:boxes", sensor="vlp16", space="r2", res=0.5)
+out = Path({str(tmp_path)!r})
+tasks = [ReplayTask(case, {str(files / "traj.csv")!r}, "lio", s, out / f"lio-toy_{{s}}.json", {{"odometry": "toy"}})
+         for s in (0, 1)]
+run_replays(tasks, 2, lambda *args, **kwargs: None)
+print(json.dumps([load_replay(t.path)["rest"]["drift_m"] for t in tasks]))
+"""
+    done = run(toy, "-c", script)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == [0.0, 0.0]  # it holds the first pose
+
+
 BROKEN = """
 raise ImportError("a dependency of the plugin is missing")
 """
