@@ -215,12 +215,12 @@ def test_the_filter_is_told_the_imu_preset_noise(run):
     from lf3pm.replays.genz import imu_noise_model
     from lf3pm.replays.imu import ImuPreset
 
-    NOISE_INFLATION = GenzSettings().noise_inflation
+    inflation = GenzSettings().noise_inflation
     imu = run[3]
     sigma = imu.preset.sigmas(200.0)
     model = imu_noise_model(imu)
-    assert model["acc_cov"] == pytest.approx(NOISE_INFLATION * sigma["accel_white"] ** 2)
-    assert model["b_gyr_cov"] == pytest.approx(NOISE_INFLATION * (imu.preset.gyro_bias_random_walk**2) * 200.0)
+    assert model["acc_cov"] == pytest.approx(inflation * sigma["accel_white"] ** 2)
+    assert model["b_gyr_cov"] == pytest.approx(inflation * (imu.preset.gyro_bias_random_walk**2) * 200.0)
     silent = type(imu)(**{**imu.__dict__, "preset": ImuPreset("ideal", "", 0.0, 0.0, 0.0, 0.0, "")})
     assert imu_noise_model(silent) == {} and imu_noise_model(object()) == {}
 
