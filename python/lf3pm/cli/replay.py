@@ -70,6 +70,7 @@ def replay_command(
         cfg = configure(config, locals(), REPLAY_PATHS)
         from lf3pm.map import load_map
         from lf3pm.replays import registry
+        from lf3pm.replays.lio import Lio
         from lf3pm.replays.methods import METHODS
         from lf3pm.replays.motion import Motion
         from lf3pm.replays.replay import replay_bag, replay_seeds, resolve_sensor
@@ -117,6 +118,7 @@ def replay_command(
                     lidar,
                     seed=scan.seed,
                     **common,
+                    lio=Lio.from_config(cfg),  # the IMU the configuration's lio replay simulates
                     progress=lambda done, total: step(f"writing {bag}", total, restart=done == 1),
                 )
             )

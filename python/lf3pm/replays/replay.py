@@ -159,16 +159,18 @@ def replay_bag(
     height: float = DEFAULTS.replay.height,
     noise: float | None = DEFAULTS.scan.noise,
     threads: int = DEFAULTS.scan.threads,
+    lio: Lio | None = None,
     progress=None,
 ) -> dict:
     """Writes the stream a replay of seed ``seed`` simulates (scans, the IMU of the lio
-    method, the truth) as a ROS 2 bag at ``path`` (bag.py); returns what write_bag says."""
+    method ``lio``, None: the defaults', and the truth) as a ROS 2 bag at ``path``
+    (bag.py); returns what write_bag says."""
     from lf3pm.replays.bag import write_bag
 
     map = as_map(map, threads)
     motion = _motion(motion_or_csv, map, height)
     scans = ScanStream(map, motion, resolve_sensor(sensor, rate), rate=rate, seed=seed, noise=noise, threads=threads)
-    imu = Lio().imu(motion, seed)
+    imu = (lio or Lio()).imu(motion, seed)
     return write_bag(path, scans, imu, progress=progress)
 
 
