@@ -383,7 +383,7 @@ class Lio:
         # run_lio pulls the scans, so their simulation happened inside it.
         seconds = time.perf_counter() - start - (scans.seconds - simulated_before)
         report = {k: v for k, v in _fields(out).items() if k not in ("times", "poses")}
-        name = str(report.get("package", "lio"))
+        name = str(report.get("package", self.name))
         run = Estimate(
             poses=out.poses,
             hits=scans.hits.copy(),
