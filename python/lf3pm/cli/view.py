@@ -34,7 +34,14 @@ def view(
         with console.status("reading and indexing the map, reading the SOLM, plans and replays"):
             inputs = load_view_inputs(map_path, solm, plan, replay, threads=cfg.scan.threads)
         with console.status("preparing the page"):
-            viewer = serve(inputs, host=host, port=port, robot=Robot.from_config(cfg.robot), guidance=cfg.guidance)
+            viewer = serve(
+                inputs,
+                host=host,
+                port=port,
+                robot=Robot.from_config(cfg.robot),
+                guidance=cfg.guidance,
+                planner=cfg.planner,
+            )
     shown = "localhost" if host in ("127.0.0.1", "0.0.0.0") else host
     console.print(f"lf3pm view: http://{shown}:{port}  (Ctrl-C stops it)", highlight=False)
     try:

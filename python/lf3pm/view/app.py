@@ -13,7 +13,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS, GuidanceConfig
+from lf3pm.config import DEFAULTS, GuidanceConfig, PlannerConfig
 from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
 from lf3pm.grid import Space
 from lf3pm.pose import pose_matrix
@@ -52,6 +52,7 @@ class ViewApp:
         robot=None,
         guidance: GuidanceConfig | None = None,
         sensor: str | None = None,
+        planner: PlannerConfig | None = None,
     ):
         import viser
 
@@ -60,6 +61,7 @@ class ViewApp:
         self.inputs = inputs
         self.robot = robot if robot is not None else Robot.from_config(DEFAULTS.robot)
         self.guidance = guidance or DEFAULTS.guidance
+        self.planner_config = planner or DEFAULTS.planner
         solm = inputs.solm
         self.sensor = sensor or (solm.attrs.get("sensor") if solm is not None else DEFAULTS.sensor)
         # The body the SOLM's obstacle mask was built for.
@@ -440,7 +442,7 @@ class ViewApp:
         goal = (*self._goal, math.radians(self.goal_yaw.value))
         with self._busy(client, "planning", "default guidance and none"):
             if self._planner is None:
-                self._planner = Planner(self.inputs.solm)
+                self._planner = Planner(self.inputs.solm, self.planner_config)
             g = self.guidance
             plans = {
                 "default guidance": self._planner.plan(start, goal, robot=self.robot, guidance=g),
@@ -588,13 +590,14 @@ def serve(
     robot=None,
     guidance: GuidanceConfig | None = None,
     sensor: str | None = None,
+    planner: PlannerConfig | None = None,
 ) -> ViewApp:
     """Starts the viewer of ``inputs`` (lf3pm.view.load_view_inputs) on ``host``:``port``
     and returns it (its server runs in a thread; ``stop()`` ends it). ``port`` 0 serves on
     any free port (``ViewApp.port`` says which); any other port must be free: one in use
     is an Lf3pmError, never another port silently. ``host`` and ``port`` are checked as
-    ``lf3pm view`` checks them (check_host, check_port). ``robot`` and ``guidance`` plan
-    the clicked start and goal (default: the configuration's); ``sensor`` evaluates
+    ``lf3pm view`` checks them (check_host, check_port). ``robot``, ``guidance`` and the
+    ``planner`` section plan the clicked start and goal (default: the configuration's); ``sensor`` evaluates
     clicked cells (default: the SOLM's)."""
     from lf3pm.sensors import as_sensor
     from lf3pm.trajectory.robots import Robot
@@ -609,6 +612,8 @@ def serve(
         raise Lf3pmError(f"robot must be an lf3pm.Robot, got {type(robot).__name__}")
     if guidance is not None and not isinstance(guidance, GuidanceConfig):
         raise Lf3pmError(f"guidance must be an lf3pm.config.GuidanceConfig, got {type(guidance).__name__}")
+    if planner is not None and not isinstance(planner, PlannerConfig):
+        raise Lf3pmError(f"planner must be an lf3pm.config.PlannerConfig, got {type(planner).__name__}")
     if sensor is not None:
         as_sensor(sensor)  # an unknown sensor fails here, not at the first click
-    return ViewApp(inputs, host=host, port=int(port), robot=robot, guidance=guidance, sensor=sensor)
+    return ViewApp(inputs, host=host, port=int(port), robot=robot, guidance=guidance, sensor=sensor, planner=planner)
