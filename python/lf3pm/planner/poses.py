@@ -16,11 +16,6 @@ def as_pose(value, name: str) -> np.ndarray:
     return pose
 
 
-def grid_cell(grid: Grid, x: float, y: float) -> tuple[int, int] | None:
-    """``grid.cell_of(x, y)``: (ix, iy) of the cell holding (x, y), or None off the grid."""
-    return grid.cell_of(x, y)
-
-
 def cell_on_grid(grid: Grid, name: str, pose) -> tuple[int, int]:
     """(ix, iy) of the cell of ``grid`` holding ``pose``'s x, y, or a one-line error naming
     ``name`` and the grid's extent."""
