@@ -232,7 +232,7 @@ class Esdf:
         k = round(self.res / self.field_res)
         near = maximum_filter(self._field, size=3, mode="nearest")
         bound = near.reshape(self.ny, k, self.nx, k).max(axis=(1, 3))
-        return GridField(np.clip(bound, -_FAR, _FAR), self.x0, self.y0, self.res)
+        return GridField.on(self.grid, np.clip(bound, -_FAR, _FAR))
 
     def traversable(self, r_safe: float = 0.0) -> np.ndarray:
         """(ny, nx) bool: cells not blocked whose value is at least ``r_safe`` metres."""
