@@ -392,9 +392,7 @@ class ReplayConfig(Section):
     method: Literal[REPLAY_METHODS] = Field(
         "localization", description="localization (prior map), lio or odometry (KISS-ICP)."
     )
-    seeds: int = Field(
-        1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1 and reports each and the median."
-    )
+    seeds: int = Field(1, ge=1, le=10_000, description="Runs seeds SEED .. SEED+N-1 and reports each and the median.")
     height: float = Field(DEFAULT_HEIGHT, gt=0, le=100, description="Sensor height above the smoothed ground (m).")
     rate: float = Field(10.0, gt=0, le=1000, description="Scans per second.")
     imu_rate: float = Field(200.0, gt=0, le=100_000, description="The lio method's IMU samples per second.")
