@@ -1,5 +1,6 @@
 """Checks of a trajectory's kinematic limits on 100 Hz samples, shared by the
-back-end and end-to-end planning tests and bench/bench_random_queries.py."""
+back-end and end-to-end planning tests (bench/bench_random_queries.py has its own copy:
+nothing under bench/ imports tests/)."""
 
 import numpy as np
 
