@@ -50,6 +50,9 @@ REPLAY_METHODS = ("localization", "lio", "odometry")
 #: registers: lf3pm.replays.registry); ``auto`` picks by the sensor.
 LIO_ODOMETRIES = ("auto", "genz", "dlio", "liosam")
 
+#: The drives `lf3pm experiment odometries` replays (lf3pm.experiments.odometries.DRIVES).
+ODOMETRY_DRIVES = ("boxes", "houses", "gobi", "tunnel", "hall", "hall3")
+
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
 #: What the planner makes of a SOLM's unknown cells (no map under them; planner/esdf.py).
@@ -503,6 +506,37 @@ class GobiConfig(Section):
     )
 
 
+class OdometriesConfig(Section):
+    """`lf3pm experiment odometries` (its drives: lf3pm.experiments.odometries)."""
+
+    scenes: tuple[Literal[ODOMETRY_DRIVES], ...] = Field(
+        ("boxes", "houses", "gobi", "tunnel"),
+        min_length=1,
+        description="Drives: boxes (a figure of eight), houses, gobi (its town), tunnel, hall, hall3 (comma "
+        "separated or repeated).",
+    )
+    sensors: tuple[str, ...] = Field(
+        ("vlp16", "mid70"), min_length=1, description="Sensor presets or YAML files (comma separated or repeated)."
+    )
+    odometries: tuple[str, ...] | None = Field(
+        None,
+        min_length=1,
+        description="The odometries compared (comma separated or repeated; none: every registered one).",
+    )
+    seeds: int = Field(1, ge=0, le=10_000, description="Noisy runs on seeds 0 .. N-1 beside the noise-free one.")
+    seconds: float | None = Field(
+        None,
+        gt=0,
+        le=MAX_TRAJECTORY_SECONDS,
+        description="Cut each drive to this long (s after the rest; none: the drive's own length).",
+    )
+    settings: dict | None = Field(
+        None,
+        description="Odometry settings run beside the defaults (a JSON object: GenZ-LIO's by section, DLIO's by "
+        "name; none: the defaults only).",
+    )
+
+
 class SceneConfig(Section):
     """`lf3pm scene` and lf3pm.build_scene."""
 
@@ -529,6 +563,7 @@ class Config(Section):
     correlation: CorrelationConfig = CorrelationConfig()
     benefit: BenefitConfig = BenefitConfig()
     gobi: GobiConfig = GobiConfig()
+    odometries: OdometriesConfig = OdometriesConfig()
     scene: SceneConfig = SceneConfig()
 
 
