@@ -493,7 +493,7 @@ class ViewApp:
     def predicted_error(self, samples: dict) -> tuple[float | None, str | None]:
         """(error, withheld): the localization error (m) the packaged fit predicts along a
         trajectory's samples (evenly spaced in time) from its predictor, the time mean of
-        q_n (experiments/localization_error.py), here the SOLM's q_n over the samples where
+        q_n (experiments/benefit/localization_error.py), here the SOLM's q_n over the samples where
         it is known; or None and why, in one line. (None, None) without a SOLM or a fit."""
         from lf3pm.calibration import (
             LOCALIZATION_PACKAGED,
