@@ -19,9 +19,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "bench"
-# Not a benchmark: to become `lf3pm experiment odometries` (issue 40), then removed from bench/.
-NOT_YET_MOVED = {"compare_odometries.py"}
-MODULES = sorted(p for p in BENCH.glob("*.py") if p.name not in NOT_YET_MOVED)
+MODULES = sorted(BENCH.glob("*.py"))
 
 
 def tree(path: Path) -> ast.Module:

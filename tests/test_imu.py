@@ -5,10 +5,10 @@ import math
 
 import numpy as np
 import pytest
-from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from scipy.spatial.transform import Rotation
 
 from lf3pm.errors import Lf3pmError
+from lf3pm.replays.analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from lf3pm.replays.imu import GRAVITY, ImuPreset, get_imu_preset, simulate_imu
 
 

@@ -9,10 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 
 from lf3pm import _core
 from lf3pm.errors import Lf3pmError
+from lf3pm.replays.analytic_motion import CurveMotion, Lissajous, TangentHeading, Warp
 from lf3pm.replays.imu import simulate_imu
 from lf3pm.replays.trajectory_metrics import ape_translation
 from lf3pm.scan.moving_scan import simulate_moving_scan

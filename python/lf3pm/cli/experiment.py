@@ -144,3 +144,42 @@ def experiment_benefit(
             )
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
+
+
+def _listed(values: list[str] | None) -> list[str] | None:
+    """The values of a repeated option, each also split at commas (None: not given)."""
+    return None if not values else [part for value in values for part in value.split(",") if part]
+
+
+@experiment_app.command("odometries")
+def experiment_odometries(
+    out: Path = typer.Option(..., "-o", "--out", help="Output folder."),
+    scenes: list[str] | None = option("odometries.scenes", metavar="NAME,..."),
+    sensors: list[str] | None = option("odometries.sensors", metavar="NAME,..."),
+    odometries: list[str] | None = option("odometries.odometries", metavar="NAME,..."),
+    seeds: int | None = option("odometries.seeds"),
+    seconds: float | None = option("odometries.seconds"),
+    settings: str | None = option("odometries.settings", metavar="JSON"),
+):
+    """The LIO replay's odometries side by side on the same drives: APE, time shift, tilt, ms/scan, rest drift."""
+    with user_errors():
+        check_output(out, folder=True, parents=True)
+        import json
+
+        from lf3pm.config import ConfigError
+
+        try:
+            parsed = None if settings is None else json.loads(settings)
+        except json.JSONDecodeError as err:
+            raise ConfigError(f"--settings is not JSON: {err}") from None
+        given = {"scenes": _listed(scenes), "sensors": _listed(sensors), "odometries": _listed(odometries)}
+        given.update(seeds=seeds, seconds=seconds, settings=parsed)
+        paths = section_paths("odometries", "scenes", "sensors", "odometries", "seeds", "seconds", "settings")
+        study = configure(None, given, paths).odometries
+        from lf3pm.experiments import odometries as experiment
+
+        experiment.chosen_odometries(study)
+        with progress_bar() as step:
+            experiment.run(out, study, progress=step)
+        console.print((out / "odometries.md").read_text())
+        console.print(f"wrote {out}/odometries.md, odometries.json")

@@ -1,5 +1,5 @@
-"""Closed-form C2 motions for the IMU and LIO tests, with the methods of
-lf3pm.validation's Motion (docs/lio.md): a level sensor whose position
+"""Closed-form C2 motions (the IMU and LIO tests', `lf3pm experiment odometries`'
+figure of eight; docs/lio.md): a level sensor whose position
 p(t) = C(u(t)) follows a curve C at a path parameter u(t) that stands still,
 speeds up smoothly, cruises and slows down to rest again, and whose yaw is a
 closed-form function of u. Derivatives by the chain rule, exact.
@@ -83,9 +83,9 @@ class CurveMotion:
     def pose(self, t):
         return pose_matrices(np.column_stack([self.position(t), self.yaw(t)]))
 
-    def samples(self, rate=1000.0):
-        """(t (N,), poses (N, 4) of x y z yaw) every 1/rate s over the span."""
-        t = np.linspace(self.t0, self.t1, int(round((self.t1 - self.t0) * rate)) + 1)
+    def samples(self, per_second=1000.0):
+        """(t (N,), poses (N, 4) of x y z yaw) every 1/per_second s over the span."""
+        t = np.linspace(self.t0, self.t1, int(round((self.t1 - self.t0) * per_second)) + 1)
         return t, np.column_stack([self.position(t), self.yaw(t)])
 
 
