@@ -27,7 +27,7 @@ def houses():
 
 def test_noise_free_scan_from_the_true_pose_has_near_zero_mde(houses):
     scene, world, target = houses
-    res = mde(world, scene.reference_pose, "vlp16", trials=3, sigma_t=0.0, sigma_r_deg=0.0, noise=0.0, target=target)
+    res = mde(world, scene.reference_pose, "vlp16", trials=3, sigma_t=0.0, sigma_r=0.0, noise=0.0, target=target)
     # A sub-millimetre floor remains: small_gicp fits its own normals (10 neighbours).
     assert res.mde < 1e-5 and res.trials == 3 and len(res.errors) == 3
 

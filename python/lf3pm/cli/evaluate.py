@@ -146,19 +146,7 @@ def mde(
 
         with map_loading() as progress:
             world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=progress)
-        scan, disturbance = cfg.scan, cfg.mde
-        result = run_mde(
-            world,
-            pose,
-            cfg.sensor,
-            trials=disturbance.trials,
-            sigma_t=disturbance.sigma_t,
-            sigma_r_deg=disturbance.sigma_r,
-            seed=scan.seed,
-            noise=scan.noise,
-            scan_voxel=scan.scan_voxel,
-            threads=scan.threads,
-        )
+        result = run_mde(world, pose, cfg.sensor, cfg)
         out = result.to_dict()
         if as_json:
             print(json.dumps(out))

@@ -51,6 +51,7 @@ def run(
         config = validated(Table1Config, "table1", **{**config.model_dump(), **parameters})
     poses, trials, seed = config.poses, config.trials, config.seed
     sigma_t, sigma_r_deg = disturbance.sigma_t, disturbance.sigma_r
+    disturbed = DEFAULTS.model_copy(update={"mde": disturbance.model_copy(update={"trials": trials})})
     out.mkdir(parents=True, exist_ok=True)
     summary, rows = {}, []
     steps = len(SCENES) * len(SENSORS) * poses
@@ -65,16 +66,7 @@ def run(
             records = []
             for i, pose in enumerate(pose_list):
                 res = evaluate(world, pose, sensor, seed=seed + i)
-                err = mde(
-                    world,
-                    pose,
-                    sensor,
-                    trials=trials,
-                    sigma_t=sigma_t,
-                    sigma_r_deg=sigma_r_deg,
-                    seed=seed + i,
-                    target=target,
-                )
+                err = mde(world, pose, sensor, disturbed, target=target, seed=seed + i)
                 records.append(
                     {
                         "pose": list(pose),

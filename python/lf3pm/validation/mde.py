@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS, MdeConfig, ScanConfig, validated
+from lf3pm.config import DEFAULTS, Config, configured
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
@@ -77,30 +77,28 @@ def mde(
     map: Map | str,
     pose,
     sensor: Sensor | str = DEFAULTS.sensor,
+    config: Config | None = None,
     *,
-    trials: int = DEFAULTS.mde.trials,
-    sigma_t: float = DEFAULTS.mde.sigma_t,
-    sigma_r_deg: float = DEFAULTS.mde.sigma_r,
-    noise: float | None = DEFAULTS.scan.noise,
-    seed: int = DEFAULTS.scan.seed,
-    scan_voxel: float = DEFAULTS.scan.scan_voxel,
-    max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
-    max_iterations: int = DEFAULTS.mde.max_iterations,
     target: RegistrationTarget | None = None,
-    threads: int = DEFAULTS.scan.threads,
-    clearance: float = DEFAULTS.scan.clearance,
+    **parameters,
 ) -> MdeResult:
-    """MDE of point-to-plane registration at ``pose`` (see module docstring).
+    """MDE of point-to-plane registration at ``pose`` (see module docstring), with the
+    scan and mde sections of ``config`` (lf3pm.config.Config; default: the defaults),
+    whose fields may also be given by name (``trials=5, seed=3``; validated there).
 
-    The scan is simulated with range noise ``noise`` (default: the sensor's) from
-    ``seed``; the disturbances are drawn from an independent stream of the same
-    seed. ``target`` reuses a prepared map across calls.
+    The scan is simulated with the scan section's range noise (default: the sensor's)
+    from its ``seed``; the disturbances (the mde section's sigmas, ``trials`` of them)
+    are drawn from an independent stream of the same seed. ``target`` reuses a prepared
+    map across calls. A pose within the scan section's ``clearance`` of a map point
+    raises PoseError.
     """
     import small_gicp
 
-    disturbance = validated(MdeConfig, "mde", trials=trials, sigma_t=sigma_t, sigma_r=sigma_r_deg)
-    scan_config = validated(ScanConfig, "scan", noise=noise, seed=seed, scan_voxel=scan_voxel, threads=threads)
+    config = configured(config, ("scan", "mde"), "mde", **parameters)
+    scan_config, disturbance = config.scan, config.mde
     trials, sigma_t, sigma_r_deg = disturbance.trials, disturbance.sigma_t, disturbance.sigma_r
+    max_correspondence_distance, max_iterations = disturbance.max_correspondence_distance, disturbance.max_iterations
+    seed, threads = scan_config.seed, scan_config.threads
     map, sensor = as_map(map), as_sensor(sensor)
     # A start disturbed by more than the map is across is no registration problem, and
     # small_gicp would grind through it for minutes.
@@ -112,7 +110,7 @@ def mde(
         )
     sigma, scan_voxel = scan_config.noise_for(sensor), scan_config.scan_voxel
     truth = pose_matrix(pose)
-    map.check_pose(truth, clearance)
+    map.check_pose(truth, scan_config.clearance)
     target = RegistrationTarget.for_map(map, target, threads)
 
     scan = simulate_scan(

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS
+from lf3pm.config import DEFAULTS, Config, configured
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, as_map
 from lf3pm.sensors import Sensor, as_sensor
@@ -69,41 +69,32 @@ def mde_along(
     map: Map | str,
     poses,
     sensor: Sensor | str = DEFAULTS.sensor,
+    config: Config | None = None,
     *,
-    trials: int = DEFAULTS.mde.trials,
-    sigma_t: float = DEFAULTS.mde.sigma_t,
-    sigma_r_deg: float = DEFAULTS.mde.sigma_r,
-    seed: int = DEFAULTS.scan.seed,
-    noise: float | None = DEFAULTS.scan.noise,
-    scan_voxel: float = DEFAULTS.scan.scan_voxel,
-    max_correspondence_distance: float = DEFAULTS.mde.max_correspondence_distance,
-    max_iterations: int = DEFAULTS.mde.max_iterations,
-    clearance: float = DEFAULTS.scan.clearance,
     target: RegistrationTarget | None = None,
-    threads: int = DEFAULTS.scan.threads,
     progress=None,
+    **parameters,
 ) -> TrajectoryMde:
     """MDE (see :func:`lf3pm.validation.mde`) at each of ``poses`` ((N, 4) x y z
-    yaw, sampled by the caller at a constant time interval) and S, their sum.
+    yaw, sampled by the caller at a constant time interval) and S, their sum, with the
+    scan and mde sections of ``config`` (default: the defaults), whose fields may also
+    be given by name (validated there).
 
     The map is prepared for registration once (or ``target`` is reused). Pose i
     is evaluated with seed ``pose_seed(seed, i)``. Poses that cannot be
     evaluated are reported in ``refused``, never dropped silently. ``progress``,
     if given, is called as progress(done, total) after each pose.
     """
+    # Checked once here (the sections): inside the loop they would refuse every pose one by one.
+    config = configured(config, ("scan", "mde"), "mde_along", **parameters)
+    scan, disturbance = config.scan, config.mde
+    seed, threads = scan.seed, scan.threads
     map, sensor = as_map(map), as_sensor(sensor)
     poses = np.asarray(poses, dtype=np.float64)
     if poses.ndim != 2 or poses.shape[1] != 4 or len(poses) < 1:
         raise Lf3pmError(f"poses must be an (N, 4) array of x y z yaw with N >= 1, got shape {poses.shape}")
     if not np.all(np.isfinite(poses)):
         raise Lf3pmError("poses contain non-finite values")
-    # Checked once here: inside the loop they would refuse every pose one by one.
-    if trials < 1:
-        raise Lf3pmError(f"trials must be >= 1, got {trials}")
-    if sigma_t < 0 or sigma_r_deg < 0:
-        raise Lf3pmError("disturbance sigmas must be >= 0")
-    if noise is not None and noise < 0:
-        raise Lf3pmError(f"range noise must be >= 0, got {noise}")
     target = RegistrationTarget.for_map(map, target, threads)
 
     values, seeds, refused, t_med, converged, hits = [], [], [], [], [], []
@@ -111,22 +102,7 @@ def mde_along(
         pose_s = pose_seed(seed, i)
         seeds.append(pose_s)
         try:
-            result = mde(
-                map,
-                pose,
-                sensor,
-                trials=trials,
-                sigma_t=sigma_t,
-                sigma_r_deg=sigma_r_deg,
-                noise=noise,
-                seed=pose_s,
-                scan_voxel=scan_voxel,
-                max_correspondence_distance=max_correspondence_distance,
-                max_iterations=max_iterations,
-                target=target,
-                threads=threads,
-                clearance=clearance,
-            )
+            result = mde(map, pose, sensor, config, target=target, seed=pose_s)
         except Lf3pmError as err:
             refused.append((i, str(err)))
             values.append(math.nan)
@@ -144,14 +120,14 @@ def mde_along(
     params = {
         "seed": int(seed),
         "pose_seed": "SeedSequence([seed, index]).generate_state(1)[0]",
-        "trials": trials,
-        "noise": sensor.range_noise_sigma if noise is None else float(noise),
-        "sigma_t": sigma_t,
-        "sigma_r_deg": sigma_r_deg,
-        "scan_voxel": scan_voxel,
-        "max_correspondence_distance": max_correspondence_distance,
-        "max_iterations": max_iterations,
-        "clearance": clearance,
+        "trials": disturbance.trials,
+        "noise": scan.noise_for(sensor),
+        "sigma_t": disturbance.sigma_t,
+        "sigma_r_deg": disturbance.sigma_r,
+        "scan_voxel": scan.scan_voxel,
+        "max_correspondence_distance": disturbance.max_correspondence_distance,
+        "max_iterations": disturbance.max_iterations,
+        "clearance": scan.clearance,
         "registration": "small_gicp PLANE_ICP",
         "map_sha256": map.sha256,
     }
