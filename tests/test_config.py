@@ -55,11 +55,17 @@ def test_sections_build_the_core_structs():
 
 
 def test_the_shipped_default_config_is_current():
-    # config/default.yaml is what `lf3pm config` prints, and reads back to the defaults.
+    # config/default.yaml is what `lf3pm config` prints (every registered odometry's
+    # settings in replay.odometries: registry.with_settings), and reads back to the defaults.
+    from lf3pm.replays import registry
+
     text = (CONFIG_DIR / "default.yaml").read_text()
     body = "".join(line + "\n" for line in text.splitlines() if not line.startswith("#"))
-    assert body == to_yaml(DEFAULTS)
-    assert load_config(CONFIG_DIR / "default.yaml") == DEFAULTS
+    assert body == to_yaml(registry.with_settings(DEFAULTS))
+    loaded = load_config(CONFIG_DIR / "default.yaml")
+    assert registry.with_settings(loaded) == registry.with_settings(DEFAULTS)
+    assert loaded.model_copy(update={"replay": DEFAULTS.replay}) == DEFAULTS
+    assert all(registry.changed_settings(name, given) == {} for name, given in loaded.replay.odometries.items())
     done = CliRunner().invoke(app, ["config"])
     assert done.exit_code == 0 and done.output == body
 

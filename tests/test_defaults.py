@@ -15,6 +15,8 @@ from lf3pm.config import DEFAULTS
 from lf3pm.experiments import benefit, correlation, table1
 from lf3pm.planner import Planner
 from lf3pm.replays.ground import smooth_ground
+from lf3pm.replays.motion import Motion
+from lf3pm.replays.replay_result import ReplayResult, rest_motion
 from lf3pm.scenes import build_scene
 from lf3pm.solm.occupancy import occupancy_factor
 from lf3pm.solm.tiles import make_job
@@ -44,7 +46,11 @@ API = [
     (Planner.__init__, ["planner"]),
     (table1.run, ["table1", "mde"]),
     (correlation.run, ["", "correlation"]),
-    (benefit.run, ["benefit"]),
+    (benefit.run, ["benefit", "replay"]),
+    (Motion.from_arrays, ["ground"]),
+    (Motion.from_csv, ["replay", "ground"]),
+    (rest_motion, ["replay"]),
+    (ReplayResult.from_run, ["replay"]),
 ]
 
 
@@ -137,7 +143,6 @@ OTHER_MEANINGS = {
     ("scan/scan_simulator.py", "simulate_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
     ("scan/moving_scan.py", "simulate_moving_scan", "noise"): "the simulator's raw sigma: 0 is noise-free",
     ("replays/lio.py", "run_lio", "threads"): "the odometry's own thread count, not the scan simulator's",
-    ("replays/localization.py", "localize", "threads"): "one registration thread (METHOD_PARAMS)",
     ("replays/replay_figures.py", "_obstacles", "cell"): "the figure's obstacle raster, not the ground's columns",
 }
 
@@ -195,3 +200,31 @@ def test_cli_help_is_written_once_in_the_configuration():
             if texts[0].value.strip() == type(owner).model_fields[name].description.strip():
                 copies.append(f"{path.name}:{node.lineno} {node.args[0].value}")
     assert not copies, "help copied from the configuration: " + ", ".join(copies)
+
+
+def test_each_odometry_s_settings_are_its_section_s_defaults():
+    """The configuration's replay.odometries gives none by default; what `lf3pm config`
+    shows for each registered odometry (registry.with_settings) is its settings section's
+    defaults, and such a configuration runs and records as the defaults do (no setting
+    changed)."""
+    from lf3pm.replays import registry
+
+    assert DEFAULTS.replay.odometries == {}
+    shown = registry.with_settings(DEFAULTS).replay.odometries
+    assert list(shown) == list(registry.odometries())
+    for name, adapter in registry.odometries().items():
+        assert shown[name] == adapter.Settings().model_dump(mode="json"), name
+        assert registry.changed_settings(name, shown[name]) == {}
+
+
+def test_the_rest_limits_are_the_replay_section_s():
+    """rest_motion judges a rest by the replay section's rest_window and rest_speed_limit."""
+    import numpy as np
+
+    times = np.arange(0.0, 2.05, 0.1)
+    truth = np.repeat(np.eye(4)[None], len(times), axis=0)
+    poses = truth.copy()
+    poses[:, 0, 3] = 0.03 * times  # 0.03 m/s
+    assert rest_motion(times, truth, poses)["steady"]
+    strict = DEFAULTS.replay.model_copy(update={"rest_speed_limit": 0.02})
+    assert not rest_motion(times, truth, poses, strict)["steady"]

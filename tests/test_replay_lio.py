@@ -155,16 +155,17 @@ def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(
 ):
     """The estimate moving per_scan m every 0.1 s scan of the 2 s rest: drift 20 per_scan
     at the rest's end, speed 10 per_scan m/s (0.01 m/s: steady; 0.1 m/s: above
-    REST_SPEED_LIMIT), and the CLI warns about the second only."""
-    from lf3pm.replays.replay_result import REST_SPEED_LIMIT
-
+    the replay section's rest_speed_limit), and the CLI warns about the second only; a
+    limit set in the section judges the rest by it."""
     monkeypatch.setattr(sys.modules[__name__], "DRIFT_PER_SCAN", per_scan)
     world, motion = boxes
     result = replay(world, motion, "vlp16", "lio", seed=0)
     scans = round(DEFAULTS.replay.rest * 10)
     assert result.rest["drift_m"] == pytest.approx(per_scan * scans)
     assert result.rest["speed_mps"] == pytest.approx(per_scan * 10)
-    assert result.rest["steady"] is steady and (per_scan * 10 <= REST_SPEED_LIMIT) is steady
+    assert result.rest["steady"] is steady and (per_scan * 10 <= DEFAULTS.replay.rest_speed_limit) is steady
+    lenient = replay(world, motion, "vlp16", "lio", seed=0, rest_speed_limit=1.0)
+    assert lenient.rest["steady"] and lenient.rest["speed_mps"] == result.rest["speed_mps"]
     assert json.loads(json.dumps(result.to_dict()))["rest"] == result.rest
     assert replay(world, motion, "vlp16", "localization", seed=0).rest == {}  # no rest there
     assert replay_rest(world, motion, "vlp16", seed=0) == result.rest

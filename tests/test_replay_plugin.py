@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from scipy.interpolate import CubicSpline
 
 from lf3pm.scenes import build_scene
@@ -85,11 +86,39 @@ def test_a_plugin_odometry_runs_under_lf3pm_replay(files, toy):
     # Without drift it holds the first pose: its error is the distance from there.
     truth, estimate = np.array(first["truth_xyz"]), np.array(first["estimate_xyz"])
     np.testing.assert_allclose(estimate, np.repeat(truth[:1], len(truth), axis=0), atol=1e-9)
-    # lf3pm config takes its name too.
+    # lf3pm config takes its name too, and shows its settings with the built-in odometries'.
     config = files / "toy.yaml"
     config.write_text("replay: {method: lio, odometry: toy}\n")
     done = run(toy, "-m", "lf3pm", "config", "--config", config)
     assert done.returncode == 0 and "odometry: toy" in done.stdout, done.stderr
+    shown = yaml.safe_load(done.stdout)["replay"]["odometries"]
+    assert shown["toy"] == {"drift": 0.0} and {"genz", "dlio", "liosam"} <= set(shown)
+
+
+def test_a_plugin_odometry_s_settings_come_from_the_yaml(files, toy):
+    """replay.odometries.toy in a --config file: lf3pm config shows it, lf3pm replay runs
+    and records it (as the Python API's settings by name), a bad value is one line naming
+    the field, exit 2."""
+    config = files / "toy_drift.yaml"
+    config.write_text("replay:\n  method: lio\n  odometry: toy\n  odometries:\n    toy: {drift: 0.01}\n")
+    done = run(toy, "-m", "lf3pm", "config", "--config", config)
+    assert done.returncode == 0, done.stderr
+    assert yaml.safe_load(done.stdout)["replay"]["odometries"]["toy"] == {"drift": 0.01}
+    done = run(
+        toy, "-m", "lf3pm", "replay", files / "traj.csv", "--map", files / "boxes.npy", "--config", config, "--json"
+    )
+    assert done.returncode == 0, done.stderr
+    first = json.loads(done.stdout.strip().splitlines()[-1])["runs"][0]
+    assert first["report"]["params"]["settings"] == {"drift": 0.01}
+    assert first["params"]["lio"]["options"] == {"odometry": "toy", "drift": 0.01}
+    assert first["rest"]["drift_m"] == pytest.approx(0.2)  # 20 rest scans at 0.01 m
+    bad = files / "toy_bad.yaml"
+    bad.write_text("replay: {odometries: {toy: {drift: -1}}}\n")
+    for command in (["config"], ["replay", files / "traj.csv", "--map", files / "boxes.npy"]):
+        done = run(toy, "-m", "lf3pm", *command, "--config", bad)
+        assert done.returncode == 2 and done.stderr.strip() == (
+            f"lf3pm: error: {bad}: replay.odometries.toy.drift must be greater than or equal to 0, got -1"
+        )
 
 
 def test_a_plugin_odometry_runs_in_replay_seeds_with_its_settings(files, toy):

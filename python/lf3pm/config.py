@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -46,9 +46,6 @@ MAX_THREADS = 1024
 #: YAML and the CLI take; lf3pm.replays.methods.METHODS holds the methods by these names).
 SPACES = tuple(space.value for space in Space)
 REPLAY_METHODS = ("localization", "lio", "odometry")
-#: The lio replay's odometries lf3pm ships (YAML and the CLI take these and any a plugin
-#: registers: lf3pm.replays.registry); ``auto`` picks by the sensor.
-LIO_ODOMETRIES = ("auto", "genz", "dlio", "liosam")
 
 #: The drives `lf3pm experiment odometries` replays (lf3pm.experiments.odometries.DRIVES).
 ODOMETRY_DRIVES = ("boxes", "houses", "gobi", "tunnel", "hall", "hall3")
@@ -417,6 +414,26 @@ class ReplayConfig(Section):
         description="Seconds the sensor stands still at the first pose before a lio replay's trajectory, "
         "for the odometry to initialise (scored from the trajectory's start; docs/lio.md).",
     )
+    rest_window: float = Field(
+        0.5,
+        gt=0,
+        le=MAX_TRAJECTORY_SECONDS,
+        description="The last seconds of the rest over which the estimate's speed is measured (steady or not).",
+    )
+    rest_speed_limit: float = Field(
+        0.05,
+        gt=0,
+        le=MAX_LIMIT,
+        description="Fastest a steady rest's estimate moves over its last rest_window s (m/s): faster hands "
+        "the trajectory a velocity error (0.05 m/s is 5 cm after a second, more than a good LIO run's "
+        'APE), so its APE measures the odometry\'s start (docs/lio.md, "A still sensor").',
+    )
+    odometries: dict[str, dict[str, Any]] = Field(
+        {},
+        description="Each odometry's settings by its name (lf3pm config lists them, with lf3pm's defaults): "
+        "what is given here goes over lf3pm's, validated by the odometry's settings section "
+        "(lf3pm.replays.registry).",
+    )
 
 
 class LocalizationConfig(Section):
@@ -490,8 +507,9 @@ class BenefitConfig(Section):
         "all",
         description="Plans the LIO replays too: all, or default (the default's and the unguided one; a shorter run).",
     )
-    odometry: Literal[LIO_ODOMETRIES] = Field(
+    odometry: str = Field(
         "auto",
+        min_length=1,
         description="The LIO replays' odometry, as replay.odometry (liosam: on the maps of a spinning "
         "sensor, auto's choice on the others); each odometry keeps its own replays.",
     )

@@ -25,9 +25,9 @@ def experiment_table1(
         check_output(out, folder=True, parents=True)
         from lf3pm.experiments import table1
 
-        study = configure(None, locals(), section_paths("table1", "poses", "trials", "seed")).table1
+        cfg = configure(None, locals(), section_paths("table1", "poses", "trials", "seed"))
         with progress_bar() as step:
-            table1.run(out, poses=study.poses, trials=study.trials, seed=study.seed, progress=step)
+            table1.run(out, cfg.table1, disturbance=cfg.mde, progress=step)
         console.print((out / "table1.md").read_text())
         console.print(f"wrote {out / 'summary.json'}, {out / 'table1.md'}, {out / 'table1.png'}")
 
@@ -51,17 +51,8 @@ def experiment_correlation(
             locals(),
             {"sensor": "sensor", **section_paths("correlation", "poses_per_map", "trials", "bootstrap", "seed")},
         )
-        study = cfg.correlation
         with progress_bar() as step:
-            summary = correlation.run(
-                out,
-                poses_per_map=study.poses_per_map,
-                trials=study.trials,
-                sensor=cfg.sensor,
-                seed=study.seed,
-                bootstrap=study.bootstrap,
-                progress=step,
-            )
+            summary = correlation.run(out, cfg.correlation, sensor=cfg.sensor, progress=step)
         table = Table(title=f"Spearman rho with MDE ({summary['params']['poses']} poses)")
         for col in ("predictor", "pooled rho", "95% CI", "mean within-map rho", "95% CI"):
             table.add_column(col)
@@ -118,15 +109,24 @@ def experiment_benefit(
     ),
     lio: str | None = option("benefit.lio"),
     odometry: str | None = option("benefit.odometry"),
+    config: Path | None = typer.Option(
+        None,
+        "--config",
+        metavar="FILE.yaml",
+        help="Parameters from a YAML file: its benefit section, and its replay section's odometry "
+        "settings and rest limits for the LIO replays (flags given override it).",
+    ),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
         check_output(out, folder=True, parents=True)
         from lf3pm.experiments import benefit
+        from lf3pm.replays import registry
 
-        study = configure(
-            None, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry")
-        ).benefit
+        cfg = configure(config, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry"))
+        study = cfg.benefit
+        registry.check_name(study.odometry, "--odometry" if odometry is not None else "benefit.odometry")
+        registry.with_settings(cfg, config)  # the odometries' settings, checked by their sections
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
@@ -140,6 +140,7 @@ def experiment_benefit(
                 guidance=candidates,
                 lio=study.lio,
                 odometry=study.odometry,
+                replay=cfg.replay,
                 progress=step,
             )
         console.print((out / "benefit.md").read_text())

@@ -27,7 +27,8 @@ def show_config(
 
         loaded = load_config(config)
         registry.check_name(loaded.replay.odometry)  # a plugin's name too (an entry point)
-        print(to_yaml(loaded), end="")
+        # Every registered odometry's settings (a plugin's too), the file's over lf3pm's.
+        print(to_yaml(registry.with_settings(loaded, config)), end="")
 
 
 @app.command()

@@ -23,7 +23,7 @@ from lf3pm.cli._common import (
     progress_bar,
     user_errors,
 )
-from lf3pm.config import MAX_TRAJECTORY_SECONDS
+from lf3pm.config import DEFAULTS, MAX_TRAJECTORY_SECONDS, ReplayConfig
 from lf3pm.errors import Lf3pmError
 
 #: Where each option of replay lives in the config.
@@ -82,6 +82,7 @@ def replay_command(
         # The method and its odometry checked before the map loads: a name, a pair of
         # odometry and sensor refused or warned about.
         registry.check_name(run.odometry, "--odometry" if odometry is not None else "replay.odometry")
+        registry.with_settings(cfg, config)  # the odometries' settings, checked by their sections
         chosen = METHODS[run.method].from_config(cfg)  # its settings: the configuration's
         options = {}
         if chosen.uses_odometry:
@@ -94,7 +95,10 @@ def replay_command(
         with map_loading() as progress:
             world = load_map(map_path, threads=scan.threads, progress=progress)
         motion = Motion.from_arrays(
-            *(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")), map=world, height=run.height
+            *(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")),
+            map=world,
+            height=run.height,
+            ground=cfg.ground,
         )
         common = {"rate": run.rate, "height": run.height, "noise": scan.noise, "threads": scan.threads}
         with progress_bar() as step:
@@ -150,7 +154,7 @@ def replay_command(
                 )
             )
             return
-        print_series(series)
+        print_series(series, run)
         if png is not None:
             console.print(f"wrote {png}", highlight=False)
         if bag_info is not None:
@@ -176,9 +180,10 @@ def read_trajectory(path: Path) -> dict:
     return samples
 
 
-def print_series(series) -> None:
+def print_series(series, settings: ReplayConfig = DEFAULTS.replay) -> None:
     """The figures of each seed and their medians, translations in mm (in metres eleven
-    columns of 0.00xxx do not fit 80 characters)."""
+    columns of 0.00xxx do not fit 80 characters); the rest judged by the replay section
+    ``settings``."""
     from lf3pm.replays.replay_result import FIGURES
 
     first = series.results[0]
@@ -200,7 +205,7 @@ def print_series(series) -> None:
     if len(series.results) > 1:
         table.add_row("median", *(format_figure(key, series.median[key]) for key, _, _ in FIGURES))
     console.print(table)
-    print_rest(series.results)
+    print_rest(series.results, settings)
 
 
 def format_figure(key: str, value) -> str:
@@ -216,11 +221,10 @@ def format_figure(key: str, value) -> str:
     return f"{value:.0f}" if abs(value) >= 1000 else f"{value:.3g}"
 
 
-def print_rest(results) -> None:
+def print_rest(results, settings: ReplayConfig = DEFAULTS.replay) -> None:
     """What the LIO did while the sensor stood still before the trajectory, per seed,
-    and a warning for each seed that entered the trajectory moving."""
-    from lf3pm.replays.replay_result import REST_SPEED_LIMIT
-
+    and a warning for each seed that entered the trajectory moving (faster than the
+    replay section's rest_speed_limit)."""
     rested = [r for r in results if r.rest]
     if not rested:
         return
@@ -234,7 +238,7 @@ def print_rest(results) -> None:
         if not r.rest["steady"]:
             print_warning(
                 f"seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at the end of "
-                f"the rest (> {REST_SPEED_LIMIT:g} m/s): it entered the trajectory with a velocity "
+                f"the rest (> {settings.rest_speed_limit:g} m/s): it entered the trajectory with a velocity "
                 'error, so this APE measures its start, not the trajectory (docs/lio.md, "A still '
                 'sensor")'
             )

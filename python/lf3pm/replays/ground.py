@@ -38,11 +38,6 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.grid import Grid
 from lf3pm.terrain import column_minimum
 
-#: The ground section's defaults, by their former names.
-GROUND_CELL = DEFAULTS.ground.cell
-GROUND_SMOOTHING = DEFAULTS.ground.smoothing
-GROUND_MAX_STEP = DEFAULTS.ground.max_step
-
 
 @dataclass(frozen=True)
 class SmoothGround:

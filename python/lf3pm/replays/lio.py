@@ -327,16 +327,18 @@ def _rest_warning(t, rows, end) -> list:
     return []
 
 
-#: The lio method's own parameters (ReplayConfig's): the rest are run_lio's (the odometry
-#: and its settings).
+#: The lio method's own parameters it records (ReplayConfig's); with REST_PARAMS, the
+#: replay section's it takes by name: the rest are run_lio's (the odometry and its settings).
 IMU_PARAMS = ("imu_rate", "imu_preset", "imu_noise", "rest")
+REST_PARAMS = ("rest_window", "rest_speed_limit")
 
 
 class Lio:
     """The ``lio`` replay method (lf3pm.replays.methods.ReplayMethod): the sensor stands
     still for ``settings.rest`` s at the first pose (RestFirst), then the simulated IMU
     (imu.py) and the scans go through :func:`run_lio` with ``options`` (the odometry and
-    its settings)."""
+    its settings), over the settings ``settings.odometries`` gives the odometry run
+    (those that differ from lf3pm's: registry.changed_settings)."""
 
     name = "lio"
     uses_odometry = True
@@ -349,8 +351,8 @@ class Lio:
     def from_params(cls, params: dict) -> Lio:
         """The method of ``params``: IMU_PARAMS over the replay section's defaults, the rest
         for run_lio (an odometry's name checked against the registry here)."""
-        own = {k: v for k, v in params.items() if k in IMU_PARAMS}
-        options = {k: v for k, v in params.items() if k not in IMU_PARAMS}
+        own = {k: v for k, v in params.items() if k in IMU_PARAMS + REST_PARAMS}
+        options = {k: v for k, v in params.items() if k not in IMU_PARAMS + REST_PARAMS}
         named = options.get("odometry")
         if named is not None:
             registry.check_name(named)
@@ -358,7 +360,9 @@ class Lio:
 
     @classmethod
     def from_config(cls, config) -> Lio:
-        """The method of a whole configuration: its replay section, and its odometry."""
+        """The method of a whole configuration: its replay section, its odometry and the
+        odometries' settings (checked by their sections: registry.settings)."""
+        registry.settings(config.replay.odometries)
         return cls(config.replay, {"odometry": registry.check_name(config.replay.odometry)})
 
     @property
@@ -378,8 +382,9 @@ class Lio:
 
     def run(self, scans, motion, sensor: Sensor, seed: int, *, prepared, threads: int, progress=None) -> MethodRun:
         imu = self.imu(motion, seed)
+        options = self.odometry_options(sensor)
         simulated_before, start = scans.seconds, time.perf_counter()
-        out = run_lio(scans, imu, sensor, initial_pose=scans.truth[0], **self.options)
+        out = run_lio(scans, imu, sensor, initial_pose=scans.truth[0], **options)
         # run_lio pulls the scans, so their simulation happened inside it.
         seconds = time.perf_counter() - start - (scans.seconds - simulated_before)
         report = {k: v for k, v in _fields(out).items() if k not in ("times", "poses")}
@@ -393,8 +398,20 @@ class Lio:
             times=getattr(out, "times", None),
         )
         imu_params = {k: getattr(self.settings, k) for k in IMU_PARAMS}
-        params = {"imu": imu_params, "options": dict(self.options)}
+        params = {"imu": imu_params, "options": options}
         return MethodRun(run, params, {**library_versions(), name: report.get("version")})
+
+    def odometry_options(self, sensor: Sensor) -> dict:
+        """run_lio's options on ``sensor``: ``options``, over the settings the replay
+        section gives the odometry run there that differ from lf3pm's."""
+        given = self.settings.odometries
+        if not given:
+            return dict(self.options)
+        key = registry.choose_odometry(self.options.get("odometry", DEFAULT_ODOMETRY), sensor).key
+        options = dict(self.options)
+        for name, value in registry.changed_settings(key, given.get(key, {})).items():
+            options.setdefault(name, value)
+        return options
 
 
 def _fields(out) -> dict:

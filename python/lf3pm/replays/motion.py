@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from lf3pm.config import DEFAULT_HEIGHT, MAX_TRAJECTORY_SECONDS
+from lf3pm.config import DEFAULT_HEIGHT, DEFAULTS, MAX_TRAJECTORY_SECONDS, GroundConfig
 from lf3pm.errors import Lf3pmError, PoseError
 from lf3pm.map import Map
 from lf3pm.pose import pose_matrices
-from lf3pm.replays.ground import GROUND_CELL, GROUND_MAX_STEP, GROUND_SMOOTHING, SmoothGround, smooth_ground
+from lf3pm.replays.ground import SmoothGround, smooth_ground
 from lf3pm.trajectory.sampling import check_trajectory
 
 #: Knots per second of the height polynomial (besides the samples): the CSV's rate.
@@ -124,14 +124,12 @@ class Motion:
         *,
         map: Map,
         height: float = DEFAULT_HEIGHT,
-        ground_cell: float = GROUND_CELL,
-        ground_smoothing: float = GROUND_SMOOTHING,
-        ground_max_step: float = GROUND_MAX_STEP,
+        ground: GroundConfig = DEFAULTS.ground,
     ) -> Motion:
         """The motion through the samples (t, x, y, yaw) with rates (vx, vy, omega)
         (default: those of a cubic spline through the samples), the sensor
-        ``height`` above the smooth ground of ``map`` (ground.py for the ground
-        parameters). Raises Lf3pmError for a malformed trajectory, a bad height
+        ``height`` above the smooth ground of ``map`` (ground.py, with the ground
+        section ``ground``). Raises Lf3pmError for a malformed trajectory, a bad height
         or a sample outside the map's x-y extent."""
         t, poses = check_trajectory(t, np.column_stack([x, y, np.zeros(np.shape(x)), yaw]))
         if not (np.isfinite(height) and height > 0):
@@ -150,13 +148,11 @@ class Motion:
 
             yaw_unwrapped = np.unwrap(poses[:, 3])
             vx, vy, omega = (CubicSpline(t, c)(t, 1) for c in (poses[:, 0], poses[:, 1], yaw_unwrapped))
-        ground = smooth_ground(
-            map.points, poses[:, :2], cell=ground_cell, smoothing=ground_smoothing, max_step=ground_max_step
-        )
-        return cls(t, poses[:, 0], poses[:, 1], poses[:, 3], vx, vy, omega, ground, height)
+        surface = smooth_ground(map.points, poses[:, :2], ground)
+        return cls(t, poses[:, 0], poses[:, 1], poses[:, 3], vx, vy, omega, surface, height)
 
     @classmethod
-    def from_csv(cls, path, map: Map, height: float = DEFAULT_HEIGHT, **ground) -> Motion:
+    def from_csv(cls, path, map: Map, height: float = DEFAULT_HEIGHT, ground: GroundConfig = DEFAULTS.ground) -> Motion:
         """The motion of the CSV ``lf3pm plan`` writes (t,x,y,yaw,vx,vy,omega), as
         :meth:`from_arrays`. Raises Lf3pmError for a file that cannot be read or
         is malformed."""
@@ -164,7 +160,7 @@ class Motion:
 
         s = read_csv(path)
         return cls.from_arrays(
-            s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map, height=height, **ground
+            s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map, height=height, ground=ground
         )
 
     def _clamped(self, t) -> tuple[np.ndarray, np.ndarray]:

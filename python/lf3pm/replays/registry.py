@@ -3,15 +3,17 @@ and those other packages register through the entry-point group ``lf3pm.odometri
 (``name = "module:Adapter"``, an :class:`lf3pm.replays.adapters.Odometry` subclass whose
 ``key`` is ``name``; docs/api.md has a complete example). Everything that takes an
 odometry's name (``lf3pm replay --odometry``, ``lf3pm config``, ``replay``,
-``replay_seeds``, the studies) looks it up here.
+``replay_seeds``, the studies) looks it up here, and each odometry's settings in a
+configuration (``replay.odometries``, by name) are validated here by its settings section.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from importlib.metadata import entry_points
 
-from lf3pm.config import ConfigError
+from lf3pm.config import Config, ConfigError, Section
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.adapters import Odometry
 from lf3pm.replays.dlio import Dlio
@@ -83,6 +85,51 @@ def check_name(name: str, where: str = "replay.odometry") -> str:
         listed = ", ".join(repr(n) for n in choices[:-1]) + f" or {choices[-1]!r}"
         raise ConfigError(f"{where} must be {listed}, got {name!r}")
     return name
+
+
+def settings(given: Mapping[str, Mapping], where: str = "replay.odometries") -> dict[str, Section]:
+    """Every registered odometry's settings section by its name: lf3pm's defaults with
+    what ``given`` (a configuration's ``replay.odometries``) sets for it over them.
+    ConfigError in one line naming ``where.<name>`` (and the field) for a name no
+    odometry has or a value its section refuses."""
+    registry = odometries()
+    unknown = [name for name in given if name not in registry]
+    if unknown:
+        raise ConfigError(f"{where}: {unknown[0]!r} is no odometry; odometries: {', '.join(registry)}")
+    sections = {}
+    for name, adapter in registry.items():
+        values = given.get(name, {})
+        if not isinstance(values, Mapping):
+            raise ConfigError(f"{where}.{name} must be a mapping of settings, got {values!r}")
+        try:
+            sections[name] = adapter.settings(dict(values))
+        except Lf3pmError as err:
+            text = str(err)
+            raise ConfigError(f"{where}.{text}" if text.startswith(f"{name}.") else f"{where}.{name}: {text}") from None
+    return sections
+
+
+def changed_settings(name: str, given: Mapping) -> dict:
+    """Of the settings ``given`` for the odometry ``name``, those that differ from lf3pm's
+    defaults (what a replay records and passes on: a configuration that states a default
+    runs and records as one that leaves it out)."""
+    adapter = odometry(name)
+    default = adapter.settings({}).model_dump()
+    return {
+        key: value for key, value in adapter.settings(dict(given)).model_dump().items() if default.get(key) != value
+    }
+
+
+def with_settings(config: Config, path=None) -> Config:
+    """``config`` with every registered odometry's settings in ``replay.odometries``
+    (lf3pm's defaults under what it gives), as ``lf3pm config`` shows them; ConfigError
+    (prefixed by ``path``, the YAML file, when given) as :func:`settings`."""
+    try:
+        sections = settings(config.replay.odometries)
+    except ConfigError as err:
+        raise ConfigError(f"{path}: {err}" if path is not None else str(err)) from None
+    shown = {name: section.model_dump(mode="json") for name, section in sections.items()}
+    return config.model_copy(update={"replay": config.replay.model_copy(update={"odometries": shown})})
 
 
 def odometry(name: str) -> type[Odometry]:

@@ -100,6 +100,7 @@ def replay(
         params={**common, chosen.name: method_params},
         map_sha256=map.sha256,
         versions=versions,
+        replay=_replay_section(chosen),
     )
 
 
@@ -215,7 +216,14 @@ def replay_rest(
     )
     run = lio.run(scans, motion, sensor, seed, prepared=None, threads=threads).estimate
     times, truth = estimate_times(run, scans)
-    return rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1])
+    return rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1], lio.settings)
+
+
+def _replay_section(method: ReplayMethod) -> ReplayConfig:
+    """The replay section a method runs with (the lio method's own: its rest's limits),
+    else the defaults'."""
+    settings = getattr(method, "settings", None)
+    return settings if isinstance(settings, ReplayConfig) else DEFAULTS.replay
 
 
 def _stream(map, motion_or_csv, sensor, method: ReplayMethod, seed, rate, height, noise, threads, rest_only=False):

@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from lf3pm.config import Section, validated
+from lf3pm.config import DEFAULTS, ReplayConfig, Section, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.replays.trajectory_metrics import ape_translation, rpe
 
@@ -129,19 +129,22 @@ class ReplayResult:
         )
 
     @classmethod
-    def from_run(cls, run: Estimate, *, scans, first: int = 0, **fields) -> ReplayResult:
+    def from_run(
+        cls, run: Estimate, *, scans, first: int = 0, replay: ReplayConfig = DEFAULTS.replay, **fields
+    ) -> ReplayResult:
         """The result of ``run`` on the ScanStream ``scans`` (its times, truth and
         simulation time), scored from scan ``first`` on (earlier scans: a rest before the
         trajectory, for the estimator to initialise), the estimate re-anchored there to
         the true pose (an odometry's frame is arbitrary; what it did while the robot stood
-        still is not the trajectory's, but is reported: ``rest``)."""
+        still is not the trajectory's, but is reported: ``rest``, :func:`rest_motion` with
+        the replay section ``replay``)."""
         count, keep = len(scans), slice(first, None)
         directions = run.degenerate_directions
         times, truth = estimate_times(run, scans)
         estimate = run.poses[keep]
         rest = {}
         if first:
-            rest = rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1])
+            rest = rest_motion(times[: first + 1], truth[: first + 1], run.poses[: first + 1], replay)
             estimate = truth[first] @ np.linalg.inv(estimate[0]) @ estimate
         return cls.evaluate(
             times=times[keep],
@@ -226,32 +229,25 @@ def estimate_times(run: Estimate, scans) -> tuple[np.ndarray, np.ndarray]:
     return times, scans.motion.pose(times)
 
 
-#: Over the last REST_WINDOW s of a rest, an estimate moving faster than REST_SPEED_LIMIT
-#: (m/s) hands the trajectory a velocity error: its APE then measures the odometry's
-#: start, not the trajectory. A sensor that carries 0.05 m/s into the plan is 5 cm off
-#: after its first second, more than the whole APE of a good LIO run; steady rests move
-#: slower (docs/lio.md, "A still sensor", has the measurements).
-REST_SPEED_LIMIT = 0.05
-REST_WINDOW = 0.5
-
-
-def rest_motion(times, truth, poses) -> dict:
+def rest_motion(times, truth, poses, replay: ReplayConfig = DEFAULTS.replay) -> dict:
     """What an estimate did while the sensor stood still: ``times`` (n,), ``truth`` and
     ``poses`` (n, 4, 4) of the rest's scans and the first of the trajectory, the
     estimate anchored at the true first pose. ``drift_m``: its largest distance from
-    the truth; ``speed_mps``: its mean speed over the last REST_WINDOW s; ``steady``:
-    that speed at most REST_SPEED_LIMIT."""
+    the truth; ``speed_mps``: its mean speed over the replay section ``replay``'s
+    last ``rest_window`` s; ``steady``: that speed at most its ``rest_speed_limit``
+    (faster hands the trajectory a velocity error: its APE then measures the odometry's
+    start, not the trajectory)."""
     times = np.asarray(times, float)
     estimate = truth[0] @ np.linalg.inv(poses[0]) @ poses
     drift = np.linalg.norm(estimate[:, :3, 3] - truth[:, :3, 3], axis=1)
-    back = int(np.searchsorted(times, times[-1] - REST_WINDOW - 1e-9))
+    back = int(np.searchsorted(times, times[-1] - replay.rest_window - 1e-9))
     span = times[-1] - times[back]
     speed = float(np.linalg.norm(estimate[-1, :3, 3] - estimate[back, :3, 3]) / span) if span > 0 else 0.0
     return {
         "seconds": float(times[-1] - times[0]),
         "drift_m": float(drift.max()),
         "speed_mps": speed,
-        "steady": bool(speed <= REST_SPEED_LIMIT),
+        "steady": bool(speed <= replay.rest_speed_limit),
     }
 
 

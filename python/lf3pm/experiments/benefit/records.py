@@ -15,6 +15,7 @@ rather than read wrongly.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from collections.abc import Mapping
@@ -96,15 +97,20 @@ def write_json(path, data: dict, *, indent=None) -> None:
 @dataclass(frozen=True)
 class LioRun:
     """The odometry the LIO replays of one map run, and the label of their JSONs:
-    ``lio`` for the odometry the sensor's auto choice picks, else ``lio-<odometry>``
-    (each odometry keeps its own replays in one study folder)."""
+    ``lio`` for the odometry the sensor's auto choice picks, else ``lio-<odometry>``;
+    with settings other than lf3pm's, ``lio-<odometry>.<digest of them>`` (each odometry
+    and each of its settings keeps its own replays in one study folder)."""
 
     odometry: str
     label: str
 
     @classmethod
-    def of(cls, odometry: str, auto: str) -> LioRun:
-        """The run of ``odometry`` where auto's choice is ``auto``."""
+    def of(cls, odometry: str, auto: str, options: dict | None = None) -> LioRun:
+        """The run of ``odometry`` where auto's choice is ``auto``, given ``options``
+        (settings that differ from lf3pm's) beyond its name."""
+        if options:
+            digest = hashlib.sha256(json.dumps(options, sort_keys=True).encode()).hexdigest()[:8]
+            return cls(odometry, f"{LIO}-{odometry}.{digest}")
         return cls(odometry, LIO if odometry == auto else f"{LIO}-{odometry}")
 
 
@@ -530,7 +536,7 @@ class ErrorFit:
 @dataclass(frozen=True)
 class Parameters:
     """The constants the study judged by, for the report: failure APE and worse margin
-    (paired_stats), the at-risk rule (risk), the LIO's rest speed limit (replay_result)."""
+    (paired_stats), the at-risk rule (risk), the LIO's rest speed limit (the replay section's)."""
 
     failure_ape_m: float
     worse_margin_m: float

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS, BenefitConfig, validated
+from lf3pm.config import DEFAULTS, BenefitConfig, ReplayConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.benefit import analysis
 from lf3pm.experiments.benefit.cases import CASES, QUICK
@@ -39,7 +39,6 @@ from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
 from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN
 from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
 from lf3pm.experiments.risk import AT_RISK_SHARE, RISK_FACTOR, at_risk, risk_share
-from lf3pm.replays.replay_result import REST_SPEED_LIMIT
 
 
 def run(
@@ -53,6 +52,7 @@ def run(
     guidance: tuple | None = None,
     lio: str = DEFAULTS.benefit.lio,
     odometry: str = DEFAULTS.benefit.odometry,
+    replay: ReplayConfig = DEFAULTS.replay,
     progress=None,
 ) -> Summary:
     """Runs (or resumes) the study into ``out`` and returns its summary. ``guidance``
@@ -61,9 +61,13 @@ def run(
     ``default`` (the one named default and the unguided one: a shorter run).
     ``odometry``: the LIO's (:func:`lio_run`); the replays of each keep their own JSONs,
     so that a second odometry's run in the same folder reuses the SOLMs, plans and
-    localization replays."""
+    localization replays. ``replay``: the replay section whose ``odometries`` settings
+    the LIO runs with and whose rest limits judge its rests (:func:`lio_options`)."""
+    from lf3pm.replays import registry
+
     folder = StudyFolder(Path(out))
     validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio, odometry=odometry)
+    registry.check_name(odometry, "benefit.odometry")
     cases = cases if cases is not None else (QUICK if quick else CASES)
     guidance = tuple(guidance) if guidance is not None else GUIDANCE
     names = [g.name for g in guidance]
@@ -77,7 +81,8 @@ def run(
     started = time.perf_counter()
     folder.root.mkdir(parents=True, exist_ok=True)
     pairs, tasks = [], []
-    lio_runs = {case.name: lio_run(case, odometry) for case in cases}
+    lio_runs = {case.name: lio_run(case, odometry, replay) for case in cases}
+    options = {case: lio_options(run.odometry, replay) for case, run in lio_runs.items()}
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
         solm_path = build_case_solm(case, folder.solm(case.name))
@@ -86,11 +91,11 @@ def run(
             pairs.append(pair)
             for name, plan in pair.plans.items():
                 for method in (LOCALIZATION, LIO) if name in lio_names else (LOCALIZATION,):
-                    options = {"odometry": lio_runs[case.name].odometry} if method == LIO else {}
+                    given = {"odometry": lio_runs[case.name].odometry, **options[case.name]} if method == LIO else {}
                     label = replay_label(method, lio_runs[case.name])
                     for seed in range(seeds):
                         path = folder.replay(case.name, pair.number, name, label, seed)
-                        tasks.append(ReplayTask(case, str(folder.root / plan.csv), method, seed, path, options))
+                        tasks.append(ReplayTask(case, str(folder.root / plan.csv), method, seed, path, given))
         step(f"{case.name}: {len(drawn)} pairs planned", len(cases))
     run_replays(tasks, workers, step)
     seconds = time.perf_counter() - started  # the runtime the report states: to the replays' end
@@ -115,7 +120,7 @@ def run(
         lio_runs=lio_runs,
         odometry_names=odometry_names(lio_runs),
         replay_cpu_s=replay_seconds,
-        parameters=Parameters(FAILURE_APE, WORSE_MARGIN, AT_RISK_SHARE, RISK_FACTOR, REST_SPEED_LIMIT),
+        parameters=Parameters(FAILURE_APE, WORSE_MARGIN, AT_RISK_SHARE, RISK_FACTOR, replay.rest_speed_limit),
         cases=tuple(cases),
         guidance=(UNGUIDED,) + guidance,
         pairs=tuple(pairs),
@@ -228,23 +233,39 @@ def _draw(planner, zone, robot, rng, tries: int = 200):
 # --- replays --------------------------------------------------------------------------
 
 
-def lio_run(case: MapCase, odometry: str) -> LioRun:
+def lio_run(case: MapCase, odometry: str, replay: ReplayConfig = DEFAULTS.replay) -> LioRun:
     """The odometry the LIO replays of ``case`` run for the study's ``odometry`` (one the
-    sensor cannot feed, LIO-SAM without rings: auto's choice), and their label."""
-    from lf3pm.replays.lio import choose_odometry, runs_on
+    sensor cannot feed, LIO-SAM without rings: auto's choice), and their label (with
+    the replay section ``replay``'s settings for it: :func:`lio_options`)."""
+    from lf3pm.replays import registry
     from lf3pm.sensors import get_sensor
 
     sensor = get_sensor(case.sensor)
-    if odometry != "auto" and not runs_on(odometry, sensor):
-        odometry = "auto"
-    return LioRun.of(choose_odometry(odometry, sensor), auto=choose_odometry("auto", sensor))
+    if odometry != registry.AUTO and not registry.odometry(odometry).runs_on(sensor):
+        odometry = registry.AUTO
+    chosen = registry.choose_odometry(odometry, sensor).key
+    auto = registry.choose_odometry(registry.AUTO, sensor).key
+    return LioRun.of(chosen, auto, lio_options(chosen, replay))
+
+
+def lio_options(odometry: str, replay: ReplayConfig) -> dict:
+    """What the LIO replays of ``odometry`` are given beyond its name: the replay
+    section's settings for it and its rest limits, those that differ from lf3pm's
+    defaults (none: the replays of the defaults, named as before)."""
+    from lf3pm.replays import registry
+
+    options = registry.changed_settings(odometry, replay.odometries.get(odometry, {}))
+    for name in ("rest_window", "rest_speed_limit"):
+        if getattr(replay, name) != getattr(DEFAULTS.replay, name):
+            options[name] = getattr(replay, name)
+    return options
 
 
 def odometry_names(lio_runs: dict[str, LioRun]) -> dict[str, str]:
-    """The display name of each odometry the study ran (lf3pm.replays.lio.ODOMETRIES)."""
-    from lf3pm.replays.lio import ODOMETRIES
+    """The display name of each odometry the study ran (the registry's)."""
+    from lf3pm.replays import registry
 
-    return {run.odometry: ODOMETRIES[run.odometry].name for run in lio_runs.values()}
+    return {run.odometry: registry.odometry(run.odometry).name for run in lio_runs.values()}
 
 
 def with_replays(
