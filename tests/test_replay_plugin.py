@@ -250,3 +250,33 @@ def test_register_checks_an_adapter_in_process():
     with pytest.raises(registry.PluginError, match="is not a subclass of lf3pm.replays.adapters.Odometry"):
         registry.register(object)
     assert registry.register(GenZ) is GenZ and "unfinished" not in registry.odometries()
+
+
+def test_the_benefit_study_takes_a_plugin_odometry_and_its_settings(tmp_path, monkeypatch):
+    """benefit.odometry is checked by the registry (a plugin's name is taken, as
+    replay.odometry's), and the replay section's settings for it label the study's LIO
+    replays apart from the defaults' (registered in this process as its entry point
+    would; the registry restored afterwards)."""
+    from lf3pm.config import DEFAULTS, ConfigError
+    from lf3pm.experiments.benefit import study
+    from lf3pm.experiments.benefit.cases import QUICK
+    from lf3pm.experiments.benefit.records import LioRun
+    from lf3pm.replays import registry
+
+    (tmp_path / "toy_odometry.py").write_text(textwrap.dedent(PLUGIN))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import toy_odometry
+
+    monkeypatch.setattr(registry, "_loaded", dict(registry.odometries()))
+    registry.register(toy_odometry.Toy)
+    case = QUICK[0]
+    assert study.lio_run(case, "toy") == LioRun("toy", "lio-toy")
+    drifting = DEFAULTS.replay.model_copy(update={"odometries": {"toy": {"drift": 0.01}}})
+    assert study.lio_options("toy", drifting) == {"drift": 0.01}
+    labelled = study.lio_run(case, "toy", drifting)
+    assert labelled.odometry == "toy" and labelled.label.startswith("lio-toy.") and labelled.label != "lio-toy"
+    stated = DEFAULTS.replay.model_copy(update={"odometries": {"toy": {"drift": 0.0}}})
+    assert study.lio_run(case, "toy", stated) == LioRun("toy", "lio-toy")  # the defaults, stated
+    with pytest.raises(ConfigError, match="benefit.odometry must be 'auto', .*'toy', got 'nothing'"):
+        study.run(tmp_path / "out", odometry="nothing")
+    assert not (tmp_path / "out").exists()
