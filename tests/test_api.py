@@ -17,6 +17,7 @@ def test_every_public_name_resolves_and_has_a_docstring():
         lf3pm.no_such_thing  # noqa: B018
 
 
+@pytest.mark.slow
 def test_map_to_replay_from_the_top_level(tmp_path):
     world = lf3pm.load_map(lf3pm.build_scene("boxes").points)
     out = lf3pm.evaluate(world, (0.0, 0.0, 0.5, 0.0), lf3pm.get_sensor("vlp16"), seed=0)

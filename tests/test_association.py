@@ -23,6 +23,7 @@ def angle(a, b):
     return np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.abs(np.sum(a * b, axis=1)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("k", [3, 5, 12])
 @pytest.mark.parametrize(
     "extent", [(0.1, 0.1, 0.005), (0.1, 0.1, 0.0), (0.1, 0.01, 0.001), (0.1, 1e-3, 1e-5), (0.1, 0.1, 0.1)]

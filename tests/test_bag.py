@@ -44,6 +44,7 @@ def messages(path, topic):
         return [(stamp, TYPES.deserialize_cdr(raw, c.msgtype)) for c, stamp, raw in reader.messages(conns)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sensor, layout", [("vlp16", "velodyne"), ("os1-64", "ouster"), ("mid70", "velodyne")])
 def test_bag_counts_stamps_and_points(room, tmp_path, sensor, layout):
     world, motion = room

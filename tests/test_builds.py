@@ -62,6 +62,7 @@ def numpy_dispatched_features() -> list:
     return [target for target in umath.__cpu_dispatch__ if found.get(target)]
 
 
+@pytest.mark.slow
 def test_every_level_built_computes_the_same_bits(reference, tmp_path):
     others = [arch for arch in _core.cpu_check.levels if arch != _core.ARCH and _core.cpu_check.runs(arch)]
     if not others:
@@ -73,6 +74,7 @@ def test_every_level_built_computes_the_same_bits(reference, tmp_path):
         assert differences(reference, result) == [], f"{_core.ARCH} against {arch}"
 
 
+@pytest.mark.slow
 def test_numpy_without_its_vector_kernels_computes_the_same_bits(reference, tmp_path):
     features = numpy_dispatched_features()
     if not features:
@@ -81,6 +83,7 @@ def test_numpy_without_its_vector_kernels_computes_the_same_bits(reference, tmp_
     assert differences(reference, result) == []
 
 
+@pytest.mark.slow
 def test_a_level_not_built_or_not_run_here_is_one_line(tmp_path):
     for asked, says in (("x86-64-v9", "this build has the core for"), ("", None)):
         run = subprocess.run(

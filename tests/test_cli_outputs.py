@@ -48,6 +48,7 @@ def plan(store, csv, png):
     )
 
 
+@pytest.mark.slow
 def test_plan_writes_both_outputs_or_neither(store, tmp_path):
     missing = tmp_path / "missing"
     one_line_error(plan(store, tmp_path / "a.csv", missing / "a.png"), "cannot write the file")

@@ -87,6 +87,7 @@ def test_a_corridor_without_ends_is_degenerate_not_a_crash():
     assert res.degenerate and res.q_n == np.inf and res.to_dict()["q_n"] is None
 
 
+@pytest.mark.slow
 def test_cli_json_and_saved_observations(room_file, tmp_path):
     obs = tmp_path / "obs.npz"
     out = run_cli(
@@ -115,11 +116,13 @@ def test_cli_json_and_saved_observations(room_file, tmp_path):
     assert api.q_n == data["q_n"]
 
 
+@pytest.mark.slow
 def test_cli_table(room_file):
     out = run_cli("evaluate", room_file, "--pose", "0", "0", "0", "0")
     assert out.returncode == 0 and "q_n" in out.stdout and "q_min" in out.stdout
 
 
+@pytest.mark.slow
 def test_cli_sensors_lists_presets():
     out = run_cli("sensors")
     assert out.returncode == 0
@@ -127,6 +130,7 @@ def test_cli_sensors_lists_presets():
         assert name in out.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args,needle",
     [

@@ -70,6 +70,7 @@ def test_bad_comparisons_and_guidance_are_one_line_errors():
             parse_guidance(text)
 
 
+@pytest.mark.slow
 def test_quick_study_end_to_end(tmp_path):
     from lf3pm.experiments.benefit.records import LIO, LOCALIZATION, MEASURES, Measure, read_summary
 

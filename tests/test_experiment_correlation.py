@@ -29,6 +29,7 @@ def test_free_poses_are_free_and_at_sensor_height():
         assert abs(z - (ground.height(x, y) + 1.0)) < 1e-9
 
 
+@pytest.mark.slow
 def test_correlation_study_writes_summary_csv_and_scatter(tmp_path):
     for name in correlation.REAL_MAPS:  # the study reads them
         shared_file(name)
@@ -51,6 +52,7 @@ def test_correlation_study_writes_summary_csv_and_scatter(tmp_path):
     assert (tmp_path / "scatter.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_analysis_ranks_predictors_on_records_made_for_it():
     """Hand-made records on two maps: q_n ranks MDE exactly, zhang exactly backwards
     (it is negated, so it ranks exactly too), q_min ranks it exactly pooled but

@@ -5,11 +5,13 @@ import json
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from lf3pm.experiments import gobi
 from lf3pm.solm import Solm
 
 
+@pytest.mark.slow
 def test_reduced_gobi_experiment_writes_every_guidance(tmp_path):
     setup = replace(gobi.REDUCED, solm_res=2.0, yaw_bins=18, mde_every=6.0, mde_trials=2, ray_stride=4, replay_seeds=1)
     summary = gobi.run(tmp_path, setup)

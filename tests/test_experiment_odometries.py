@@ -21,6 +21,7 @@ def test_the_drives_are_the_configurations():
     assert tuple(odometries.DRIVES) == ODOMETRY_DRIVES
 
 
+@pytest.mark.slow
 def test_a_short_noise_free_drive_writes_the_table_and_records(tmp_path):
     out = tmp_path / "odometries"
     args = ["experiment", "odometries", "-o", str(out), "--scenes", "boxes", "--sensors", "vlp16"]

@@ -3,9 +3,12 @@
 import json
 import math
 
+import pytest
+
 from lf3pm.experiments import table1
 
 
+@pytest.mark.slow
 def test_table1_writes_summary_table_and_figure(tmp_path):
     summary = table1.run(tmp_path, poses=1, trials=2)
     on_disk = json.loads((tmp_path / "summary.json").read_text())

@@ -72,6 +72,7 @@ def boxes():
     return lf3pm.load_map(lf3pm.build_scene("boxes").points)
 
 
+@pytest.mark.slow
 def test_sections_whole_give_what_their_fields_by_name_give(boxes, tmp_path):
     se2 = load_config(overrides={"solm.space": "se2", "solm.res": 1.0, "solm.yaw_bins": 8})
     assert make_grid(boxes, config=se2.solm) == make_grid(boxes, "se2", 1.0, yaw_bins=8)

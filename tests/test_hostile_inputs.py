@@ -213,6 +213,7 @@ def config_error(*config) -> str:
     return one_line_error(done, "", within=20, started=started)
 
 
+@pytest.mark.slow
 def test_a_config_that_is_not_a_regular_file_is_refused_at_once(tmp_path):
     # /dev/zero was read without end (+2.7 GB in 8 s); a FIFO would wait for a writer.
     assert "/dev/zero: the config is a device, FIFO or socket, not a regular file" in config_error("/dev/zero")
@@ -251,6 +252,7 @@ def test_yaml_beyond_the_limits_is_one_short_line(tmp_path, text, message):
         load_config(config)
 
 
+@pytest.mark.slow
 def test_errors_quote_a_short_excerpt_of_a_value(tmp_path):
     config = tmp_path / "c.yaml"
     for value in (
@@ -307,6 +309,7 @@ def test_a_bad_host_is_named_as_the_host(boxes):
 # --- warnings format -------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_warnings_are_one_line_without_source(tmp_path):
     points = build_scene("boxes").points.copy()
     points[:3] = np.nan
@@ -319,6 +322,7 @@ def test_warnings_are_one_line_without_source(tmp_path):
     ]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(importlib.util.find_spec("evalio") is None, reason="the LIO is not installed")
 def test_an_odometry_on_a_sensor_it_loses_is_warned_in_one_line(boxes):
     done = run_cli(
@@ -450,6 +454,7 @@ def test_a_read_only_output_fails_before_the_work(tmp_path, boxes):
 # --- command lines click cannot parse ----------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args, text",
     [

@@ -104,6 +104,7 @@ def failing_write(monkeypatch):
 # -- storage faults mid-write -------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_full_disk_mid_build_is_one_line_and_the_rerun_resumes_identically(site, tmp_path, failing_write):
     out = tmp_path / "s.zarr"
     failing_write("q_max/c/0/1/0", errno.ENOSPC)  # the third tile's q_max
@@ -124,6 +125,7 @@ def test_a_full_disk_mid_build_is_one_line_and_the_rerun_resumes_identically(sit
     same_store(out, site.store)
 
 
+@pytest.mark.slow
 def test_a_failed_done_flag_loses_only_its_tile(site, tmp_path, failing_write):
     """The done flag is written last: a tile whose data were written but whose flag was not
     is recomputed, and the store still ends as an uninterrupted build's."""
@@ -136,6 +138,7 @@ def test_a_failed_done_flag_loses_only_its_tile(site, tmp_path, failing_write):
     same_store(out, site.store)
 
 
+@pytest.mark.slow
 def test_an_io_error_on_the_ground_layer_is_one_line(site, tmp_path, failing_write):
     failing_write("ground_z/c/0/0", errno.EIO)
     with pytest.raises(StorageError) as caught:
@@ -146,6 +149,7 @@ def test_an_io_error_on_the_ground_layer_is_one_line(site, tmp_path, failing_wri
     same_store(tmp_path / "s.zarr", site.store)
 
 
+@pytest.mark.slow
 def test_a_store_that_vanishes_mid_build_is_one_line_and_not_recreated(site, tmp_path):
     out = tmp_path / "gone" / "s.zarr"
     out.parent.mkdir()
@@ -161,6 +165,7 @@ def test_a_store_that_vanishes_mid_build_is_one_line_and_not_recreated(site, tmp
     assert not out.parent.exists()  # zarr would have recreated the folders of the next chunk
 
 
+@pytest.mark.slow
 def test_the_cli_build_stops_in_one_line_and_resumes(site, tmp_path, failing_write):
     out = tmp_path / "cli.zarr"
     args = [
@@ -195,6 +200,7 @@ def test_the_cli_build_stops_in_one_line_and_resumes(site, tmp_path, failing_wri
     assert done.exit_code == 0 and "complete: True" in done.output, done.output
 
 
+@pytest.mark.slow
 def test_a_build_onto_a_really_full_disk_resumes_bit_identically(site, tmp_path, mounted):
     """A real full file system (tmpfs, root only): the build stops in one line, and once
     space is freed the rerun completes to the store built on an ample disk."""
@@ -331,6 +337,7 @@ def test_lf3pm_plan_on_a_corrupt_chunk_is_one_line(site, tmp_path):
     assert not (tmp_path / "t.csv").exists()
 
 
+@pytest.mark.slow
 def test_the_viewer_shows_a_corrupt_chunk_in_the_page_and_keeps_serving(site, tmp_path, capfd):
     store, damaged = corrupt_copy(site, tmp_path, "garbled chunk")
     viewer = serve(load_view_inputs(site.dir / "map.npy", store), port=0)
@@ -350,6 +357,7 @@ def test_the_viewer_shows_a_corrupt_chunk_in_the_page_and_keeps_serving(site, tm
         viewer.stop()
 
 
+@pytest.mark.slow
 def test_lf3pm_view_on_a_corrupt_chunk_serves_and_says_so_in_one_line(site, tmp_path):
     store, damaged = corrupt_copy(site, tmp_path, "garbled chunk")
     port = free_port()
@@ -584,6 +592,7 @@ def test_a_replay_that_is_not_a_regular_file_is_refused_before_it_is_read(site, 
     assert time.monotonic() - started < 5
 
 
+@pytest.mark.slow
 def test_lf3pm_view_refuses_a_bad_replay_json_and_a_bad_host_in_one_line(site, tmp_path):
     bad = replay_json(tmp_path, "strings", errors=["x", "y", "z"])
     for args, text in (

@@ -99,6 +99,7 @@ def rms(values):
     return float(np.sqrt(np.mean(np.square(values))))
 
 
+@pytest.mark.slow
 def test_noise_free_run_in_a_room_tracks_closely(run):
     """Horizontal error about 1 cm and yaw 0.05 deg (RMS); the height, which the
     VLP-16's +-15 deg beams see only in the floor beyond 3.7 m and on box tops,
@@ -122,6 +123,7 @@ def rmse(motion, estimate):
     return ape_translation(motion.pose(estimate.times), estimate.poses)["rmse"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shift", [-0.02, 0.02])
 def test_imu_20ms_off_is_far_worse(run, shift):
     """The IMU's clock 20 ms off the scans': deskewing and prediction use the
@@ -134,6 +136,7 @@ def test_imu_20ms_off_is_far_worse(run, shift):
     assert rms(shifted[0]) > 1.3 * rms(right[0])
 
 
+@pytest.mark.slow
 def test_reversed_firing_order_is_far_worse(run):
     """Each return stamped with another ray's time: deskewing moves it the wrong way."""
     motion, sensor, scans, imu, first, estimate = run
@@ -157,6 +160,7 @@ def test_an_empty_scan_is_skipped_and_tracking_goes_on(run):
     assert horizontal.max() < 0.04 and yaw.max() < 0.5
 
 
+@pytest.mark.slow
 def test_unknown_settings_and_bad_input_raise_one_line(run):
     motion, sensor, scans, imu, first, _ = run
     with pytest.raises(Lf3pmError, match="unknown GenZ-LIO parameter mapping.voxel"):
@@ -252,6 +256,7 @@ def town():
     return lf3pm.load_map(build_scene("gobi", seed=REDUCED.seed, **REDUCED.scene_params).points)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "sensor, turn_rate, odometry", [("vlp16", 0.0, "genz"), ("vlp16", 0.0, "dlio"), ("mid70", 0.3, "genz")]
 )
@@ -275,6 +280,7 @@ def test_noise_free_drive_from_rest_holds_centimetres_with_no_lag(town, sensor, 
     assert abs(timing["offset"]) <= 0.01, timing
 
 
+@pytest.mark.slow
 def test_the_rest_alone_is_what_the_replay_saw(town):
     """replay_rest runs the stream only up to the trajectory's start: the same scans, IMU
     samples and (the odometry looking only back) estimates as the whole replay, so the
@@ -287,6 +293,7 @@ def test_the_rest_alone_is_what_the_replay_saw(town):
     assert replay_rest(town, motion, "mid70", seed=1) == whole.rest
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("yaw", [0.0, 1.57, 3.14, -1.57])
 def test_a_still_mid70_holds_its_pose_at_lf3pm_initial_covariance(town, yaw):
     """A still sensor is a known answer: the estimate must not move. Noise-free Mid-70
@@ -305,6 +312,7 @@ def test_a_still_mid70_holds_its_pose_at_lf3pm_initial_covariance(town, yaw):
     assert own["drift_m"] > 0.1, own
 
 
+@pytest.mark.slow
 def test_a_lidar_clock_50ms_late_is_detected(town):
     """The same drive with every scan stamped 50 ms after it was taken (the IMU on time):
     the estimate is where the sensor was 50 ms before its stamp."""
@@ -335,6 +343,7 @@ def dlio_run(room):
     return motion, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first, odometry="dlio")
 
 
+@pytest.mark.slow
 def test_dlio_tracks_the_figure_of_eight_at_its_median_return_times(dlio_run):
     """DLIO's poses refer to each scan's median return time (its deskewing reference),
     not to the scan's end: scored there, noise-free, within 2 cm with no better time
@@ -356,6 +365,7 @@ def test_dlio_tracks_the_figure_of_eight_at_its_median_return_times(dlio_run):
     assert at_end["offset"] == pytest.approx(-PERIOD / 2, abs=0.015), at_end
 
 
+@pytest.mark.slow
 def test_dlio_deterministic_with_one_thread(dlio_run):
     motion, scans, imu, first, estimate = dlio_run
     again = run_lio(scans[:40], imu, "vlp16", initial_pose=first, odometry="dlio")
@@ -384,6 +394,7 @@ def liosam_run(room):
     return motion, scans, imu, first, run_lio(scans, imu, sensor, initial_pose=first, odometry="liosam")
 
 
+@pytest.mark.slow
 def test_liosam_tracks_the_figure_of_eight_at_its_median_return_times(liosam_run):
     """LIO-SAM answers two scans late and deskews only the rotation: the replay still
     gets one pose per scan, each at the scan's median return time, where it fits the
@@ -407,6 +418,7 @@ def test_liosam_tracks_the_figure_of_eight_at_its_median_return_times(liosam_run
     assert at_begin["offset"] == pytest.approx(PERIOD / 2, abs=0.015), at_begin
 
 
+@pytest.mark.slow
 def test_liosam_is_deterministic_and_refuses_a_livox(liosam_run):
     motion, scans, imu, first, estimate = liosam_run
     again = run_lio(scans[:40], imu, "vlp16", initial_pose=first, odometry="liosam")

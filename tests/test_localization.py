@@ -39,6 +39,7 @@ def test_noise_free_localization_on_a_structured_scene_is_within_a_centimetre(bo
     assert result.params["localization"]["odometry"] == {"scale_error": 0.0, "yaw_noise": 0.0}
 
 
+@pytest.mark.slow
 def test_same_seed_same_result_and_the_result_pickles(boxes):
     world, motion, target = boxes
     a = replay(world, motion, "vlp16", "localization", seed=4, target=target)

@@ -35,6 +35,7 @@ def reference_spacing(points: np.ndarray) -> float:
     return max(float(np.sort(nearest)[len(nearest) // 2]), 1e-4)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [3000, 1_300_000])
 def test_median_spacing_matches_reference(n):
     """Also across the estimate's 2^20-point chunks, with exact duplicates in other chunks

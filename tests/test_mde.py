@@ -25,6 +25,7 @@ def houses():
     return scene, world, RegistrationTarget(world)
 
 
+@pytest.mark.slow
 def test_noise_free_scan_from_the_true_pose_has_near_zero_mde(houses):
     scene, world, target = houses
     res = mde(world, scene.reference_pose, "vlp16", trials=3, sigma_t=0.0, sigma_r=0.0, noise=0.0, target=target)
@@ -32,6 +33,7 @@ def test_noise_free_scan_from_the_true_pose_has_near_zero_mde(houses):
     assert res.mde < 1e-5 and res.trials == 3 and len(res.errors) == 3
 
 
+@pytest.mark.slow
 def test_wall_is_worse_than_houses(houses):
     scene, world, target = houses
     good = mde(world, scene.reference_pose, "vlp16", trials=6, seed=1, target=target)
@@ -40,6 +42,7 @@ def test_wall_is_worse_than_houses(houses):
     assert bad.mde > 100 * good.mde
 
 
+@pytest.mark.slow
 def test_seeded_and_reported(houses):
     scene, world, target = houses
     a = mde(world, scene.reference_pose, trials=4, seed=7, target=target)

@@ -50,6 +50,7 @@ for seed in range(8):
     CASES.append(("minimal", seed, 3, 4))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind,seed,n,m", CASES)
 def test_fast_metric_matches_reference(kind, seed, n, m):
     rng = np.random.default_rng(seed)

@@ -63,6 +63,7 @@ def test_maps_without_strays_build_without_the_warning(tmp_path):
     assert stray_points_warning(scan.points, lf3pm.make_grid(scan, "r2", 0.5)) is None
 
 
+@pytest.mark.slow
 def test_solm_build_prints_the_warning_with_the_bounds(tmp_path):
     path = tmp_path / "room_and_strays.pcd"
     write_points(path, np.vstack([ROOM, STRAYS]))
@@ -79,6 +80,7 @@ def test_load_map_reports_each_phase():
     assert seen == ["reading the map array", f"indexing {world.size:,} points of <array>"]
 
 
+@pytest.mark.slow
 def test_commands_that_load_a_map_show_a_line_on_a_terminal_only(tmp_path):
     """On a terminal (FORCE_COLOR makes Rich treat the pipe as one) the line says which
     phase runs; elsewhere nothing is added, and an error stays one line."""
@@ -96,6 +98,7 @@ def test_commands_that_load_a_map_show_a_line_on_a_terminal_only(tmp_path):
     assert missing.returncode == 2 and len(missing.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_the_demos_view_command_runs_as_printed(tmp_path, monkeypatch):
     from lf3pm.demo import cli_command, view_command
 

@@ -74,6 +74,7 @@ def test_straight_drive_in_a_structured_scene_stays_within_a_few_cm(boxes):
     assert result.params["kiss_icp"]["deskew"] is False and result.to_dict()["scans"] == 21
 
 
+@pytest.mark.slow
 def test_motion_distortion_with_deskewing_stays_close_to_no_distortion(boxes):
     world, z = boxes
     t, poses = drive(z)
@@ -107,6 +108,7 @@ def test_same_seed_same_result(boxes):
     np.testing.assert_array_equal(a.hits, b.hits)
 
 
+@pytest.mark.slow
 def test_degenerate_wall_is_worse_than_structured(boxes):
     world, z = boxes
     t, poses = drive(z)

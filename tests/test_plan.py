@@ -19,6 +19,7 @@ def planner(boxes_planner):
     return boxes_planner
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])
 def test_plan_on_boxes_is_feasible(planner, kind):
     robot = Robot(kind, min_turn_radius=0.5 if kind == "car" else 0.0, r_safe=0.05)
@@ -34,6 +35,7 @@ def test_plan_on_boxes_is_feasible(planner, kind):
     assert abs(np.angle(np.exp(1j * (s["yaw"][-1] - GOAL[2])))) < 1e-2
 
 
+@pytest.mark.slow
 def test_a_car_turns_round_at_both_ends(planner):
     """The start yaw points away from the goal and the goal yaw back toward the start:
     the car front end's path loops at both ends, forwards only, and the trajectory
@@ -113,6 +115,7 @@ def test_csv_velocities_are_the_derivatives_of_its_positions(planner, tmp_path):
             assert np.max(np.abs(fd[:-1] - v[1:-2])) <= 0.01 * limit
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["omni", "car"])
 def test_plans_keep_the_body_off_thin_poles_between_cell_centres(tmp_path, kind):
     """Poles 0.1 m beside the straight line through a row of 1 m cells' centres, and

@@ -25,6 +25,7 @@ def run_plan(*args):
     return subprocess.run([sys.executable, "-m", "lf3pm.cli", "plan", *map(str, args)], capture_output=True, text=True)
 
 
+@pytest.mark.slow
 def test_plan_writes_a_100_hz_trajectory_from_start_to_goal_and_a_png(boxes_solm, tmp_path):
     csv, png = tmp_path / "traj.csv", tmp_path / "plan.png"
     done = run_plan(
@@ -58,6 +59,7 @@ def test_plan_writes_a_100_hz_trajectory_from_start_to_goal_and_a_png(boxes_solm
     assert png.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
     csv = tmp_path / "traj.csv"
     done = run_plan(
@@ -83,6 +85,7 @@ def test_speed_norm_limit_from_the_command_line(boxes_solm, tmp_path):
     assert np.max(np.hypot(data[:, 4], data[:, 5])) <= 1.02 * 0.7
 
 
+@pytest.mark.slow
 def test_the_composite_channel_plans_from_the_command_line(boxes_solm, tmp_path):
     csv = tmp_path / "traj.csv"
     done = run_plan(
@@ -108,6 +111,7 @@ def test_the_composite_channel_plans_from_the_command_line(boxes_solm, tmp_path)
     assert np.allclose(data[-1, 1:3], (6.2, 2.2), atol=1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args, needle",
     [
@@ -126,6 +130,7 @@ def test_bad_requests_get_one_line_and_exit_2(boxes_solm, tmp_path, args, needle
     assert not csv.exists()
 
 
+@pytest.mark.slow
 def test_a_missing_solm_is_refused(tmp_path):
     done = run_plan("--solm", tmp_path / "none.zarr", "--start", 0, 0, 0, "--goal", 1, 1, 0, "-o", tmp_path / "t.csv")
     assert done.returncode == 2 and "no such SOLM" in done.stderr

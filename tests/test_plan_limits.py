@@ -41,6 +41,7 @@ def check_plan(plan, robot):
     assert violations[binding] >= AT_A_LIMIT, (binding, violations)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("metric", ["none", "q_n"])
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])
 def test_plans_on_boxes_hold_every_limit_at_1_khz_and_reach_one(boxes_planner, kind, metric):
@@ -57,6 +58,7 @@ def test_plans_on_boxes_hold_every_limit_at_1_khz_and_reach_one(boxes_planner, k
     assert planned >= 4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("metric", ["none", "q_n"])
 @pytest.mark.parametrize("kind", ["omni", "diff"])
 def test_plans_on_an_se2_solm_hold_every_limit_at_1_khz_and_reach_one(orientation_planner, kind, metric):
@@ -110,6 +112,7 @@ def test_a_fixed_end_inside_the_clearance_margin_adds_no_penalty():
 STOP_SLACK = 1.2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["omni", "diff", "car"])
 def test_plans_are_not_stopped_early(study_boxes_planner, kind):
     """The same descent continued to a 1000 times tighter relative tolerance gains less than

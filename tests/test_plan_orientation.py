@@ -133,6 +133,7 @@ def _densify(poses, step=0.05):
     return np.array(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("weight", [1.0, 5.0])
 def test_trajectory_keeps_the_front_ends_cost_on_random_se2_queries(orientation_planner, weight):
     """The front end's objective, integral of (1 + weight c) (ds + 0.5 |d yaw|) with c the

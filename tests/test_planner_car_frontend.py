@@ -82,6 +82,7 @@ def numeric_shortest(start, goal, radius, rng):
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(8))
 def test_dubins_is_the_shortest_word_and_reaches_the_goal(seed):
     rng = np.random.default_rng(seed)
@@ -226,6 +227,7 @@ def test_hybrid_cost_is_bounded_by_dubins_and_the_grid_search(case):
     assert path.cost >= grid.cost / KAPPA - 2 * RES * (1 + weight * cost.max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", range(8))
 def test_heuristic_never_exceeds_found_costs_to_go(case):
     esdf, cost, start, goal = queries()[case]

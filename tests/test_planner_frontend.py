@@ -338,6 +338,7 @@ def test_start_equal_to_goal_is_a_one_cell_path(blocked_map):
     assert path.cells.shape == (1, 3) and path.cost == 0.0 and path.length == 0.0
 
 
+@pytest.mark.slow
 def test_plans_on_a_built_solm(tmp_path):
     scene = build_scene("boxes")
     world_map, sensor = lf3pm.load_map(scene.points), lf3pm.get_sensor("vlp16")

@@ -93,6 +93,7 @@ def test_evaluate_withholds_the_localization_error_beyond_the_fits_q_n():
     assert far.predicted_localization_error_m is None and far.predicted_localization_error_interval_m is None
 
 
+@pytest.mark.slow
 def test_evaluate_cli_prints_null_and_the_reason(tmp_path):
     path = tmp_path / "far_box.pcd"
     write_points(path, box_far_ahead(0.5, 30.0))

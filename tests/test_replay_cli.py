@@ -32,6 +32,7 @@ def replay(*args):
     return runner.invoke(app, ["replay", *map(str, args)])
 
 
+@pytest.mark.slow
 def test_json_with_two_seeds_and_a_png(files, tmp_path):
     png = tmp_path / "replay.png"
     done = replay(files / "traj.csv", "--map", files / "boxes.npy", "--seeds", 2, "--seed", 3, "--json", "--png", png)
@@ -60,6 +61,7 @@ def test_table_for_odometry(files):
     assert "replay: odometry, mid70, 11 scans at 5 Hz" in done.stdout and "APE" in done.stdout
 
 
+@pytest.mark.slow
 def test_the_methods_settings_come_from_the_config_file(files, tmp_path):
     """--config FILE.yaml sets the method's section (here localization's), which the run
     records and uses: the same figures as the API given the same settings."""
@@ -130,6 +132,7 @@ def test_outputs_replace_only_regular_files(files, tmp_path):
     assert done.exit_code == 2 and "exists" in done.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("odometry, name", [("dlio", "DLIO"), ("liosam", "LIO-SAM")])
 def test_lio_with_an_evalio_odometry_in_json(files, odometry, name):
     """`--method lio --odometry dlio|liosam`: the 2 s boxes trajectory after the LIO's

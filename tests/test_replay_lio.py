@@ -149,6 +149,7 @@ def test_cli_bag_and_lio(fake_lio, boxes, tmp_path):
     assert counts == {"/points": 11, "/imu": 201, "/ground_truth": 101, "/tf": 101, "/tf_static": 1}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("per_scan, steady", [(0.001, True), (0.01, False)])
 def test_the_rest_reports_what_the_odometry_did_while_the_sensor_stood_still(
     fake_lio, boxes, monkeypatch, tmp_path, per_scan, steady

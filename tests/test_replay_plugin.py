@@ -62,6 +62,7 @@ def toy(tmp_path_factory):
     )
 
 
+@pytest.mark.slow
 def test_a_plugin_odometry_runs_under_lf3pm_replay(files, toy):
     done = run(
         toy,
@@ -95,6 +96,7 @@ def test_a_plugin_odometry_runs_under_lf3pm_replay(files, toy):
     assert shown["toy"] == {"drift": 0.0} and {"genz", "dlio", "liosam"} <= set(shown)
 
 
+@pytest.mark.slow
 def test_a_plugin_odometry_s_settings_come_from_the_yaml(files, toy):
     """replay.odometries.toy in a --config file: lf3pm config shows it, lf3pm replay runs
     and records it (as the Python API's settings by name), a bad value is one line naming
@@ -121,6 +123,7 @@ def test_a_plugin_odometry_s_settings_come_from_the_yaml(files, toy):
         )
 
 
+@pytest.mark.slow
 def test_a_plugin_odometry_runs_in_replay_seeds_with_its_settings(files, toy):
     """What the studies call: replay_seeds over two seeds, the plugin's settings passed
     as the built-in odometries' are (its section validates them)."""
@@ -145,6 +148,7 @@ except lf3pm.Lf3pmError as err:
     assert lines[-1] == "toy.drift must be greater than or equal to 0, got -1.0"
 
 
+@pytest.mark.slow
 def test_a_plugin_odometry_runs_in_a_study_s_replay_workers(files, toy, tmp_path):
     """The studies' machinery (experiments.replay_tasks): replays in spawned worker
     processes, each record saved as it ends, find the plugin as the parent does."""
@@ -176,6 +180,7 @@ class Wrong:
 MISSING_PACKAGE = PLUGIN.replace('worker = "toy_odometry:ToyWorker"', 'worker = "toy_odometry_backend:Worker"')
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "source, attribute, message",
     [
@@ -200,6 +205,7 @@ def test_a_bad_plugin_is_one_line_naming_it(files, tmp_path, source, attribute, 
     assert done.returncode == 2 and done.stderr.strip() == f"lf3pm: error: {message}"
 
 
+@pytest.mark.slow
 def test_a_plugin_whose_odometry_is_not_installed_is_one_line(files, tmp_path):
     """The worker process imports the odometry's worker class; a missing package is one
     line naming the odometry (as for GenZ-LIO or evalio without lf3pm[lio])."""
@@ -224,6 +230,7 @@ def test_a_plugin_whose_odometry_is_not_installed_is_one_line(files, tmp_path):
     ]
 
 
+@pytest.mark.slow
 def test_lf3pm_s_own_entry_points_and_a_name_taken(tmp_path):
     """lf3pm's odometries declared as entry points (pyproject.toml) are the registry's own,
     not a clash; another package's odometry under one of their names is refused."""

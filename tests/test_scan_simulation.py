@@ -177,6 +177,7 @@ def test_the_python_wrapper_returns_the_core_scan():
         np.testing.assert_array_equal(getattr(scan, name), raw[name])
 
 
+@pytest.mark.slow
 def test_every_hit_is_the_nearest_disc_a_float64_brute_force_finds():
     """The caster's walk, slabs and skips only prune: each ray's hit is the nearest of
     all the map's discs, found here by testing every disc in float64. Rays on a disc's

@@ -106,6 +106,7 @@ def test_bad_parameters_are_one_line_errors(kwargs, needle):
     assert "\n" not in str(err.value) and needle in str(err.value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_scene_record(built, name):
     scene = built[name]
@@ -121,6 +122,7 @@ def test_scene_record(built, name):
     assert scene.description == dict(describe_scenes())[name]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_same_seed_same_points_other_seed_other_points(built, name):
     again = build_scene(name, seed=0)
@@ -131,6 +133,7 @@ def test_same_seed_same_points_other_seed_other_points(built, name):
     assert len(a) != len(b) or not np.array_equal(a, b)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_reference_pose_is_free_and_above_ground(built, name):
     scene = built[name]
@@ -191,6 +194,7 @@ def test_gobi_is_large_uneven_with_a_distant_warehouse(built):
     assert local_rise(pts[(r > 45.0) & (r < 80.0)]) < 3.0
 
 
+@pytest.mark.slow
 def test_wall_is_degenerate_or_far_worse_than_houses(built, indexed):
     houses = lf3pm.evaluate(indexed("houses"), built["houses"].reference_pose, "vlp16", noise=0.0)
     wall = lf3pm.evaluate(indexed("wall"), built["wall"].reference_pose, "vlp16", noise=0.0)
@@ -198,6 +202,7 @@ def test_wall_is_degenerate_or_far_worse_than_houses(built, indexed):
     assert wall.degenerate or wall.q_min > 10.0 * houses.q_min
 
 
+@pytest.mark.slow
 def test_meadow_residuals_scatter_far_more_than_on_houses(built, indexed):
     """Point-to-plane residuals at the true pose (no range noise): millimetres on walls
     and bare ground, scattered by the vegetation's small randomly oriented surfaces."""
@@ -222,6 +227,7 @@ def ground_points(points, ground_z=0.0, tol=0.02):
     return points[np.abs(points[:, 2] - ground_z) < tol]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(ZONED))
 def test_zones_lie_on_bare_ground(built, name):
     """Every zone is ground of the map (a sample within 0.2 m of each point of a
@@ -281,6 +287,7 @@ def test_tunnel_is_empty_inside_and_its_lane_is_clear_down_the_middle(built):
     assert not beyond.any()
 
 
+@pytest.mark.slow
 def test_tunnel_is_degenerate_along_its_axis_and_the_lane_is_not(built, indexed):
     """Mid-tunnel the weakest direction of the Gram is x, 10 times weaker than
     anywhere in the lane, and registration from 0.3 m starts slides along x;
@@ -299,6 +306,7 @@ def test_tunnel_is_degenerate_along_its_axis_and_the_lane_is_not(built, indexed)
     assert max(slide.translation_errors) > 0.25 and max(hold.translation_errors) < 0.01
 
 
+@pytest.mark.slow
 def test_tunnel_portal_at_the_mouth_would_fix_the_axis():
     """Why the tunnel sticks out of its portals: with the portal walls meeting the
     mouths' rims (mouth_length 0), rays grazing the walls hit the rims head-on and
@@ -361,6 +369,7 @@ def test_field_localizes_past_the_row_only_facing_back_towards_it(built, indexed
     assert not at_start.degenerate and np.count_nonzero(at_start.observations["points"][:, 2] > 0.3) > 100
 
 
+@pytest.mark.slow
 def test_cli_writes_a_readable_pcd(tmp_path):
     out = tmp_path / "boxes.pcd"
     result = run_cli("scene", "boxes", "-o", out, "--seed", "3")
@@ -379,6 +388,7 @@ def test_cli_list_names_every_scene():
         assert name in result.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args,needle",
     [

@@ -48,6 +48,7 @@ def store_digest(path: Path) -> str:
     return h.hexdigest()
 
 
+@pytest.mark.slow
 def test_a_cell_equals_evaluate_at_its_centre(boxes, built):
     _, world, sensor = boxes
     path, grid = built
@@ -67,6 +68,7 @@ def test_a_cell_equals_evaluate_at_its_centre(boxes, built):
     assert q[k, iy, ix] == pytest.approx(ref.metric.q_n, rel=1e-6)  # stored as float32
 
 
+@pytest.mark.slow
 def test_resume_after_interruption_is_bitwise_identical(boxes, built, tmp_path):
     _, world, sensor = boxes
     path, grid = built
@@ -80,6 +82,7 @@ def test_resume_after_interruption_is_bitwise_identical(boxes, built, tmp_path):
     assert store_digest(partial) == store_digest(path)
 
 
+@pytest.mark.slow
 def test_a_store_from_other_parameters_is_refused(boxes, built):
     _, world, sensor = boxes
     path, grid = built
@@ -112,6 +115,7 @@ def test_query_interpolates_and_its_gradient_matches_finite_differences(built):
     assert solm.query(cx, cy, 0.3)[0] == pytest.approx(solm.query(cx, cy, 0.3 + 2 * np.pi)[0])
 
 
+@pytest.mark.slow
 def test_masks_mark_boxes_as_obstacles_and_the_free_pad_as_free(boxes, tmp_path):
     scene, world, sensor = boxes
     grid = make_grid(world, "r2", 0.5, bounds=(-4, -4, 8, 4), height=1.0)
@@ -213,6 +217,7 @@ def test_bad_grids_are_refused(boxes, kwargs, needle):
         make_grid(world, args.pop("space"), args.pop("res"), **args)
 
 
+@pytest.mark.slow
 def test_cli_unwritable_output_and_unknown_sensor_leave_no_store(boxes, tmp_path):
     scene, _, _ = boxes
     map_path = tmp_path / "boxes.pcd"
@@ -236,6 +241,7 @@ def test_cli_unwritable_output_and_unknown_sensor_leave_no_store(boxes, tmp_path
     assert not (tmp_path / "s.zarr").exists() and blocker.is_file()
 
 
+@pytest.mark.slow
 def test_se2_yaw_reuse_is_close_to_exact_per_yaw_evaluation(boxes, tmp_path):
     _, world, _ = boxes
     mid70 = lf3pm.get_sensor("mid70")
@@ -294,6 +300,7 @@ def test_thinned_build_is_close_to_exact(boxes, built, tmp_path):
     assert ok.sum() > 50 and np.median(rel) < 0.05 and np.percentile(rel, 95) < 0.15
 
 
+@pytest.mark.slow
 def test_the_same_map_by_another_path_resumes_the_build(boxes, tmp_path, monkeypatch):
     scene, _, sensor = boxes
     write_points(tmp_path / "boxes.pcd", scene.points)

@@ -55,6 +55,7 @@ def assert_same_store(a: Path, b: Path):
     assert ga["done"][...].all()
 
 
+@pytest.mark.slow
 def test_the_crop_margin_holds_what_a_tile_sees(town):
     from lf3pm.solm.tiles import crop_margin
 
@@ -75,12 +76,14 @@ def _job(town):
     return make_job(sensor, grid, ScanConfig(noise=sensor.range_noise_sigma), solm=SolmConfig(tile=8))
 
 
+@pytest.mark.slow
 def test_crop_build_equals_the_whole_map_build_bitwise(town, whole, tmp_path):
     world, sensor, grid = town
     build_solm(world, sensor, grid, tmp_path / "c.zarr", tile=8, threads=2, crop=True)
     assert_same_store(whole, tmp_path / "c.zarr")
 
 
+@pytest.mark.slow
 def test_a_map_not_indexed_whole_builds_the_same_store(town, whole, tmp_path):
     from lf3pm import _core
     from lf3pm.map import load_map_points
@@ -96,6 +99,7 @@ def test_a_map_not_indexed_whole_builds_the_same_store(town, whole, tmp_path):
     assert_same_store(whole, tmp_path / "q.zarr")
 
 
+@pytest.mark.slow
 def test_the_cli_builds_a_map_above_crop_above_tile_by_tile(tmp_path):
     path = tmp_path / "boxes.npy"
     np.save(path, lf3pm.build_scene("boxes").points)
@@ -108,6 +112,7 @@ def test_the_cli_builds_a_map_above_crop_above_tile_by_tile(tmp_path):
     assert_same_store(stores["whole"], stores["crops"])
 
 
+@pytest.mark.slow
 def test_ray_engine_equals_the_local_engine_bitwise(town, whole, cluster, tmp_path):
     world, sensor, grid = town
     calls = []
@@ -124,6 +129,7 @@ def test_ray_engine_equals_the_local_engine_bitwise(town, whole, cluster, tmp_pa
     assert sum(c for c, _ in calls) == calls[0][1] == grid.nx * grid.ny
 
 
+@pytest.mark.slow
 def test_an_interrupted_cluster_build_resumes(town, whole, cluster, tmp_path):
     world, sensor, grid = town
     out = build_solm(world, sensor, grid, tmp_path / "r.zarr", tile=8, engine="ray", max_tiles=2)
@@ -133,6 +139,7 @@ def test_an_interrupted_cluster_build_resumes(town, whole, cluster, tmp_path):
     assert_same_store(whole, tmp_path / "r.zarr")
 
 
+@pytest.mark.slow
 def test_a_killed_worker_is_retried_and_changes_nothing(town, whole, cluster, tmp_path, monkeypatch):
     """The first attempt at one tile kills its worker process (os._exit, as a node
     lost mid-tile would); Ray reruns the task and the store is the local build's."""
@@ -162,6 +169,7 @@ def run_cli(*args):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "address, message",
     [("127.0.0.1:1", "no Ray head answers at 127.0.0.1:1"), ("nonsense", "--address must be HOST:PORT")],
@@ -177,6 +185,7 @@ def test_an_unreachable_cluster_is_one_line(tmp_path, address, message):
     assert not (tmp_path / "s.zarr").exists()
 
 
+@pytest.mark.slow
 def test_a_store_in_a_missing_or_unwritable_folder_is_refused_before_the_cluster_starts(tmp_path):
     path = tmp_path / "boxes.npy"
     np.save(path, lf3pm.build_scene("boxes").points)
@@ -190,6 +199,7 @@ def test_a_store_in_a_missing_or_unwritable_folder_is_refused_before_the_cluster
     assert done.returncode == 2 and "unknown engine 'spark'" in done.stderr
 
 
+@pytest.mark.slow
 def test_a_full_disk_under_the_ray_engine_is_the_local_engines_one_line(town, whole, cluster, tmp_path, mounted):
     """A worker's StorageError keeps its class through Ray: the build says, in one line,
     which tile's chunk failed, what it kept and how to resume, and the rerun with space

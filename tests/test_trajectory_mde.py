@@ -48,6 +48,7 @@ def test_seeds_do_not_depend_on_order(boxes):
     assert alone.mde == pytest.approx(forward.mde[2], rel=1e-9)
 
 
+@pytest.mark.slow
 def test_matches_the_cli(boxes, tmp_path):
     scene, world, target = boxes
     pcd = tmp_path / "boxes.pcd"

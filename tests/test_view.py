@@ -56,6 +56,7 @@ def test_a_large_map_is_subsampled_with_a_seed():
     assert len(layers.map_cloud(points, max_points=10_000)[0]) == 5000
 
 
+@pytest.mark.slow
 def test_the_solm_layer_is_the_channel_min_over_yaw_or_one_bin(site):
     d, _ = site
     solm = Solm.open(d / "solm.zarr")
@@ -101,6 +102,7 @@ def test_replay_tracks_read_both_replay_formats_and_refuse_one_without_positions
         layers.replay_tracks({"ape_rmse": 0.1})
 
 
+@pytest.mark.slow
 def test_what_lf3pm_replay_json_writes_is_shown(site, tmp_path):
     d, _ = site
     run = subprocess.run(
@@ -144,6 +146,7 @@ def test_the_weakest_direction_of_a_corridor_is_along_it():
     assert weak["eigenvalues"][0] < 1e-6 * weak["eigenvalues"][1]
 
 
+@pytest.mark.slow
 def test_inputs_are_checked_before_anything_is_served(site, tmp_path):
     d, _ = site
     with pytest.raises(Lf3pmError, match="no such map file"):
@@ -163,6 +166,7 @@ def test_inputs_are_checked_before_anything_is_served(site, tmp_path):
             check_port("127.0.0.1", taken.getsockname()[1])
 
 
+@pytest.mark.slow
 def test_the_cli_refuses_bad_input_in_one_line_with_status_2(site, tmp_path):
     d, _ = site
     with socket.socket() as taken:
@@ -208,6 +212,7 @@ def test_plans_between_clicked_poses_with_and_without_guidance(app):
         assert summary["predicted_error_m"] is None or summary["predicted_error_m"] > 0
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     __import__("browser").chromium() is None,
     reason="no Chromium for the browser test (Debian: apt-get install chromium; `make test` "
