@@ -53,7 +53,7 @@ import numpy as np
 from lf3pm.config import DEFAULTS, LocalizationConfig
 from lf3pm.errors import Lf3pmError
 from lf3pm.pose import se3_exp, se3_log
-from lf3pm.replays.replay_result import Estimate, MethodRun, library_versions, method_settings
+from lf3pm.replays.replay_result import Estimate, MethodRun, SectionMethod, library_versions
 from lf3pm.sensors import Sensor
 from lf3pm.validation.mde import RegistrationTarget
 
@@ -257,24 +257,13 @@ def localization_params(settings: LocalizationConfig) -> dict:
     return {"odometry": asdict(odometry), **recorded, "registration": "small_gicp PLANE_ICP"}
 
 
-class Localization:
+class Localization(SectionMethod):
     """The ``localization`` replay method (lf3pm.replays.methods.ReplayMethod): the map
-    prepared for registration once, then :func:`localize` with ``settings``."""
+    prepared for registration once, then :func:`localize` with ``settings`` (a
+    LocalizationConfig)."""
 
     name = "localization"
-    rest = 0.0
-    uses_odometry = False
-
-    def __init__(self, settings: LocalizationConfig = DEFAULTS.localization):
-        self.settings = settings
-
-    @classmethod
-    def from_params(cls, params: dict) -> Localization:
-        return cls(method_settings(cls.name, DEFAULTS.localization, params))
-
-    @classmethod
-    def from_config(cls, config) -> Localization:
-        return cls(config.localization)
+    section = "localization"
 
     def prepare(self, map, threads: int, prepared: RegistrationTarget | None = None) -> RegistrationTarget:
         return RegistrationTarget.for_map(map, prepared, threads)

@@ -22,7 +22,13 @@ import numpy as np
 from lf3pm.config import DEFAULTS, KissIcpConfig, validated
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
-from lf3pm.replays.replay_result import Estimate, MethodRun, ReplayResult, library_versions, method_settings
+from lf3pm.replays.replay_result import (
+    Estimate,
+    MethodRun,
+    ReplayResult,
+    SectionMethod,
+    library_versions,
+)
 from lf3pm.scan.scans import ScanStream
 from lf3pm.sensors import Sensor, as_sensor
 from lf3pm.trajectory.sampling import LinearMotion
@@ -81,24 +87,12 @@ def run_kiss_icp(
     return Estimate(poses=estimate, hits=hits, skipped=skipped, seconds=seconds)
 
 
-class KissIcpOdometry:
+class KissIcpOdometry(SectionMethod):
     """The ``odometry`` replay method (lf3pm.replays.methods.ReplayMethod): KISS-ICP with
-    ``settings`` on the replay's scans."""
+    ``settings`` (a KissIcpConfig) on the replay's scans."""
 
     name = "odometry"
-    rest = 0.0
-    uses_odometry = False
-
-    def __init__(self, settings: KissIcpConfig = DEFAULTS.kiss_icp):
-        self.settings = settings
-
-    @classmethod
-    def from_params(cls, params: dict) -> KissIcpOdometry:
-        return cls(method_settings(cls.name, DEFAULTS.kiss_icp, params))
-
-    @classmethod
-    def from_config(cls, config) -> KissIcpOdometry:
-        return cls(config.kiss_icp)
+    section = "kiss_icp"
 
     def prepare(self, map, threads: int, prepared=None):
         return None

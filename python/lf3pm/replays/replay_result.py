@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -40,6 +40,29 @@ class MethodRun(NamedTuple):
     estimate: Estimate
     params: dict
     versions: dict
+
+
+class SectionMethod:
+    """A replay method (lf3pm.replays.methods.ReplayMethod) whose settings are one section
+    of the configuration, ``section`` by its name in :class:`lf3pm.config.Config`: made
+    from it (``from_config``) or from its defaults updated by keyword parameters
+    (``from_params``). No rest, no odometry of the registry."""
+
+    name: ClassVar[str]
+    section: ClassVar[str]
+    rest = 0.0
+    uses_odometry = False
+
+    def __init__(self, settings: Section | None = None):
+        self.settings = getattr(DEFAULTS, self.section) if settings is None else settings
+
+    @classmethod
+    def from_params(cls, params: dict):
+        return cls(method_settings(cls.name, getattr(DEFAULTS, cls.section), params))
+
+    @classmethod
+    def from_config(cls, config):
+        return cls(getattr(config, cls.section))
 
 
 def method_settings(method: str, defaults: Section, params: dict) -> Section:
