@@ -32,6 +32,7 @@ from lf3pm.map import load_map
 from lf3pm.planner.plan import Planner
 from lf3pm.replays.lio import Lio
 from lf3pm.replays.localization import Localization
+from lf3pm.scenes.gobi import REDUCED as REDUCED_SCENE
 from lf3pm.sensors import get_sensor
 from lf3pm.solm import Solm
 from lf3pm.trajectory.robots import Robot
@@ -65,15 +66,7 @@ class GobiSetup:
 FULL = GobiSetup(scene_params={})
 #: A smaller desert (115 x 90 m, warehouse 60 m east, 4 buildings) for the demo.
 REDUCED = GobiSetup(
-    scene_params={
-        "length": 115.0,
-        "width": 90.0,
-        "west": 25.0,
-        "town_radius": 25.0,
-        "warehouse_distance": 60.0,
-        "buildings": 4,
-        "stones": 150,
-    },
+    scene_params=REDUCED_SCENE,
     mde_every=2.0,
     mde_trials=3,
     replay_seeds=2,

@@ -50,6 +50,17 @@ DEFAULTS = {
 }
 
 #: Warehouse footprint and height (m).
+#: A smaller desert (115 x 90 m, warehouse 60 m east, 4 buildings): the demo's
+#: (experiments/gobi.py REDUCED) and the benefit study's gobi map.
+REDUCED = {
+    "length": 115.0,
+    "width": 90.0,
+    "west": 25.0,
+    "town_radius": 25.0,
+    "warehouse_distance": 60.0,
+    "buildings": 4,
+    "stones": 150,
+}
 _WAREHOUSE = (40.0, 24.0, 9.0)
 
 

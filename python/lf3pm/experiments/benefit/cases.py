@@ -7,17 +7,7 @@ from dataclasses import replace
 
 from lf3pm.experiments.map_cases import MapCase
 from lf3pm.grid import Space
-
-#: The reduced Gobi scene of the demo (experiments/gobi.py): town and open desert.
-_GOBI = {
-    "length": 115.0,
-    "width": 90.0,
-    "west": 25.0,
-    "town_radius": 25.0,
-    "warehouse_distance": 60.0,
-    "buildings": 4,
-    "stones": 150,
-}
+from lf3pm.scenes.gobi import REDUCED as REDUCED_SCENE
 
 #: Zones of the two real maps (single scans in their sensor frames), where their ground is
 #: sampled densely enough to plan on (docs/benefit.md): the room scan's free floor spans
@@ -50,7 +40,7 @@ CASES = (
         8,
         yaw_reuse=True,
         ray_stride=2,
-        scene_params=_GOBI,
+        scene_params=REDUCED_SCENE,
         bounds=(-15.0, -30.0, 55.0, 30.0),
         zones={"start": (-8.0, -8.0, 8.0, 8.0), "goal": (30.0, -20.0, 45.0, 20.0)},
         min_distance=25.0,
