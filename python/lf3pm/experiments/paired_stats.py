@@ -143,3 +143,98 @@ def compare(
         if x is not None:
             out[f"median_{name}_overhead"] = float(np.median(np.asarray(x, float) / np.asarray(y, float) - 1.0))
     return Comparison(**out)
+
+
+# --- effects over groups (maps), paired failures, equivalence ---------------------------
+
+
+def geometric_mean(ratios) -> float:
+    """exp(mean log ratio) (NaN where empty)."""
+    r = np.asarray(ratios, float)
+    return float(np.exp(np.mean(np.log(r)))) if r.size else math.nan
+
+
+def group_bootstrap(groups, *, draws: int, seed: int, level: float) -> tuple[float, tuple[float, float]]:
+    """The geometric mean over groups of each group's geometric-mean ratio (each group,
+    a map, weighs the same however many pairs it has), with a percentile interval from
+    a two-stage bootstrap: resample the groups with replacement, then the pairs within
+    each group drawn (seeded: ``seed``; ``draws`` resamples; ``level`` e.g. 0.95). With
+    one group the first stage is moot and the interval is that of its pairs."""
+    logs = [np.log(np.asarray(g, float)) for g in groups if len(g)]
+    if not logs:
+        return math.nan, (math.nan, math.nan)
+    estimate = float(np.exp(np.mean([g.mean() for g in logs])))
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x6A95]))
+    chosen = rng.integers(0, len(logs), size=(draws, len(logs)))
+    means = np.empty(chosen.shape)
+    for i, g in enumerate(logs):  # each time a group is drawn, its pairs drawn afresh
+        where = chosen == i
+        means[where] = g[rng.integers(0, g.size, size=(int(where.sum()), g.size))].mean(axis=1)
+    stats = means.mean(axis=1)
+    lo, hi = np.exp(np.percentile(stats, [50 * (1 - level), 50 * (1 + level)]))
+    return estimate, (float(lo), float(hi))
+
+
+def sign_test_p(values) -> float:
+    """Two-sided exact sign test that ``values`` (e.g. maps' log ratios) centre on 0
+    (zeros dropped; NaN where none is left)."""
+    from scipy.stats import binomtest
+
+    v = np.asarray(values, float)
+    v = v[v != 0]
+    if v.size == 0:
+        return math.nan
+    return float(binomtest(int(np.sum(v > 0)), int(v.size), 0.5).pvalue)
+
+
+def wilcoxon_exact_p(values) -> float:
+    """Two-sided exact Wilcoxon signed-rank p that ``values`` centre on 0 (zeros
+    dropped; NaN with fewer than two left)."""
+    from scipy.stats import wilcoxon
+
+    v = np.asarray(values, float)
+    v = v[v != 0]
+    if v.size < 2:
+        return math.nan
+    return float(wilcoxon(v, method="exact").pvalue)
+
+
+def minimum_p(n: int) -> float:
+    """The smallest two-sided p an exact sign or signed-rank test can give on ``n``
+    units (all of one sign): 2 / 2^n (NaN for none)."""
+    return 2.0 ** (1 - n) if n > 0 else math.nan
+
+
+def mcnemar_exact_p(guided_only: int, unguided_only: int) -> float:
+    """McNemar's exact test of a paired binary outcome: the two-sided binomial p of the
+    discordant pairs (one plan fails, its twin does not) splitting evenly (1 where there
+    is none)."""
+    from scipy.stats import binomtest
+
+    n = guided_only + unguided_only
+    return 1.0 if n == 0 else float(binomtest(guided_only, n, 0.5).pvalue)
+
+
+def binomial_upper(successes: int, n: int, level: float) -> float:
+    """One-sided ``level`` Clopper-Pearson upper bound of a share (NaN for n = 0)."""
+    from scipy.stats import beta
+
+    if n == 0:
+        return math.nan
+    return 1.0 if successes >= n else float(beta.ppf(level, successes + 1, n - successes))
+
+
+def tost_t_p(values, low: float, high: float) -> float:
+    """Two one-sided t tests that the mean of ``values`` (log ratios) lies inside
+    (log low, log high): the larger of the two p (NaN with fewer than two values)."""
+    from scipy.stats import t
+
+    v = np.asarray(values, float)
+    if v.size < 2:
+        return math.nan
+    se = v.std(ddof=1) / math.sqrt(v.size)
+    if se == 0:
+        return 0.0 if math.log(low) < v.mean() < math.log(high) else 1.0
+    p_low = t.sf((v.mean() - math.log(low)) / se, v.size - 1)
+    p_high = t.cdf((v.mean() - math.log(high)) / se, v.size - 1)
+    return float(max(p_low, p_high))

@@ -15,18 +15,33 @@ from lf3pm.experiments.benefit.records import (
     LOCALIZATION,
     MEASURES,
     NONE,
+    AnalysisSettings,
     BeyondBound,
     BeyondPair,
     ChannelFit,
     Comparison,
     Comparisons,
+    Effect,
+    Equivalence,
+    Failures,
+    MapAnalysis,
     Measure,
+    MeasureAnalysis,
     Pair,
     RestCount,
     RiskSplit,
     SeedReplays,
 )
-from lf3pm.experiments.paired_stats import compare
+from lf3pm.experiments.paired_stats import (
+    binomial_upper,
+    compare,
+    group_bootstrap,
+    mcnemar_exact_p,
+    minimum_p,
+    sign_test_p,
+    tost_t_p,
+    wilcoxon_exact_p,
+)
 
 #: SOLM channels whose mean along each trajectory the summary records (calibration).
 CHANNELS = ("q_n", "q_min", "q_max", "step_norm")
@@ -182,3 +197,137 @@ def goal(comparisons: dict[str, Comparisons]) -> dict:
     if overall is not None and overall.pairs:
         out["length_overhead_at_most_15pct"] = overall.median_length_overhead <= 0.15
     return out
+
+
+# --- at the level of the map ----------------------------------------------------------
+
+
+def _rows(pairs: list[Pair], guidance: str, measure: Measure) -> list[tuple[Pair, SeedReplays, SeedReplays]]:
+    return [(p, *both) for p in pairs if (both := paired(p, guidance, measure)) is not None]
+
+
+def _ratio(guided: SeedReplays, unguided: SeedReplays) -> float:
+    return max(guided.ape, APE_FLOOR) / max(unguided.ape, APE_FLOOR)
+
+
+def _by_map(rows, cases: list[str]) -> dict[str, list[float]]:
+    """The ratios of ``rows`` grouped by map, in ``cases``' order (maps without a row left out)."""
+    groups = {case: [_ratio(a, b) for p, a, b in rows if p.case == case] for case in cases}
+    return {case: r for case, r in groups.items() if r}
+
+
+def map_effect(name: str, ratios: list[float], s: AnalysisSettings) -> Effect:
+    """One map's (or one map and robot's) effect: its pairs resampled."""
+    ratio, ci = group_bootstrap([ratios], draws=s.bootstrap_draws, seed=s.bootstrap_seed, level=s.level)
+    return Effect(name, 1, len(ratios), ratio, ci)
+
+
+def over_maps(name: str, groups: dict[str, list[float]], s: AnalysisSettings) -> Effect:
+    """The effect over maps (``groups``: each map's ratios): maps then pairs resampled,
+    the maps' log ratios tested (exact Wilcoxon and sign tests)."""
+    if not groups:
+        return Effect(name, 0, 0, math.nan, (math.nan, math.nan))
+    values = list(groups.values())
+    ratio, ci = group_bootstrap(values, draws=s.bootstrap_draws, seed=s.bootstrap_seed, level=s.level)
+    logs = [float(np.mean(np.log(r))) for r in values]
+    return Effect(
+        name,
+        len(values),
+        sum(len(r) for r in values),
+        ratio,
+        ci,
+        wilcoxon_exact_p(logs),
+        sign_test_p(logs),
+        minimum_p(len(values)),
+        sum(v < 0 for v in logs),
+    )
+
+
+def failures(name: str, rows, threshold: float) -> Failures:
+    """The paired failure table of ``rows`` (APE > ``threshold``) and McNemar's exact p."""
+    g = [a.ape > threshold for _, a, _ in rows]
+    u = [b.ape > threshold for _, _, b in rows]
+    both = sum(x and y for x, y in zip(g, u))
+    guided_only = sum(x and not y for x, y in zip(g, u))
+    unguided_only = sum(y and not x for x, y in zip(g, u))
+    neither = len(rows) - both - guided_only - unguided_only
+    p = mcnemar_exact_p(guided_only, unguided_only)
+    return Failures(name, threshold, both, guided_only, unguided_only, neither, p)
+
+
+def no_harm(rows, cases: list[str], s: AnalysisSettings) -> Equivalence | None:
+    """The pre-set equivalence test on ``rows`` (the no-risk pairs): the geometric-mean
+    ratio's 1 - 2 alpha interval (maps, then pairs) inside the margins; the tail: pairs
+    whose guided mean APE over seeds exceeds the unguided one by more than twice the
+    standard error of the difference, their share's one-sided upper bound at most
+    ``tail_max_share`` (not judged where no pair has two seeds a side)."""
+    groups = _by_map(rows, cases)
+    if not groups:
+        return None
+    values = list(groups.values())
+    ratio, ci = group_bootstrap(
+        values, draws=s.bootstrap_draws, seed=s.bootstrap_seed, level=1 - 2 * s.equivalence_alpha
+    )
+    flags = []
+    for _, a, b in rows:
+        x, y = np.asarray(a.ape_per_seed, float), np.asarray(b.ape_per_seed, float)
+        if min(x.size, y.size) >= 2:
+            se = math.sqrt(x.var(ddof=1) / x.size + y.var(ddof=1) / y.size)
+            flags.append(bool(x.mean() - y.mean() > 2.0 * se))
+    worse, n = sum(flags), len(flags)
+    upper = binomial_upper(worse, n, 1 - s.equivalence_alpha)
+    return Equivalence(
+        s.equivalence_low,
+        s.equivalence_high,
+        s.equivalence_alpha,
+        len(values),
+        sum(len(r) for r in values),
+        ratio,
+        ci,
+        bool(s.equivalence_low < ci[0] and ci[1] < s.equivalence_high),
+        bool(ci[1] < s.equivalence_high),
+        tost_t_p([float(np.mean(np.log(r))) for r in values], s.equivalence_low, s.equivalence_high),
+        n,
+        worse,
+        worse / n if n else math.nan,
+        upper,
+        s.tail_max_share,
+        bool(upper <= s.tail_max_share) if n else None,
+    )
+
+
+def measure_analysis(pairs: list[Pair], cases: list[str], measure: Measure, s: AnalysisSettings) -> MeasureAnalysis:
+    """One measure's analysis at the level of the map (records.MeasureAnalysis)."""
+    rows = _rows(pairs, s.guidance, measure)
+    robots = sorted({p.robot for p, _, _ in rows})
+    risky = [r for r in rows if r[0].at_risk]
+    safe = [r for r in rows if not r[0].at_risk]
+    ok = [r for r in rows if r[1].ape <= s.failure_ape_m and r[2].ape <= s.failure_ape_m]
+    by_map = _by_map(rows, cases)
+    by_map_robot = [
+        map_effect(f"{case}, {robot}", ratios, s)
+        for case in by_map
+        for robot in robots
+        if (ratios := [_ratio(a, b) for p, a, b in rows if p.case == case and p.robot == robot])
+    ]
+    groups = [("every pair", rows), ("at risk", risky), ("no risk", safe)]
+    groups += [(f"{robot} robot", [r for r in rows if r[0].robot == robot]) for robot in robots]
+    return MeasureAnalysis(
+        by_map=tuple(map_effect(case, ratios, s) for case, ratios in by_map.items()),
+        by_map_robot=tuple(by_map_robot),
+        over_maps=tuple(over_maps(name, _by_map(g, cases), s) for name, g in groups),
+        both_succeed=tuple(over_maps(name, _by_map([r for r in g if r in ok], cases), s) for name, g in groups[:3]),
+        failures=tuple(failures(name, g, s.failure_ape_m) for name, g in groups[:3]),
+        failures_by_map=tuple(
+            failures(case, [r for r in rows if r[0].case == case], s.failure_ape_m) for case in by_map
+        ),
+        no_harm=no_harm(safe, cases, s),
+    )
+
+
+def analyse(pairs: list[Pair], cases: list[str], settings: AnalysisSettings | None = None) -> MapAnalysis | None:
+    """The analysis at the level of the map and of failures for every measure
+    (:data:`MEASURES`) that replayed the judged guidance (None where none did)."""
+    s = settings or AnalysisSettings()
+    out = {m.key: measure_analysis(pairs, cases, m, s) for m in MEASURES if _rows(pairs, s.guidance, m)}
+    return MapAnalysis(s, out) if out else None

@@ -188,3 +188,50 @@ def example_figures(summary: Summary, folder: StudyFolder) -> None:
         bottom.legend(fontsize=8)
         fig.tight_layout()
         save_figure(fig, folder.examples / f"{case.name}.png")
+
+
+def forest_figure(summary: Summary, path: Path) -> None:
+    """The analysis at the level of the map (summary.map_analysis) as a forest plot: one
+    panel per measure; each map's geometric-mean APE ratio with its interval (at-risk
+    maps in red), each robot's beside it, and the effects over maps (diamonds) below."""
+    analysed = summary.map_analysis
+    if analysed is None:
+        return
+    plt = _plt()
+    measures = [m for m in (Measure(LOCALIZATION), Measure(LIO)) if m.key in analysed.by_measure]
+    risky = {p.case for p in summary.pairs if p.at_risk}
+    first = analysed.by_measure[measures[0].key]
+    rows = len(first.by_map) + len(first.over_maps) + 1
+    fig, axes = plt.subplots(1, len(measures), figsize=(5.2 * len(measures), 0.36 * rows + 1.4), dpi=110, squeeze=False)
+    for ax, measure in zip(axes[0], measures):
+        m = analysed.by_measure[measure.key]
+        robots = {e.name: e for e in m.by_map_robot}
+        labels = []
+        y = 0
+        for e in m.by_map:
+            colour = "tab:red" if e.name in risky else "tab:blue"
+            ax.errorbar(e.ratio, y, xerr=[[e.ratio - e.ci[0]], [e.ci[1] - e.ratio]], fmt="o", color=colour, capsize=3)
+            for offset, robot, marker in ((-0.22, "diff", "v"), (0.22, "omni", "^")):
+                r = robots.get(f"{e.name}, {robot}")
+                if r is not None:
+                    ax.plot(r.ratio, y + offset, marker, color=colour, ms=4, alpha=0.55)
+            labels.append(f"{e.name} ({e.pairs})")
+            y += 1
+        y += 1
+        labels.append("")
+        for e in m.over_maps:
+            if e.pairs:
+                ax.errorbar(
+                    e.ratio, y, xerr=[[e.ratio - e.ci[0]], [e.ci[1] - e.ratio]], fmt="D", color="k", capsize=3, ms=6
+                )
+            labels.append(f"over maps: {e.name} ({e.maps} maps)")
+            y += 1
+        ax.axvline(1.0, color="k", lw=0.8)
+        ax.set_xscale("log")
+        ax.set_yticks(range(len(labels)), labels, fontsize=8)
+        ax.invert_yaxis()
+        ax.set_xlabel(f"geometric-mean APE ratio, {analysed.settings.guidance} / none")
+        ax.set_title(f"{measure.title}: {100 * analysed.settings.level:g} % intervals", fontsize=9)
+    fig.suptitle("Red: maps with pairs at risk; triangles: the diff (v) and omni (^) robots' effects", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, Path(path))

@@ -153,6 +153,20 @@ class StudyFolder:
         return self.root / "benefit.md"
 
     @property
+    def pair_records(self) -> Path:
+        """pairs.jsonl: one :class:`Pair` a line (:func:`write_records`)."""
+        return self.root / "pairs.jsonl"
+
+    @property
+    def replay_records(self) -> Path:
+        """replays.jsonl: one :class:`Replay` a line, with its plan, method and seed."""
+        return self.root / "replays.jsonl"
+
+    @property
+    def forest(self) -> Path:
+        return self.root / "maps.png"
+
+    @property
     def examples(self) -> Path:
         return self.root / "examples"
 
@@ -545,6 +559,169 @@ class Parameters:
     rest_speed_limit_mps: float
 
 
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """The settings of the analysis at the level of the map and of failures
+    (analysis.analyse; docs/benefit.md, "How the study is analysed"), written once here
+    with their defaults: the bootstrap's resamples and seed, the intervals' level; the
+    APE beyond which a replay counts as failed (the LIO diverged); the no-harm
+    equivalence margins on the geometric-mean ratio and its alpha (TOST: the
+    1 - 2 alpha interval inside the margins); the largest share of no-risk pairs worse
+    beyond seed noise that still counts as no harm; the guidance judged."""
+
+    bootstrap_draws: int = 2000
+    bootstrap_seed: int = 0
+    level: float = 0.95
+    failure_ape_m: float = 1.0
+    equivalence_low: float = 0.9
+    equivalence_high: float = 1 / 0.9
+    equivalence_alpha: float = 0.05
+    tail_max_share: float = 0.10
+    guidance: str = DEFAULT
+
+
+@dataclass(frozen=True)
+class Effect:
+    """The geometric-mean APE ratio (guided / unguided) of a group of pairs, with its
+    bootstrap interval: one map (resampling its pairs), or several maps (resampling
+    maps, then pairs within each: each map weighs the same); over maps also the exact
+    Wilcoxon and sign tests of the maps' log ratios, the least p they can reach with
+    that many maps and how many maps' ratios are below 1."""
+
+    name: str
+    maps: int
+    pairs: int
+    ratio: float
+    ci: tuple[float, float]
+    wilcoxon_p: float = math.nan
+    sign_p: float = math.nan
+    minimum_p: float = math.nan
+    maps_below_1: int = 0
+
+    @property
+    def gains_nothing(self) -> bool:
+        """Its interval reaches 1 (or it has no pairs): no gain shown."""
+        return not self.pairs or not self.ci[1] < 1.0
+
+    @classmethod
+    def from_json(cls, d: dict) -> Effect:
+        return cls(**{**d, "ci": tuple(d["ci"])})
+
+
+@dataclass(frozen=True)
+class Failures:
+    """A paired binary outcome, the replay failed (APE > ``threshold_m``), over some
+    pairs: both failed, the guided plan only, the unguided only, neither; McNemar's
+    exact p on the discordant pairs."""
+
+    name: str
+    threshold_m: float
+    both: int
+    guided_only: int
+    unguided_only: int
+    neither: int
+    mcnemar_p: float
+
+    @property
+    def pairs(self) -> int:
+        return self.both + self.guided_only + self.unguided_only + self.neither
+
+
+@dataclass(frozen=True)
+class Equivalence:
+    """ "No harm" as a pre-set equivalence test on the no-risk pairs: the geometric-mean
+    ratio over maps with its 1 - 2 alpha two-stage bootstrap interval, inside
+    [low, high] or not (TOST by interval inclusion: guidance changes nothing), its upper
+    end below ``high`` or not (non-inferiority: guidance does no harm, it may help), the
+    two one-sided t tests over the maps' log ratios (p, a check); the tail: the share of pairs worse beyond seed noise
+    and its one-sided upper bound against ``tail_max_share`` (None: one seed, no seed
+    noise to judge by)."""
+
+    low: float
+    high: float
+    alpha: float
+    maps: int
+    pairs: int
+    ratio: float
+    ci: tuple[float, float]
+    equivalent: bool
+    not_worse: bool
+    tost_p_over_maps: float
+    tail_pairs: int
+    tail_worse: int
+    tail_share: float
+    tail_upper: float
+    tail_max_share: float
+    tail_no_harm: bool | None
+
+    @classmethod
+    def from_json(cls, d: dict) -> Equivalence:
+        return cls(**{**d, "ci": tuple(d["ci"])})
+
+
+@dataclass(frozen=True)
+class MeasureAnalysis:
+    """One measure's analysis at the level of the map (the default guidance against
+    none): each map's effect, each map and robot's, over maps for every pair, at risk,
+    no risk and per robot; the same where both plans succeeded; failures overall, at
+    risk, no risk and per map; the no-harm test."""
+
+    by_map: tuple[Effect, ...]
+    by_map_robot: tuple[Effect, ...]
+    over_maps: tuple[Effect, ...]
+    both_succeed: tuple[Effect, ...]
+    failures: tuple[Failures, ...]
+    failures_by_map: tuple[Failures, ...]
+    no_harm: Equivalence | None
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, d: dict) -> MeasureAnalysis:
+        def effects(key):
+            return tuple(Effect.from_json(e) for e in d[key])
+
+        return cls(
+            effects("by_map"),
+            effects("by_map_robot"),
+            effects("over_maps"),
+            effects("both_succeed"),
+            tuple(Failures(**f) for f in d["failures"]),
+            tuple(Failures(**f) for f in d["failures_by_map"]),
+            None if d["no_harm"] is None else Equivalence.from_json(d["no_harm"]),
+        )
+
+
+@dataclass(frozen=True)
+class MapAnalysis:
+    """The analysis at the level of the map, by measure key, with its settings."""
+
+    settings: AnalysisSettings
+    by_measure: Mapping[str, MeasureAnalysis]
+
+    def to_json(self) -> dict:
+        return {"settings": asdict(self.settings), **{k: m.to_json() for k, m in self.by_measure.items()}}
+
+    @classmethod
+    def from_json(cls, d: dict) -> MapAnalysis:
+        return cls(
+            AnalysisSettings(**d["settings"]),
+            {k: MeasureAnalysis.from_json(v) for k, v in d.items() if k != "settings"},
+        )
+
+
+@dataclass(frozen=True)
+class Redraw:
+    """A draw of a pair that was replaced (study.plan_pairs): its map, the draw's number
+    among the map's draws and why (an end with no free cell, ends too close, a guidance
+    that could not plan it)."""
+
+    case: str
+    draw: int
+    reason: str
+
+
 def _case(d: dict) -> MapCase:
     d = dict(d)
     d["robots"] = tuple(d["robots"])
@@ -578,6 +755,10 @@ class Summary:
     lio_beyond_bound: BeyondBound
     goal: Mapping[str, bool | None]
     localization_error: ErrorFit
+    #: The analysis at the level of the map (None: a summary written before it).
+    map_analysis: MapAnalysis | None = None
+    #: The draws of pairs replaced (None: a run that did not count them).
+    redrawn: tuple[Redraw, ...] | None = None
 
     def compared(self, measure: Measure) -> Comparisons:
         return self.comparisons[measure.key]
@@ -622,6 +803,8 @@ class Summary:
                 "lio_beyond_bound": self.lio_beyond_bound.to_json(),
                 "goal": dict(self.goal),
                 "localization_error": dict(self.localization_error.data),
+                **({} if self.map_analysis is None else {"map_analysis": self.map_analysis.to_json()}),
+                **({} if self.redrawn is None else {"redrawn": [asdict(r) for r in self.redrawn]}),
             }
         )
 
@@ -649,6 +832,8 @@ class Summary:
             lio_beyond_bound=BeyondBound.from_json(d["lio_beyond_bound"]),
             goal=dict(d["goal"]),
             localization_error=ErrorFit(d["localization_error"]),
+            map_analysis=MapAnalysis.from_json(d["map_analysis"]) if "map_analysis" in d else None,
+            redrawn=tuple(Redraw(**r) for r in d["redrawn"]) if "redrawn" in d else None,
         )
 
 
@@ -662,3 +847,50 @@ def write_summary(path, summary: Summary) -> None:
 
     with atomic_write(Path(path)) as fp:
         fp.write(json.dumps(summary.to_json(), indent=1).encode())
+
+
+# --- records as JSON Lines ------------------------------------------------------------
+
+
+def _jsonl(path, rows) -> None:
+    from lf3pm.atomic import atomic_write
+
+    with atomic_write(Path(path)) as fp:
+        fp.write("".join(json.dumps(versioned(row)) + "\n" for row in rows).encode())
+
+
+def replay_rows(folder: StudyFolder, summary: Summary):
+    """Each replay of the summary's plans found in ``folder`` as one record: its map,
+    pair, guidance, method, label, seed and :class:`Replay`'s fields."""
+    for pair in summary.pairs:
+        for name, plan in pair.plans.items():
+            for method, seeds in plan.replays.items():
+                label = replay_label(method, summary.lio_runs[pair.case])
+                for seed in range(len(seeds.ape_per_seed)):
+                    path = folder.replay(pair.case, pair.number, name, label, seed)
+                    if path.exists():
+                        head = {"case": pair.case, "pair": pair.number, "guidance": name, "method": method}
+                        yield {**head, "label": label, "seed": seed, **asdict(read_replay(path))}
+
+
+def write_records(folder: StudyFolder, summary: Summary) -> None:
+    """pairs.jsonl (one :class:`Pair` a line) and, where the folder holds the replays'
+    JSONs, replays.jsonl (one replay a line); each line with the schema version."""
+    _jsonl(folder.pair_records, (pair.to_json() for pair in summary.pairs))
+    rows = list(replay_rows(folder, summary))
+    if rows:
+        _jsonl(folder.replay_records, rows)
+
+
+def read_jsonl(path) -> list[dict]:
+    """The records of a JSON Lines file, each line's schema checked (:func:`checked`)."""
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    return [checked(json.loads(line), f"{path}:{k + 1}") for k, line in enumerate(lines) if line.strip()]
+
+
+def read_records(root) -> Summary:
+    """A study's records: summary.json's setup with the pairs of pairs.jsonl (the pairs
+    are the record; the summary's statistics are recomputed from them)."""
+    folder = StudyFolder(Path(root))
+    summary = read_summary(folder.summary)
+    return replace(summary, pairs=tuple(Pair.from_json(d) for d in read_jsonl(folder.pair_records)))

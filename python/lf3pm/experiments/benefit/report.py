@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import math
 
-from lf3pm.experiments.benefit.records import DEFAULT, MEASURES, Comparison, Measure, Summary
+from lf3pm.experiments.benefit.records import (
+    DEFAULT,
+    MEASURES,
+    Comparison,
+    Effect,
+    Failures,
+    MapAnalysis,
+    Measure,
+    Summary,
+)
 
 _VERDICT = {True: "yes", False: "no", None: "n/a (one seed)"}
 
@@ -162,4 +171,167 @@ def report(summary: Summary) -> str:
             + "; ".join(f"{k.replace('_', ' ')}: {_VERDICT[v]}" for k, v in summary.goal.items())
             + ".",
         ]
+    if summary.map_analysis is not None:
+        lines += map_sections(summary.map_analysis, summary)
+    lines += ["", redrawn_line(summary)]
     return "\n".join(lines) + "\n"
+
+
+def _p(v: float) -> str:
+    return "n/a" if not math.isfinite(v) else f"{v:.2g}"
+
+
+def _ratio(e: Effect) -> str:
+    if not e.pairs:
+        return "n/a"
+    return f"{e.ratio:.3g} [{e.ci[0]:.3g}, {e.ci[1]:.3g}]"
+
+
+def _failure_row(f: Failures) -> str:
+    return (
+        f"| {f.name} | {f.pairs} | {f.both} | {f.guided_only} | {f.unguided_only} | {f.neither} | {_p(f.mcnemar_p)} |"
+    )
+
+
+def map_sections(a: MapAnalysis, summary: Summary) -> list[str]:
+    """The analysis at the level of the map, of failures and of no harm (analysis.analyse)."""
+    s = a.settings
+    level = f"{100 * s.level:g} %"
+    lines = [
+        "",
+        f"## At the level of the map ({s.guidance} guidance against none)",
+        "",
+        "Each map's effect is the geometric mean of its pairs' APE ratios (guided / none) with a "
+        f"{level} interval from {s.bootstrap_draws} bootstrap resamples of its pairs (seed {s.bootstrap_seed}); "
+        "over maps each map weighs the same: the geometric mean of the maps' effects, its interval from "
+        "resampling maps, then pairs within each map drawn. The Wilcoxon signed-rank and sign tests are "
+        "exact, over the maps' log ratios (one value a map): with n maps neither can give a p below 2 / 2^n "
+        "(column 'least p'). Figure: maps.png.",
+    ]
+    measures = {m.key: m for m in MEASURES}
+    for key, m in a.by_measure.items():
+        title = measures[key].title
+        robots = sorted({e.name.split(", ")[-1] for e in m.by_map_robot})
+        by_robot = {e.name: e for e in m.by_map_robot}
+        lines += [
+            "",
+            f"### Per map ({title})",
+            "",
+            "| map | pairs | ratio [CI] | " + " | ".join(f"{r} robot" for r in robots) + " | gain shown |",
+            "|---|---|---|" + "---|" * len(robots) + "---|",
+        ]
+        for e in m.by_map:
+            cells = [_ratio(by_robot[f"{e.name}, {r}"]) if f"{e.name}, {r}" in by_robot else "" for r in robots]
+            gain = "no" if e.gains_nothing else "yes"
+            lines.append(f"| {e.name} | {e.pairs} | {_ratio(e)} | " + " | ".join(cells) + f" | {gain} |")
+        lines += [
+            "",
+            f"Over maps ({title}); 'both succeed': the pairs where both plans' APE is at most "
+            f"{s.failure_ape_m:g} m, the ratio of accuracy apart from failures:",
+            "",
+            "| pairs of | maps | pairs | ratio [CI] | Wilcoxon p over maps | sign p | least p | maps below 1 |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        rows = [(e.name, e) for e in m.over_maps] + [(f"{e.name}, both succeed", e) for e in m.both_succeed]
+        lines += [
+            f"| {name} | {e.maps} | {e.pairs} | {_ratio(e)} | {_p(e.wilcoxon_p)} | {_p(e.sign_p)} | "
+            f"{_p(e.minimum_p)} | {e.maps_below_1} of {e.maps} |"
+            for name, e in rows
+        ]
+        nothing = [e.name for e in m.by_map if e.gains_nothing]
+        lines += ["", f"Maps where no gain is shown (interval reaching 1): {', '.join(nothing) or 'none'}."]
+        lines += [
+            "",
+            f"Failures (APE > {s.failure_ape_m:g} m) as a paired outcome ({title}); McNemar's exact test on the "
+            "pairs where one plan fails and the other does not:",
+            "",
+            f"| pairs of | pairs | both fail | {s.guidance} only fails | none only fails | neither | McNemar p |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        lines += [_failure_row(f) for f in m.failures + m.failures_by_map]
+    eq = [(measures[key].title, m.no_harm) for key, m in a.by_measure.items() if m.no_harm is not None]
+    if eq:
+        first = eq[0][1]
+        inner = f"{100 * (1 - 2 * first.alpha):g} %"
+        lines += [
+            "",
+            "## No harm on the no-risk pairs (pre-set equivalence test)",
+            "",
+            f"The geometric-mean ratio over the no-risk maps with its {inner} interval (maps, then pairs, "
+            f"resampled): equivalent where it lies inside [{first.low:.2f}, {first.high:.2f}] (TOST at alpha "
+            f"{first.alpha:g}), not worse where its upper end is below {first.high:.2f} (non-inferiority); the "
+            "t-test TOST over the maps' log ratios as a check. The tail: the share of pairs whose guided "
+            "mean APE over seeds exceeds the unguided one by more than twice the standard error of the "
+            f"difference, its one-sided {100 * (1 - first.alpha):g} % upper bound at most "
+            f"{100 * first.tail_max_share:g} % for no harm (n/a: one seed, no seed noise to judge by).",
+            "",
+            f"| measure | maps | pairs | ratio [{inner} CI] | equivalent | not worse | TOST p over maps | "
+            "worse beyond seed noise (upper bound) | tail no harm |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for title, e in eq:
+            tail = "n/a" if not e.tail_pairs else f"{e.tail_worse} of {e.tail_pairs} ({_share(e.tail_upper)})"
+            lines.append(
+                f"| {title} | {e.maps} | {e.pairs} | {e.ratio:.3g} [{e.ci[0]:.3g}, {e.ci[1]:.3g}] | "
+                f"{'yes' if e.equivalent else 'no'} | {'yes' if e.not_worse else 'no'} | {_p(e.tost_p_over_maps)} | "
+                f"{tail} | {_VERDICT[e.tail_no_harm]} |"
+            )
+    return lines
+
+
+def redrawn_line(summary: Summary) -> str:
+    """The draws of pairs replaced because they could not be planned, listed."""
+    if summary.redrawn is None:
+        return "Redrawn pairs: not recorded (a run before they were counted)."
+    if not summary.redrawn:
+        return "Redrawn pairs: none (every draw was planned)."
+    listed = "; ".join(f"{r.case} draw {r.draw}: {r.reason}" for r in summary.redrawn)
+    return f"Redrawn pairs: {len(summary.redrawn)} draws replaced ({listed})."
+
+
+def regenerate(root, out=None, settings=None) -> Summary:
+    """The report, figures and summary.json of the study whose records are in ``root``
+    (summary.json's setup and pairs.jsonl; records.read_records), recomputed from those
+    records alone, into ``out`` (default ``root``): no map is loaded, no replay run. The
+    localization-error fit is the run's (it needs the maps); the example figures are
+    drawn only where ``out`` holds the study's SOLMs. ``settings``: the analysis's
+    (default: the records' own, else AnalysisSettings' defaults)."""
+    import shutil
+    from dataclasses import replace
+    from pathlib import Path
+
+    from lf3pm.atomic import atomic_write
+    from lf3pm.experiments.benefit import analysis
+    from lf3pm.experiments.benefit.figures import example_figures, forest_figure, ratio_figure, scatter_figure
+    from lf3pm.experiments.benefit.records import StudyFolder, read_records, write_summary
+
+    source = StudyFolder(Path(root))
+    folder = StudyFolder(Path(out) if out is not None else source.root)
+    records = read_records(source.root)
+    if settings is None and records.map_analysis is not None:
+        settings = records.map_analysis.settings
+    pairs, cases = list(records.pairs), [c.name for c in records.cases]
+    comparisons = analysis.comparisons(pairs, cases, [g.name for g in records.guided], list(records.lio_guidance[1:]))
+    summary = replace(
+        records,
+        comparisons=comparisons,
+        lio_rest=analysis.rest_counts(pairs),
+        calibration=analysis.calibration(pairs),
+        lio_beyond_bound=analysis.lio_beyond_bound(pairs),
+        goal=analysis.goal(comparisons),
+        map_analysis=analysis.analyse(pairs, cases, settings),
+    )
+    folder.root.mkdir(parents=True, exist_ok=True)
+    if folder.root.resolve() != source.root.resolve():
+        for name in (source.pair_records, source.replay_records):
+            if name.exists():
+                shutil.copyfile(name, folder.root / name.name)
+    write_summary(folder.summary, summary)
+    with atomic_write(folder.report) as fp:
+        fp.write(report(summary).encode())
+    scatter_figure(summary, folder.root / "scatter.png")
+    ratio_figure(summary, folder.root / "ratios.png")
+    forest_figure(summary, folder.forest)
+    if all(folder.solm(c).exists() for c in cases):
+        example_figures(summary, folder)
+    return summary
