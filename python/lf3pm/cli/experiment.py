@@ -147,6 +147,28 @@ def experiment_benefit(
         console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
 
 
+@experiment_app.command("benefit-report")
+def experiment_benefit_report(
+    records: Path = typer.Argument(..., help="A benefit study's folder: its summary.json and pairs.jsonl."),
+    out: Path | None = typer.Option(None, "-o", "--out", help="Where to write (default: the records' folder)."),
+):
+    """The benefit study's report, figures and summary.json again, from its records alone (no map, no replay)."""
+    with user_errors():
+        from lf3pm.errors import Lf3pmError
+
+        for name in ("summary.json", "pairs.jsonl"):
+            if not (records / name).is_file():
+                raise Lf3pmError(f"{records}: no {name} (a benefit study's records: lf3pm experiment benefit -o DIR)")
+        if out is not None:
+            check_output(out, folder=True, parents=True)
+        from lf3pm.experiments.benefit.report import regenerate
+
+        regenerate(records, out)
+        where = out if out is not None else records
+        console.print((where / "benefit.md").read_text())
+        console.print(f"wrote {where}/summary.json, benefit.md, scatter.png, ratios.png, maps.png")
+
+
 def _listed(values: list[str] | None) -> list[str] | None:
     """The values of a repeated option, each also split at commas (None: not given)."""
     return None if not values else [part for value in values for part in value.split(",") if part]
