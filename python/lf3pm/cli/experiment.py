@@ -97,7 +97,12 @@ def experiment_gobi(
 
 @experiment_app.command("benefit")
 def experiment_benefit(
-    out: Path = typer.Option(..., "-o", "--out", help="Output folder (an interrupted study resumes there)."),
+    out: Path | None = typer.Option(
+        None,
+        "-o",
+        "--out",
+        help="Output folder (an interrupted study resumes there; required but with --write-protocol).",
+    ),
     quick: bool = typer.Option(False, help="Two small maps, one pair each, one seed (a few minutes)."),
     seeds: int | None = option("benefit.seeds"),
     workers: int | None = option("benefit.workers"),
@@ -116,11 +121,37 @@ def experiment_benefit(
         help="Parameters from a YAML file: its benefit section, and its replay section's odometry "
         "settings and rest limits for the LIO replays (flags given override it).",
     ),
+    frozen: Path | None = typer.Option(
+        None,
+        "--frozen",
+        metavar="PROTOCOL.yaml",
+        help="Refuse to run (one line, exit 2) unless this run's protocol is the one frozen in the file "
+        '(docs/benefit.md, "The protocol").',
+    ),
+    write_protocol: Path | None = typer.Option(
+        None,
+        "--write-protocol",
+        metavar="FILE.yaml",
+        help="Write the protocol this run would use to FILE (to freeze it) and run nothing.",
+    ),
+    rules: Path | None = typer.Option(
+        None,
+        "--rules",
+        metavar="PROTOCOL.yaml",
+        help="Take the at-risk rule, the localization-error fit and the statistics from this protocol "
+        "(a sensitivity variant; default: lf3pm's).",
+    ),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
+        from lf3pm.errors import Lf3pmError
+
+        if out is None and write_protocol is None:
+            raise Lf3pmError("-o/--out is required (but with --write-protocol)")
         check_output(out, folder=True, parents=True)
+        check_output(write_protocol, parents=True)
         from lf3pm.experiments import benefit
+        from lf3pm.experiments.benefit import protocol as protocols
         from lf3pm.replays import registry
 
         cfg = configure(config, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry"))
@@ -130,21 +161,33 @@ def experiment_benefit(
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
+        settings = dict(
+            quick=quick,
+            seeds=study.seeds,
+            workers=study.workers,
+            pair_seed=study.pair_seed,
+            guidance=candidates,
+            lio=study.lio,
+            odometry=study.odometry,
+            replay=cfg.replay,
+            rules=protocols.DEFAULT_PROTOCOL if rules is None else protocols.read_protocol(rules),
+        )
+        if write_protocol is not None:
+            import datetime
+
+            from lf3pm.experiments.benefit.study import study_protocol
+
+            today = datetime.datetime.now(datetime.timezone.utc).date().isoformat()
+            written = study_protocol(**settings, date=today)
+            if frozen is not None:
+                protocols.check_frozen(protocols.read_protocol(frozen), written, frozen)
+            protocols.write_protocol(write_protocol, written)
+            console.print(f"wrote {write_protocol} (protocol sha256 {written.digest()})", soft_wrap=True)
+            return
         with progress_bar() as step:
-            benefit.run(
-                out,
-                quick=quick,
-                seeds=study.seeds,
-                workers=study.workers,
-                pair_seed=study.pair_seed,
-                guidance=candidates,
-                lio=study.lio,
-                odometry=study.odometry,
-                replay=cfg.replay,
-                progress=step,
-            )
+            benefit.run(out, **settings, frozen=frozen, progress=step)
         console.print((out / "benefit.md").read_text())
-        console.print(f"wrote {out}/summary.json, benefit.md, scatter.png, ratios.png, examples/")
+        console.print(f"wrote {out}/summary.json, protocol.yaml, benefit.md, scatter.png, ratios.png, examples/")
 
 
 @experiment_app.command("benefit-report")

@@ -14,44 +14,51 @@ follows q_n with slope 0.97 in log-log over the benefit study's 240 plans
 (docs/benefit.md, "Calibration"), so such a pose is predicted to localize an
 order of magnitude worse than the map's typical place. A pair is at risk when
 at least :data:`AT_RISK_SHARE` of its unguided plan's poses are.
+
+The rule's settings are the benefit study's protocol's (``protocol.risk``: a
+:class:`~lf3pm.experiments.benefit.protocol.RiskRule`); the constants below are its
+defaults, and each function takes another rule (``median="all_headings"``: the median
+over every cell and heading, the rule's first form).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from lf3pm.experiments.benefit.protocol import RISK, RiskRule
 from lf3pm.grid import Space
 
 #: A pose is at risk at q_n >= RISK_FACTOR x the map's median q_n (or degenerate).
-RISK_FACTOR = 10.0
+RISK_FACTOR = RISK.factor
 #: A pair is at risk when this share of its unguided plan's poses is.
-AT_RISK_SHARE = 0.1
+AT_RISK_SHARE = RISK.share
 #: Poses per second of trajectory the rule looks at.
-RISK_RATE = 10.0
+RISK_RATE = RISK.rate
 
 
-def map_median(solm) -> float:
+def map_median(solm, median: str = RISK.median) -> float:
     """The map's median q_n over its evaluated, non-degenerate cells; on an SE(2)
-    SOLM over each cell's best heading (module docstring)."""
+    SOLM over each cell's best heading (``median`` best_heading, module docstring) or
+    over every cell and heading (all_headings)."""
     q = np.asarray(solm.channel("q_n"), dtype=np.float64)
     q = np.where(np.isfinite(q) & ~np.asarray(solm.channel("degenerate")).astype(bool), q, np.inf)
-    if solm.grid_spec.space is Space.SE2:
+    if solm.grid_spec.space is Space.SE2 and median == "best_heading":
         q = q.min(axis=0)
     q = q[np.isfinite(q)]
     return float(np.median(q)) if q.size else float("nan")
 
 
-def risk_share(solm, trajectory, *, rate: float = RISK_RATE) -> float:
-    """The share of ``trajectory``'s poses (sampled at ``rate`` Hz) that are at risk
-    on ``solm`` (module docstring)."""
-    s = trajectory.sample(rate)
+def risk_share(solm, trajectory, *, rule: RiskRule = RISK) -> float:
+    """The share of ``trajectory``'s poses (sampled at ``rule.rate`` Hz) that are at risk
+    on ``solm`` by ``rule`` (module docstring)."""
+    s = trajectory.sample(rule.rate)
     cell = solm.grid_spec.cell(s["x"], s["y"], s["yaw"] if solm.grid_spec.space is Space.SE2 else None)
     q = np.asarray(solm.channel("q_n"), dtype=np.float64)[cell]
     degenerate = np.asarray(solm.channel("degenerate")).astype(bool)[cell]
-    risky = degenerate | (q >= RISK_FACTOR * map_median(solm))  # NaN (not evaluated): not at risk
+    risky = degenerate | (q >= rule.factor * map_median(solm, rule.median))  # NaN (not evaluated): not at risk
     return float(np.mean(risky))
 
 
-def at_risk(share: float) -> bool:
+def at_risk(share: float, rule: RiskRule = RISK) -> bool:
     """Whether a pair whose unguided plan has ``share`` of its poses at risk is at risk."""
-    return share >= AT_RISK_SHARE
+    return share >= rule.share

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from lf3pm.experiments.benefit.protocol import STATISTICS
 from lf3pm.experiments.benefit.records import (
     APE_FLOOR,
     DEFAULT,
@@ -48,8 +49,9 @@ CHANNELS = ("q_n", "q_min", "q_max", "step_norm")
 
 #: The bound the issue sets on the LIO's error along a guided plan (m): the report lists
 #: every default-guided plan beyond it, beside its unguided plan, so that where and how
-#: often the bound fails is read off the study, not looked for.
-LIO_BOUND = 0.3
+#: often the bound fails is read off the study, not looked for (the protocol's
+#: statistics.lio_bound_m).
+LIO_BOUND = STATISTICS.lio_bound_m
 
 
 def paired(pair: Pair, guidance: str, measure: Measure) -> tuple[SeedReplays, SeedReplays] | None:

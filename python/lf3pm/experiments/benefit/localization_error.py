@@ -24,12 +24,14 @@ from lf3pm.atomic import atomic_write
 from lf3pm.calibration import fit_localization_error
 from lf3pm.config import DEFAULT_HEIGHT, MetricConfig
 from lf3pm.errors import Lf3pmError
+from lf3pm.experiments.benefit.protocol import FIT, LocalizationFit
 from lf3pm.experiments.benefit.records import LOCALIZATION, Pair, Predictor, StudyFolder, read_json, write_json
 
-#: Poses per second of trajectory at which q_n is evaluated.
-FIT_RATE = 1.0
+#: Poses per second of trajectory at which q_n is evaluated (the protocol's default:
+#: ``protocol.localization_fit``).
+FIT_RATE = FIT.rate
 #: Fewest plans without a degenerate pose a fit is made from.
-MIN_PLANS = 10
+MIN_PLANS = FIT.min_plans
 
 
 def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: float = DEFAULT_HEIGHT) -> Predictor:
@@ -56,11 +58,12 @@ def plan_predictor(world, csv, sensor: str, *, rate: float = FIT_RATE, height: f
 
 
 def localization_error_fit(
-    out: Path, cases, pairs: list[Pair], *, seeds: int, pair_seed: int, step=None
+    out: Path, cases, pairs: list[Pair], *, seeds: int, pair_seed: int, step=None, fit: LocalizationFit = FIT
 ) -> tuple[dict, dict[tuple[str, int, str], Predictor]]:
     """The fit over the study's plans (``pairs``, with their replays), written to
     DIR/localization_error.json, and each plan's predictor by (map, pair number,
-    guidance)."""
+    guidance); ``fit``: the protocol's sampling (``rate``) and fewest plans."""
+    settings = fit
     by_name = {case.name: case for case in cases}
     folder = StudyFolder(Path(out))
     maps, q_n, ape, sensors, worlds, predictors = [], [], [], set(), {}, {}
@@ -77,7 +80,7 @@ def localization_error_fit(
                 from lf3pm.experiments.map_cases import load_case_map
 
                 worlds = {case.name: load_case_map(case)[0]}  # one map in memory at a time
-            predictor = plan_predictor(worlds[case.name], folder.root / plan.csv, case.sensor)
+            predictor = plan_predictor(worlds[case.name], folder.root / plan.csv, case.sensor, rate=settings.rate)
             write_json(path, predictor.to_json())
         if step is not None:
             step("q_n along the plans (localization-error fit)", len(plans))
@@ -92,12 +95,12 @@ def localization_error_fit(
         "sensors": sorted(sensors),
         "maps": sorted(set(maps)),
         "w1": MetricConfig().w1,
-        "predictor": f"time mean of q_n at {FIT_RATE:g} Hz along a trajectory (lf3pm.evaluate "
+        "predictor": f"time mean of q_n at {settings.rate:g} Hz along a trajectory (lf3pm.evaluate "
         "defaults), plans with a degenerate pose left out",
         "error": "APE rmse of map localization (docs/replay.md: small_gicp from wheel odometry "
         "with 2 % scale error and 0.01 rad/sqrt(s) yaw noise), median over seeds",
     }
-    if len(ape) < MIN_PLANS:  # a quick run: nothing to fit
+    if len(ape) < settings.min_plans:  # a quick run: nothing to fit
         fit = {"predictor": "q_n", "samples": len(ape), "provenance": provenance}
     else:
         fit = fit_localization_error(maps, q_n, ape, provenance=provenance)

@@ -26,6 +26,7 @@ import numpy as np
 
 from lf3pm.config import REPLAY_METHODS
 from lf3pm.errors import Lf3pmError
+from lf3pm.experiments.benefit.protocol import STATISTICS
 from lf3pm.experiments.guidance import UNGUIDED, Guidance
 from lf3pm.experiments.map_cases import MapCase
 from lf3pm.experiments.paired_stats import Comparison
@@ -35,8 +36,9 @@ from lf3pm.experiments.replay_tasks import load_replay, replay_json
 SCHEMA = 1
 
 #: An APE below this (m, 0.1 mm) is rounding: errors are floored to it before ratios,
-#: logarithms and log axes, which need a positive error.
-APE_FLOOR = 1e-4
+#: logarithms and log axes, which need a positive error (the protocol's
+#: statistics.ape_floor_m).
+APE_FLOOR = STATISTICS.ape_floor_m
 
 
 def _method(name: str) -> str:

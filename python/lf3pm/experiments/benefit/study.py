@@ -15,6 +15,19 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.benefit import analysis
 from lf3pm.experiments.benefit.cases import CASES, QUICK
 from lf3pm.experiments.benefit.localization_error import localization_error_fit
+from lf3pm.experiments.benefit.protocol import (
+    DEFAULT_PROTOCOL,
+    RISK,
+    STATISTICS,
+    Protocol,
+    ProtocolError,
+    RiskRule,
+    build,
+    check_folder,
+    check_frozen,
+    read_protocol,
+    write_protocol,
+)
 from lf3pm.experiments.benefit.records import (
     DEFAULT,
     LIO,
@@ -36,9 +49,8 @@ from lf3pm.experiments.benefit.records import (
 )
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
 from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
-from lf3pm.experiments.paired_stats import FAILURE_APE, WORSE_MARGIN
 from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
-from lf3pm.experiments.risk import AT_RISK_SHARE, RISK_FACTOR, at_risk, risk_share
+from lf3pm.experiments.risk import at_risk, risk_share
 
 
 def run(
@@ -53,6 +65,8 @@ def run(
     lio: str = DEFAULTS.benefit.lio,
     odometry: str = DEFAULTS.benefit.odometry,
     replay: ReplayConfig = DEFAULTS.replay,
+    rules: Protocol = DEFAULT_PROTOCOL,
+    frozen: Path | None = None,
     progress=None,
 ) -> Summary:
     """Runs (or resumes) the study into ``out`` and returns its summary. ``guidance``
@@ -62,31 +76,51 @@ def run(
     ``odometry``: the LIO's (:func:`lio_run`); the replays of each keep their own JSONs,
     so that a second odometry's run in the same folder reuses the SOLMs, plans and
     localization replays. ``replay``: the replay section whose ``odometries`` settings
-    the LIO runs with and whose rest limits judge its rests (:func:`lio_options`)."""
-    from lf3pm.replays import registry
-
+    the LIO runs with and whose rest limits judge its rests (:func:`lio_options`).
+    ``rules``: the protocol whose at-risk rule, localization-error fit and statistics
+    the run uses (its other fields are this run's arguments': :func:`study_protocol`).
+    ``frozen``: a protocol file the run's protocol must equal (ProtocolError naming the
+    first field that differs, before any work). The run writes its protocol to
+    DIR/protocol.yaml, and refuses a folder made under another."""
     folder = StudyFolder(Path(out))
-    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio, odometry=odometry)
-    registry.check_name(odometry, "benefit.odometry")
-    cases = cases if cases is not None else (QUICK if quick else CASES)
-    guidance = tuple(guidance) if guidance is not None else GUIDANCE
+    protocol = study_protocol(
+        quick=quick,
+        seeds=seeds,
+        workers=workers,
+        pair_seed=pair_seed,
+        cases=cases,
+        guidance=guidance,
+        lio=lio,
+        odometry=odometry,
+        replay=replay,
+        rules=rules,
+    )
+    if frozen is not None:
+        fixed = read_protocol(frozen)
+        check_frozen(fixed, protocol, frozen)
+        protocol = protocol.model_copy(update={"name": fixed.name, "date": fixed.date})
+    if protocol.statistics != STATISTICS:
+        raise ProtocolError(
+            "protocol.statistics: this lf3pm's analysis judges by the default statistics only "
+            f"({STATISTICS.model_dump()})"
+        )
+    check_folder(folder.root / "protocol.yaml", protocol)
+    cases, guidance, seeds = _resolved(quick, seeds, cases, guidance)
     names = [g.name for g in guidance]
-    reserved = (NONE, *Comparisons.GROUPS)
-    if len(set(names)) != len(names) or any(n in reserved for n in names):
-        raise Lf3pmError(f"guidance names must be distinct and none of {', '.join(reserved)}, got {', '.join(names)}")
     lio_names = [NONE] + (names if lio == "all" else [n for n in names if n == DEFAULT])
-    if quick:
-        seeds = 1
     step = progress or (lambda label, total, advance=1, restart=False: None)
     started = time.perf_counter()
     folder.root.mkdir(parents=True, exist_ok=True)
+    write_protocol(folder.root / "protocol.yaml", protocol)
     pairs, tasks = [], []
     lio_runs = {case.name: lio_run(case, odometry, replay) for case in cases}
     options = {case: lio_options(run.odometry, replay) for case, run in lio_runs.items()}
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
         solm_path = build_case_solm(case, folder.solm(case.name))
-        drawn = plan_pairs(case, solm_path, folder, np.random.SeedSequence([pair_seed, number]), guidance)
+        drawn = plan_pairs(
+            case, solm_path, folder, np.random.SeedSequence([pair_seed, number]), guidance, protocol.risk
+        )
         for pair in drawn:
             pairs.append(pair)
             for name, plan in pair.plans.items():
@@ -101,7 +135,9 @@ def run(
     seconds = time.perf_counter() - started  # the runtime the report states: to the replays' end
     pairs, replay_seconds = with_replays(folder, pairs, lio_runs, lio_names, seeds)
     comparisons = analysis.comparisons(pairs, [c.name for c in cases], names, lio_names[1:])
-    fit, predictors = localization_error_fit(folder.root, cases, pairs, seeds=seeds, pair_seed=pair_seed, step=step)
+    fit, predictors = localization_error_fit(
+        folder.root, cases, pairs, seeds=seeds, pair_seed=pair_seed, step=step, fit=protocol.localization_fit
+    )
     pairs = [
         replace(
             pair,
@@ -120,7 +156,13 @@ def run(
         lio_runs=lio_runs,
         odometry_names=odometry_names(lio_runs),
         replay_cpu_s=replay_seconds,
-        parameters=Parameters(FAILURE_APE, WORSE_MARGIN, AT_RISK_SHARE, RISK_FACTOR, replay.rest_speed_limit),
+        parameters=Parameters(
+            protocol.statistics.failure_ape_m,
+            protocol.statistics.worse_margin_m,
+            protocol.risk.share,
+            protocol.risk.factor,
+            replay.rest_speed_limit,
+        ),
         cases=tuple(cases),
         guidance=(UNGUIDED,) + guidance,
         pairs=tuple(pairs),
@@ -133,6 +175,56 @@ def run(
     )
     write_outputs(folder, summary)
     return summary
+
+
+def _resolved(quick: bool, seeds: int, cases, guidance) -> tuple[tuple, tuple, int]:
+    """(cases, guidance, replay seeds) a run uses: the given ones or the study's (the
+    quick mode's cases and one seed)."""
+    cases = tuple(cases) if cases is not None else (QUICK if quick else CASES)
+    guidance = tuple(guidance) if guidance is not None else GUIDANCE
+    return cases, guidance, 1 if quick else seeds
+
+
+def study_protocol(
+    *,
+    quick: bool = False,
+    seeds: int = DEFAULTS.benefit.seeds,
+    workers: int = DEFAULTS.benefit.workers,
+    pair_seed: int = DEFAULTS.benefit.pair_seed,
+    cases: tuple | None = None,
+    guidance: tuple | None = None,
+    lio: str = DEFAULTS.benefit.lio,
+    odometry: str = DEFAULTS.benefit.odometry,
+    replay: ReplayConfig = DEFAULTS.replay,
+    rules: Protocol = DEFAULT_PROTOCOL,
+    date: str = "",
+) -> Protocol:
+    """The protocol a :func:`run` with these arguments runs under (its settings checked
+    first: ConfigError or Lf3pmError in one line); ``rules``: the protocol whose risk
+    rule, fit and statistics it takes (``name`` too)."""
+    from lf3pm.replays import registry
+
+    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio, odometry=odometry)
+    registry.check_name(odometry, "benefit.odometry")
+    cases, guidance, seeds = _resolved(quick, seeds, cases, guidance)
+    names = [g.name for g in guidance]
+    reserved = (NONE, *Comparisons.GROUPS)
+    if len(set(names)) != len(names) or any(n in reserved for n in names):
+        raise Lf3pmError(f"guidance names must be distinct and none of {', '.join(reserved)}, got {', '.join(names)}")
+    return build(
+        cases=cases,
+        guidance=guidance,
+        pair_seed=pair_seed,
+        seeds=seeds,
+        lio=lio,
+        odometry=odometry,
+        replay=replay,
+        risk=rules.risk,
+        statistics=rules.statistics,
+        localization_fit=rules.localization_fit,
+        name=rules.name,
+        date=date,
+    )
 
 
 def write_outputs(folder: StudyFolder, summary: Summary) -> None:
@@ -153,10 +245,16 @@ def write_outputs(folder: StudyFolder, summary: Summary) -> None:
 
 
 def plan_pairs(
-    case: MapCase, solm_path: Path, folder: StudyFolder, seed: np.random.SeedSequence, guidance: tuple
+    case: MapCase,
+    solm_path: Path,
+    folder: StudyFolder,
+    seed: np.random.SeedSequence,
+    guidance: tuple,
+    rule: RiskRule = RISK,
 ) -> list[Pair]:
     """``case.pairs`` seeded pairs, each planned with every guidance (a draw that some
-    guidance cannot plan is replaced), trajectories written as CSV."""
+    guidance cannot plan is replaced), trajectories written as CSV; at risk or not by
+    ``rule`` (the protocol's)."""
     from lf3pm.planner.plan import Planner
     from lf3pm.solm import Solm
     from lf3pm.trajectory.robots import Robot
@@ -186,7 +284,7 @@ def plan_pairs(
             for g in (UNGUIDED,) + guidance:
                 plan = planner.plan(start, goal, robot=robot, metric=g.channel, weight=g.weight, power=g.power)
                 if g is UNGUIDED:
-                    risk = risk_share(planner.solm, plan.trajectory)
+                    risk = risk_share(planner.solm, plan.trajectory, rule=rule)
                 csv = trajectories / f"{number:02d}_{robot.kind}_{g.name}.csv"
                 write_plan(plan.trajectory, csv, folder.replays(case.name), plan_prefix(number, g.name))
                 summary = plan.summary()
@@ -200,7 +298,7 @@ def plan_pairs(
                 )
         except Lf3pmError:
             continue
-        pairs.append(Pair(case.name, number, robot.kind, start, goal, risk, at_risk(risk), plans))
+        pairs.append(Pair(case.name, number, robot.kind, start, goal, risk, at_risk(risk, rule), plans))
     return pairs
 
 

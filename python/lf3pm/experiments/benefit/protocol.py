@@ -1,0 +1,344 @@
+"""The benefit study's protocol: every setting that decides its outcome, in one versioned
+document (docs/benefit.md, "The protocol").
+
+A :class:`Protocol` holds the pair seed and the replay seeds, the cases (their names and
+a SHA-256 of their content), the guidance compared with its weights, the LIO's
+odometry with each chosen odometry's settings, the replays' and localization's
+settings, lf3pm's defaults the plans are made with (SOLM, planner, robot), the at-risk
+rule (:class:`RiskRule`), the localization-error fit's sampling
+(:class:`LocalizationFit`) and the statistics (:class:`Statistics`). The field
+defaults are the study's constants, written once here: ``risk``, ``analysis``,
+``records`` and ``localization_error`` read them from :data:`DEFAULT_PROTOCOL`.
+
+Every run writes its protocol to ``DIR/protocol.yaml`` and its :func:`digest` into
+summary.json; ``lf3pm experiment benefit --frozen FILE`` refuses to start where the
+protocol it would run differs from FILE's (:func:`check_frozen`), naming the first
+field that differs; ``--write-protocol FILE`` writes the protocol a run would use,
+to freeze it. ``name`` and ``date`` describe the document and are no part of the
+comparison nor of the digest.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import MISSING, asdict, fields
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import Field, ValidationError
+
+from lf3pm.config import ConfigError, Section, describe
+
+#: The version of the protocol's schema: a document of another is refused.
+VERSION = 1
+#: Fields that describe the document rather than the study: not compared, not hashed.
+METADATA = ("name", "date")
+
+
+class ProtocolError(ConfigError):
+    """A protocol that cannot be read, or that differs from the one a run would use."""
+
+
+class RiskRule(Section):
+    """Which pairs are at risk, from the unguided plan and its SOLM alone
+    (lf3pm.experiments.risk): a pose is at risk when its cell is degenerate or its q_n
+    is at least ``factor`` times the map's median; a pair when ``share`` of its
+    unguided plan's poses (sampled at ``rate`` Hz) are."""
+
+    factor: float = Field(10.0, gt=0, description="A pose is at risk at q_n >= factor x the map's median q_n.")
+    share: float = Field(0.1, gt=0, le=1, description="A pair is at risk when this share of its poses is.")
+    rate: float = Field(10.0, gt=0, le=1000, description="Poses per second of trajectory the rule looks at.")
+    median: Literal["best_heading", "all_headings"] = Field(
+        "best_heading",
+        description="The map's median on an SE(2) SOLM: over each cell's best heading (the minimum over "
+        "yaw), or over every cell and heading (the rule's first form).",
+    )
+
+
+class Statistics(Section):
+    """How plans are compared (paired_stats, analysis, records)."""
+
+    bootstrap_draws: int = Field(2000, ge=1, description="Bootstrap resamples of the median ratio's interval.")
+    bootstrap_seed: int = Field(0, ge=0, description="The bootstrap's seed.")
+    ci_level: float = Field(0.95, gt=0, lt=1, description="The intervals' confidence level.")
+    failure_ape_m: float = Field(1.0, gt=0, description="An APE above this (m) is a failure.")
+    worse_margin_m: float = Field(
+        0.01, ge=0, description="A guided plan is meaningfully worse beyond seed noise and by more than this (m)."
+    )
+    ape_floor_m: float = Field(1e-4, gt=0, description="Errors are floored to this (m) before ratios and logs.")
+    lio_bound_m: float = Field(0.3, gt=0, description="The LIO's bound along a guided plan (m).")
+
+
+class LocalizationFit(Section):
+    """The localization-error fit (lf3pm.experiments.benefit.localization_error)."""
+
+    rate: float = Field(1.0, gt=0, le=1000, description="Poses per second at which q_n is evaluated.")
+    min_plans: int = Field(10, ge=1, description="Fewest plans without a degenerate pose a fit is made from.")
+
+
+class GuidanceEntry(Section):
+    """One guidance compared with none (lf3pm.experiments.guidance.Guidance)."""
+
+    name: str
+    channel: str
+    power: float
+    weight: float
+
+
+class Lio(Section):
+    """The LIO replays: which plans, which odometry (per map: the one chosen for its
+    sensor), each chosen odometry's settings (lf3pm's defaults with the configuration's
+    replay.odometries over them) and version (lf3pm's build where it has one) and the
+    rest limits that judge its rests."""
+
+    plans: Literal["all", "default"] = "all"
+    odometry: str = "auto"
+    chosen: dict[str, str] = {}
+    settings: dict[str, dict[str, Any]] = {}
+    versions: dict[str, str] = {}
+    rest_window: float = 0.5
+    rest_speed_limit: float = 0.05
+
+
+class Protocol(Section):
+    """The benefit study's whole configuration (module docstring)."""
+
+    version: int = VERSION
+    name: str = "benefit study"
+    date: str = ""
+    pair_seed: int = 0
+    seeds: int = 3
+    cases: list[str] = []
+    cases_sha256: str = ""
+    guidance: list[GuidanceEntry] = []
+    lio: Lio = Lio()
+    replay: dict[str, Any] = {}
+    localization: dict[str, Any] = {}
+    defaults: dict[str, dict[str, Any]] = {}
+    risk: RiskRule = RiskRule()
+    localization_fit: LocalizationFit = LocalizationFit()
+    statistics: Statistics = Statistics()
+
+    def content(self) -> dict:
+        """What is compared and hashed: the document less :data:`METADATA`, as JSON."""
+        return {k: v for k, v in self.model_dump(mode="json").items() if k not in METADATA}
+
+    def digest(self) -> str:
+        """SHA-256 of the canonical JSON of :meth:`content`."""
+        return hashlib.sha256(canonical(self.content()).encode()).hexdigest()
+
+    def to_yaml(self) -> str:
+        import yaml
+
+        head = (
+            f"# The benefit study's protocol (lf3pm.experiments.benefit.protocol, version {self.version}).\n"
+            f"# sha256 of its content (name and date aside): {self.digest()}\n"
+        )
+        return head + yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False, width=100)
+
+
+#: The protocol's defaults: the study's constants (risk, statistics, the fit's sampling).
+DEFAULT_PROTOCOL = Protocol()
+RISK = DEFAULT_PROTOCOL.risk
+STATISTICS = DEFAULT_PROTOCOL.statistics
+FIT = DEFAULT_PROTOCOL.localization_fit
+
+
+def canonical(data) -> str:
+    """JSON with sorted keys and no spaces: the same bytes for the same content."""
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False, default=_plain)
+
+
+def _plain(value):
+    if hasattr(value, "value"):  # an Enum (Space)
+        return value.value
+    if isinstance(value, tuple):
+        return list(value)
+    raise TypeError(f"{type(value).__name__} is not JSON")
+
+
+def case_content(case) -> dict:
+    """A MapCase's fields that differ from MapCase's defaults (a field added later with
+    a default that keeps the old behaviour leaves the digest as it was), as JSON."""
+    out = {}
+    for f in fields(case):
+        value = getattr(case, f.name)
+        if f.default is not MISSING:
+            default = f.default
+        elif f.default_factory is not MISSING:
+            default = f.default_factory()
+        else:
+            out[f.name] = value  # a field without a default: always stated
+            continue
+        if value != default:
+            out[f.name] = value
+    return json.loads(canonical(out))
+
+
+def cases_digest(cases) -> str:
+    """SHA-256 of the cases' canonical content, in their order (a case's pairs are drawn
+    from its index)."""
+    return hashlib.sha256(canonical([case_content(c) for c in cases]).encode()).hexdigest()
+
+
+#: The replay section's rest limits: the LIO's (Lio), not the replays' in general.
+_REST = ("rest_window", "rest_speed_limit")
+
+
+def build(
+    *,
+    cases,
+    guidance,
+    pair_seed: int,
+    seeds: int,
+    lio: str,
+    odometry: str,
+    replay,
+    risk: RiskRule = RISK,
+    statistics: Statistics = STATISTICS,
+    localization_fit: LocalizationFit = FIT,
+    name: str = DEFAULT_PROTOCOL.name,
+    date: str = "",
+) -> Protocol:
+    """The protocol of a run with these settings: ``cases`` (MapCases), ``guidance``
+    (Guidance, without none), ``replay`` (the replay section whose odometries' settings
+    and rest limits the LIO runs with; its other settings are lf3pm's defaults, which
+    the replays run with)."""
+    from lf3pm.config import DEFAULTS
+    from lf3pm.experiments.benefit.study import lio_run
+    from lf3pm.replays import registry
+
+    runs = {case.name: lio_run(case, odometry, replay) for case in cases}
+    chosen = sorted({run.odometry for run in runs.values()})
+    sections = registry.settings(replay.odometries)
+    fixed = DEFAULTS.replay.model_dump(mode="json")
+    return Protocol(
+        name=name,
+        date=date,
+        pair_seed=pair_seed,
+        seeds=seeds,
+        cases=[case.name for case in cases],
+        cases_sha256=cases_digest(cases),
+        guidance=[GuidanceEntry(**asdict(g)) for g in guidance],
+        lio=Lio(
+            plans=lio,
+            odometry=odometry,
+            chosen={case: run.odometry for case, run in runs.items()},
+            settings={key: sections[key].model_dump(mode="json") for key in chosen},
+            versions={key: _version(registry.odometry(key)) for key in chosen},
+            rest_window=replay.rest_window,
+            rest_speed_limit=replay.rest_speed_limit,
+        ),
+        replay={k: v for k, v in fixed.items() if k not in ("method", "seeds", "odometry", "odometries", *_REST)},
+        localization=DEFAULTS.localization.model_dump(mode="json"),
+        defaults={s: getattr(DEFAULTS, s).model_dump(mode="json") for s in ("solm", "planner", "robot", "scan")},
+        risk=risk,
+        statistics=statistics,
+        localization_fit=localization_fit,
+    )
+
+
+def _version(adapter) -> str:
+    """The version an odometry's replays run with: lf3pm's build of it where it has one."""
+    return str(getattr(adapter, "build", None) or adapter.version)
+
+
+def first_difference(frozen, current, path: str = "protocol") -> tuple[str, Any, Any] | None:
+    """(dotted path, frozen value, current value) of the first place two protocols'
+    contents (or parts of them) differ, in the frozen one's order; None where equal."""
+    if isinstance(frozen, dict) and isinstance(current, dict):
+        for key in list(frozen) + [k for k in current if k not in frozen]:
+            if key not in current or key not in frozen:
+                return (f"{path}.{key}", frozen.get(key, "(absent)"), current.get(key, "(absent)"))
+            found = first_difference(frozen[key], current[key], f"{path}.{key}")
+            if found:
+                return found
+        return None
+    if isinstance(frozen, list) and isinstance(current, list):
+        for i, (a, b) in enumerate(zip(frozen, current)):
+            found = first_difference(a, b, f"{path}[{i}]")
+            if found:
+                return found
+        if len(frozen) != len(current):
+            return (f"{path} (length)", len(frozen), len(current))
+        return None
+    if _same(frozen, current):
+        return None
+    return (path, frozen, current)
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, bool) or isinstance(b, bool):
+        return a is b
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return a == b or (math.isnan(a) and math.isnan(b))
+    return a == b
+
+
+def _shown(value) -> str:
+    return json.dumps(value) if isinstance(value, (str, dict, list)) else str(value)
+
+
+def compared(frozen: Protocol, current: Protocol, what: str = "frozen", other: str = "this run") -> str | None:
+    """One line naming the first field where ``current`` differs from ``frozen`` (None:
+    the same), e.g. ``protocol.risk.factor: frozen 10.0, this run 9.0``."""
+    found = first_difference(frozen.content(), current.content())
+    if found is None:
+        return None
+    path, a, b = found
+    return f"{path}: {what} {_shown(a)}, {other} {_shown(b)}"
+
+
+def check_frozen(frozen: Protocol, current: Protocol, path) -> None:
+    """ProtocolError in one line where ``current`` is not the protocol frozen in ``path``."""
+    line = compared(frozen, current)
+    if line is not None:
+        raise ProtocolError(f"{line} (--frozen {path}: this run's protocol differs; nothing was run)")
+
+
+def read_protocol(path) -> Protocol:
+    """The protocol of a YAML file; ProtocolError in one line naming the file otherwise."""
+    from lf3pm.limits import load_yaml, read_text_file
+
+    text = read_text_file(path, "protocol", ProtocolError)
+    try:
+        import yaml
+
+        data = load_yaml(text, path, ProtocolError)
+    except yaml.YAMLError as err:
+        raise ProtocolError(f"{path}: not YAML ({str(err).splitlines()[0]})") from None
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{path}: a protocol is a mapping of its fields")
+    if data.get("version") != VERSION:
+        raise ProtocolError(f"{path}: a protocol of version {data.get('version')!r}, not {VERSION}")
+    try:
+        return Protocol(**data)
+    except ValidationError as err:
+        raise ProtocolError(f"{path}: {describe(err, 'protocol')}") from None
+
+
+def write_protocol(path, protocol: Protocol) -> None:
+    """``protocol`` as YAML at ``path`` (atomically)."""
+    from lf3pm.atomic import atomic_write
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(Path(path)) as fp:
+        fp.write(protocol.to_yaml().encode())
+
+
+def check_folder(path, protocol: Protocol) -> None:
+    """ProtocolError in one line where the study folder's protocol.yaml (``path``) was
+    written under another protocol than ``protocol`` (the LIO's odometry and its
+    settings aside: its replays are labelled apart, docs/benefit.md); none there: the
+    folder is new or older than protocols."""
+    if not Path(path).exists():
+        return
+    before = read_protocol(path)
+    same_lio = {"lio": protocol.lio}
+    line = compared(before.model_copy(update=same_lio), protocol, "the folder's", "this run")
+    if line is not None:
+        raise ProtocolError(
+            f"{Path(path).parent} was made under another protocol ({line}): use another folder rather than mix them"
+        )
