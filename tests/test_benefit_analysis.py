@@ -1,0 +1,200 @@
+"""The benefit study's analysis at the level of the map (issue 41, items 3-5): the
+two-stage bootstrap, the tests over maps, McNemar's exact test, the equivalence test,
+the records as JSON Lines and the report regenerated from them alone, each checked on a
+case whose answer is known or against committed records."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lf3pm.experiments import paired_stats
+from lf3pm.experiments.benefit import analysis
+from lf3pm.experiments.benefit.records import (
+    LOCALIZATION,
+    AnalysisSettings,
+    Measure,
+    Pair,
+    Plan,
+    Redraw,
+    SeedReplays,
+    StaleRecordError,
+    StudyFolder,
+    read_jsonl,
+    read_records,
+    write_records,
+)
+from lf3pm.experiments.benefit.report import redrawn_line, regenerate
+
+ROOT = Path(__file__).resolve().parents[1]
+FIXTURE = ROOT / "tests" / "data" / "benefit_records"
+ISSUE39 = ROOT / "results" / "benefit_issue39"
+FAST = AnalysisSettings(bootstrap_draws=400)
+
+
+def _synthetic_groups(true_logs, pairs: int, noise: float, seed: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return [np.exp(mu + noise * rng.standard_normal(pairs)) for mu in true_logs]
+
+
+def test_two_stage_bootstrap_covers_the_true_effect_over_maps():
+    # Maps' true log ratios drawn around a known centre: over 60 replications the 95 %
+    # interval over maps covers the centre about 95 % of the time, and each map's
+    # interval its own true ratio.
+    centre, covered, map_covered, maps_seen = math.log(0.5), 0, 0, 0
+    for k in range(60):
+        rng = np.random.default_rng(k)
+        true_logs = centre + 0.4 * rng.standard_normal(8)
+        groups = _synthetic_groups(true_logs, 8, 0.3, 1000 + k)
+        ratio, (lo, hi) = paired_stats.group_bootstrap(groups, draws=400, seed=0, level=0.95)
+        assert lo <= ratio <= hi
+        covered += lo <= math.exp(centre) <= hi
+        for mu, g in zip(true_logs, groups):
+            _, (a, b) = paired_stats.group_bootstrap([g], draws=400, seed=0, level=0.95)
+            map_covered += a <= math.exp(mu) <= b
+            maps_seen += 1
+    assert covered >= 50  # 60 x 0.95 = 57; the percentile bootstrap on 8 maps runs a little narrow
+    assert map_covered / maps_seen >= 0.8
+
+
+def test_group_bootstrap_is_seeded_and_weighs_maps_equally():
+    groups = [np.full(20, 0.1), np.full(2, 1.0)]
+    a = paired_stats.group_bootstrap(groups, draws=300, seed=3, level=0.95)
+    assert a == paired_stats.group_bootstrap(groups, draws=300, seed=3, level=0.95)
+    assert a[0] == pytest.approx(math.sqrt(0.1))  # each map once, however many pairs
+
+
+def test_tests_over_maps_and_their_least_p():
+    four_below = np.log([0.1, 0.5, 0.2, 0.9])
+    assert paired_stats.minimum_p(4) == 0.125
+    assert paired_stats.sign_test_p(four_below) == pytest.approx(0.125)
+    assert paired_stats.wilcoxon_exact_p(four_below) == pytest.approx(0.125)
+    assert paired_stats.minimum_p(8) == pytest.approx(0.0078125)
+
+
+def test_mcnemar_is_the_exact_binomial_on_discordant_pairs():
+    from scipy.stats import binomtest
+
+    # both fail 7, guided only 1, unguided only 23, neither 1
+    assert paired_stats.mcnemar_exact_p(1, 23) == pytest.approx(binomtest(1, 24, 0.5).pvalue)
+    assert paired_stats.mcnemar_exact_p(1, 23) == pytest.approx(2 * sum(math.comb(24, k) for k in (0, 1)) / 2**24)
+    assert paired_stats.mcnemar_exact_p(0, 0) == 1.0
+
+
+def test_tost_and_the_binomial_upper_bound():
+    rng = np.random.default_rng(0)
+    near_one = 0.02 * rng.standard_normal(10)
+    assert paired_stats.tost_t_p(near_one, 0.9, 1 / 0.9) < 0.001
+    assert paired_stats.tost_t_p(near_one + math.log(1.3), 0.9, 1 / 0.9) > 0.5
+    from scipy.stats import beta
+
+    assert paired_stats.binomial_upper(2, 30, 0.95) == pytest.approx(beta.ppf(0.95, 3, 28))
+    assert paired_stats.binomial_upper(0, 0, 0.95) != paired_stats.binomial_upper(0, 0, 0.95)  # NaN
+
+
+def _plan(name: str, apes: list[float]) -> Plan:
+    replays = SeedReplays(float(np.median(apes)), tuple(apes), 0.0, 10)
+    return Plan(name, f"{name}.csv", 10.0, 10.0, {}, {}, {LOCALIZATION: replays})
+
+
+def _pairs(table: dict[str, list[tuple[list[float], list[float], bool, str]]]) -> list[Pair]:
+    out = []
+    for case, rows in table.items():
+        for number, (guided, unguided, risky, robot) in enumerate(rows):
+            plans = {"none": _plan("none", unguided), "default": _plan("default", guided)}
+            out.append(Pair(case, number, robot, (0, 0, 0), (1, 0, 0), 0.5 if risky else 0.0, risky, plans))
+    return out
+
+
+def test_failures_are_a_paired_table_and_the_ratio_where_both_succeed():
+    pairs = _pairs(
+        {
+            "a": [([0.1], [2.0], True, "omni"), ([3.0], [2.0], True, "diff"), ([0.1], [0.2], True, "omni")],
+            "b": [([1.5], [5.0], True, "omni"), ([0.01], [0.01], False, "diff")],
+        }
+    )
+    m = analysis.measure_analysis(pairs, ["a", "b"], Measure(LOCALIZATION), FAST)
+    every = m.failures[0]
+    assert (every.both, every.guided_only, every.unguided_only, every.neither) == (2, 0, 1, 2)
+    assert every.mcnemar_p == 1.0
+    assert [f.name for f in m.failures_by_map] == ["a", "b"]
+    assert (m.failures_by_map[0].both, m.failures_by_map[0].unguided_only) == (1, 1)
+    succeed = m.both_succeed[0]  # only a's third pair and b's second
+    assert (succeed.maps, succeed.pairs) == (2, 2)
+    assert succeed.ratio == pytest.approx(math.sqrt(0.5 * 1.0))
+
+
+def test_map_effects_recover_a_set_ratio_and_flag_the_maps_that_gain_nothing():
+    rng = np.random.default_rng(7)
+    truth = {"helped": 0.2, "flat": 1.0, "also": 0.4}
+    table = {}
+    for case, r in truth.items():
+        noise = 0.1 * rng.standard_normal(8)
+        noise -= noise.mean()  # each map's geometric-mean ratio is exactly its set ratio
+        rows = []
+        for k in range(8):
+            unguided = float(np.exp(rng.normal(-3, 0.5)))
+            rows.append(([unguided * r * float(np.exp(noise[k]))], [unguided], r < 1, "omni" if k % 2 else "diff"))
+        table[case] = rows
+    m = analysis.measure_analysis(_pairs(table), list(truth), Measure(LOCALIZATION), FAST)
+    for e in m.by_map:
+        assert e.ratio == pytest.approx(truth[e.name]) and e.ci[0] <= truth[e.name] <= e.ci[1], e
+    assert [e.name for e in m.by_map if e.gains_nothing] == ["flat"]
+    assert {e.name for e in m.by_map_robot} == {f"{c}, {r}" for c in truth for r in ("diff", "omni")}
+    at_risk = next(e for e in m.over_maps if e.name == "at risk")
+    assert (at_risk.maps, at_risk.minimum_p) == (2, 0.5)
+    no_harm = m.no_harm
+    assert no_harm.maps == 1 and no_harm.equivalent and no_harm.not_worse
+    assert no_harm.tail_pairs == 0 and no_harm.tail_no_harm is None  # one seed: the tail cannot be judged
+
+
+def test_the_tail_is_judged_with_seeds():
+    rows = [([0.010, 0.011, 0.012], [0.010, 0.011, 0.012], False, "omni")] * 30
+    rows += [([0.050, 0.051, 0.052], [0.010, 0.011, 0.012], False, "omni")]
+    m = analysis.measure_analysis(_pairs({"a": rows}), ["a"], Measure(LOCALIZATION), FAST)
+    e = m.no_harm
+    assert (e.tail_pairs, e.tail_worse) == (31, 1)
+    assert e.tail_upper == pytest.approx(paired_stats.binomial_upper(1, 31, 0.95))
+    assert e.tail_no_harm is (e.tail_upper <= 0.10)
+
+
+def test_records_are_json_lines_with_the_schema(tmp_path):
+    summary = read_records(FIXTURE)
+    write_records(StudyFolder(tmp_path), summary)
+    lines = (tmp_path / "pairs.jsonl").read_text().splitlines()
+    assert all(json.loads(line)["schema"] == 1 for line in lines)
+    assert tuple(Pair.from_json(d) for d in read_jsonl(tmp_path / "pairs.jsonl")) == summary.pairs
+    (tmp_path / "pairs.jsonl").write_text(lines[0].replace('"schema": 1', '"schema": 0') + "\n")
+    with pytest.raises(StaleRecordError, match="pairs.jsonl:1"):
+        read_jsonl(tmp_path / "pairs.jsonl")
+
+
+def test_redrawn_pairs_are_listed():
+    summary = read_records(FIXTURE)
+    assert "not recorded" in redrawn_line(summary)
+    assert redrawn_line(replace(summary, redrawn=())) == "Redrawn pairs: none (every draw was planned)."
+    line = redrawn_line(replace(summary, redrawn=(Redraw("room", 2, "default could not plan it: x"),)))
+    assert line == "Redrawn pairs: 1 draws replaced (room draw 2: default could not plan it: x)."
+
+
+@pytest.mark.slow
+def test_report_regenerates_from_the_committed_records_byte_for_byte(tmp_path):
+    regenerate(FIXTURE, tmp_path)
+    assert (tmp_path / "benefit.md").read_bytes() == (FIXTURE / "benefit.md").read_bytes()
+    assert (tmp_path / "summary.json").read_bytes() == (FIXTURE / "summary.json").read_bytes()
+    assert (tmp_path / "maps.png").is_file()
+
+
+@pytest.mark.slow
+def test_issue39_report_and_summary_come_out_of_its_records(tmp_path):
+    for name in ("summary.json", "pairs.jsonl", "replays.jsonl"):
+        shutil.copyfile(ISSUE39 / name, tmp_path / name)
+    regenerate(tmp_path)
+    for name in ("benefit.md", "summary.json", "ratios.png", "scatter.png", "maps.png"):
+        assert (tmp_path / name).read_bytes() == (ISSUE39 / name).read_bytes(), name
