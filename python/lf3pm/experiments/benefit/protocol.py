@@ -120,6 +120,10 @@ class Protocol(Section):
     risk: RiskRule = RiskRule()
     localization_fit: LocalizationFit = LocalizationFit()
     statistics: Statistics = Statistics()
+    #: The analysis at the level of the map and of failures (records.AnalysisSettings, its
+    #: fields by name: bootstrap, level, failure APE, equivalence margins and alpha, the
+    #: tail's largest share, the guidance judged); empty: its defaults.
+    analysis: dict[str, Any] = {}
 
     def content(self) -> dict:
         """What is compared and hashed: the document less :data:`METADATA`, as JSON."""
@@ -199,6 +203,7 @@ def build(
     risk: RiskRule = RISK,
     statistics: Statistics = STATISTICS,
     localization_fit: LocalizationFit = FIT,
+    analysis: dict | None = None,
     name: str = DEFAULT_PROTOCOL.name,
     date: str = "",
 ) -> Protocol:
@@ -237,7 +242,19 @@ def build(
         risk=risk,
         statistics=statistics,
         localization_fit=localization_fit,
+        analysis=analysis_settings(analysis),
     )
+
+
+def analysis_settings(given: dict | None = None) -> dict:
+    """records.AnalysisSettings' fields with ``given`` over its defaults (ProtocolError in
+    one line for a field it has not)."""
+    from lf3pm.experiments.benefit.records import AnalysisSettings
+
+    try:
+        return asdict(AnalysisSettings(**(given or {})))
+    except TypeError as err:
+        raise ProtocolError(f"protocol.analysis: {err}") from None
 
 
 def _version(adapter) -> str:

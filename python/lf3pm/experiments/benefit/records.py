@@ -761,6 +761,9 @@ class Summary:
     map_analysis: MapAnalysis | None = None
     #: The draws of pairs replaced (None: a run that did not count them).
     redrawn: tuple[Redraw, ...] | None = None
+    #: The SHA-256 of the protocol it ran under (protocol.Protocol.digest; DIR/protocol.yaml);
+    #: None: a summary written before protocols.
+    protocol_sha256: str | None = None
 
     def compared(self, measure: Measure) -> Comparisons:
         return self.comparisons[measure.key]
@@ -807,6 +810,7 @@ class Summary:
                 "localization_error": dict(self.localization_error.data),
                 **({} if self.map_analysis is None else {"map_analysis": self.map_analysis.to_json()}),
                 **({} if self.redrawn is None else {"redrawn": [asdict(r) for r in self.redrawn]}),
+                **({} if self.protocol_sha256 is None else {"protocol_sha256": self.protocol_sha256}),
             }
         )
 
@@ -836,6 +840,7 @@ class Summary:
             localization_error=ErrorFit(d["localization_error"]),
             map_analysis=MapAnalysis.from_json(d["map_analysis"]) if "map_analysis" in d else None,
             redrawn=tuple(Redraw(**r) for r in d["redrawn"]) if "redrawn" in d else None,
+            protocol_sha256=d.get("protocol_sha256"),
         )
 
 

@@ -55,6 +55,11 @@ def report(summary: Summary) -> str:
         f"{summary.runtime_s / 60:.0f} min (this invocation; a resumed study counts only its own "
         f"part), replays {summary.replay_cpu_s / 60:.0f} CPU-minutes in all.",
         "",
+        *(
+            []
+            if summary.protocol_sha256 is None
+            else [f'Protocol: protocol.yaml, sha256 {summary.protocol_sha256} (docs/benefit.md, "The protocol").', ""]
+        ),
         "## Localization (registration to the prior map from wheel odometry)",
         "",
         header,

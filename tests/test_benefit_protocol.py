@@ -1,0 +1,195 @@
+"""The benefit study's protocol (experiments/benefit/protocol.py): today's is the one
+frozen in config/benefit_protocol.yaml, `--frozen` refuses any run whose protocol
+differs in one line naming the field, before any work, and a protocol round-trips."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from lf3pm.cli import app
+from lf3pm.experiments.benefit import protocol as protocols
+from lf3pm.experiments.benefit.protocol import ProtocolError, read_protocol, write_protocol
+from lf3pm.experiments.benefit.study import study_protocol
+
+FROZEN = Path(__file__).resolve().parents[1] / "config" / "benefit_protocol.yaml"
+
+
+def test_the_default_run_has_the_frozen_protocol():
+    """The protocol a default run builds (lf3pm's cases, guidance, replay settings and
+    constants) is config/benefit_protocol.yaml's; a change to any of them must be a new
+    frozen protocol, made on purpose."""
+    frozen, current = read_protocol(FROZEN), study_protocol()
+    assert protocols.compared(frozen, current) is None, protocols.compared(frozen, current)
+    assert frozen.digest() == current.digest() and frozen.version == protocols.VERSION == 1
+    assert f"sha256 of its content (name and date aside): {frozen.digest()}" in FROZEN.read_text()
+
+
+def test_the_module_constants_are_the_protocols_defaults():
+    """The constants the study's modules keep read the protocol's defaults (one source),
+    and paired_stats' (not yet read from it) hold the same numbers."""
+    from lf3pm.experiments import paired_stats, risk
+    from lf3pm.experiments.benefit import analysis, localization_error, records
+
+    p = protocols.DEFAULT_PROTOCOL
+    assert (risk.RISK_FACTOR, risk.AT_RISK_SHARE, risk.RISK_RATE) == (p.risk.factor, p.risk.share, p.risk.rate)
+    assert (p.risk.factor, p.risk.share, p.risk.rate, p.risk.median) == (10.0, 0.1, 10.0, "best_heading")
+    assert (localization_error.FIT_RATE, localization_error.MIN_PLANS) == (1.0, 10)
+    assert analysis.LIO_BOUND == p.statistics.lio_bound_m == 0.3
+    assert records.APE_FLOOR == p.statistics.ape_floor_m == 1e-4
+    assert paired_stats.FAILURE_APE == p.statistics.failure_ape_m
+    assert paired_stats.WORSE_MARGIN == p.statistics.worse_margin_m
+
+
+def _changed(tmp_path, path: str, value) -> Path:
+    """config/benefit_protocol.yaml with the field at dotted ``path`` set to ``value``."""
+    data = yaml.safe_load(FROZEN.read_text())
+    *head, last = path.split(".")
+    node = data
+    for key in head:
+        node = node[int(key)] if isinstance(node, list) else node[key]
+    if isinstance(node, list):
+        node[int(last)] = value
+    else:
+        node[last] = value
+    out = tmp_path / "frozen.yaml"
+    out.write_text(yaml.safe_dump(data, sort_keys=False))
+    return out
+
+
+CHANGES = [
+    ("pair_seed", 7, "protocol.pair_seed: frozen 7, this run 0"),
+    ("risk.factor", 9.0, "protocol.risk.factor: frozen 9.0, this run 10.0"),
+    ("risk.median", "all_headings", 'protocol.risk.median: frozen "all_headings", this run "best_heading"'),
+    ("guidance.3.weight", 2.0, "protocol.guidance[3].weight: frozen 2.0, this run 3.0"),
+    ("lio.settings.genz.noise_inflation", 50.0, "protocol.lio.settings.genz.noise_inflation: frozen 50.0, this run"),
+    ("lio.rest_speed_limit", 0.1, "protocol.lio.rest_speed_limit: frozen 0.1, this run 0.05"),
+    ("statistics.lio_bound_m", 0.5, "protocol.statistics.lio_bound_m: frozen 0.5, this run 0.3"),
+    ("analysis.equivalence_low", 0.8, "protocol.analysis.equivalence_low: frozen 0.8, this run 0.9"),
+    ("cases_sha256", "0" * 64, "protocol.cases_sha256: frozen"),
+]
+
+
+@pytest.mark.parametrize(("path", "value", "line"), CHANGES, ids=[c[0] for c in CHANGES])
+def test_frozen_refuses_a_run_whose_protocol_differs(tmp_path, path, value, line):
+    """One line naming the first field that differs with both values, exit 2, and
+    nothing made: not even the output folder."""
+    out = tmp_path / "out"
+    done = CliRunner().invoke(
+        app, ["experiment", "benefit", "-o", str(out), "--frozen", str(_changed(tmp_path, path, value))]
+    )
+    assert done.exit_code == 2, done.output
+    lines = [line for line in done.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("lf3pm: error: ") and line in lines[0], done.output
+    assert not out.exists()
+
+
+def test_the_run_itself_refuses_before_any_work(tmp_path):
+    """study.run checks the frozen protocol before it makes its folder."""
+    from lf3pm.experiments.benefit import study
+
+    with pytest.raises(ProtocolError, match=r"protocol\.seeds: frozen 5, this run 3"):
+        study.run(tmp_path / "out", frozen=_changed(tmp_path, "seeds", 5))
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_setting_given_to_the_run_is_in_its_protocol(tmp_path):
+    """The CLI's and the configuration's settings make the run's protocol: --pair-seed and
+    an odometry's settings (replay.odometries) differ from the frozen one; --write-protocol
+    writes the protocol that then passes --frozen."""
+    config = tmp_path / "c.yaml"
+    config.write_text("replay:\n  odometries:\n    genz:\n      noise_inflation: 10.0\n")
+    written = tmp_path / "p.yaml"
+    args = ["experiment", "benefit", "--pair-seed", "11", "--config", str(config)]
+    done = CliRunner().invoke(app, [*args, "--write-protocol", str(written)])
+    assert done.exit_code == 0, done.output
+    p = read_protocol(written)
+    assert p.pair_seed == 11 and p.lio.settings["genz"]["noise_inflation"] == 10.0
+    done = CliRunner().invoke(app, [*args, "--write-protocol", str(tmp_path / "q.yaml"), "--frozen", str(written)])
+    assert done.exit_code == 0, done.output
+    done = CliRunner().invoke(
+        app, ["experiment", "benefit", "--write-protocol", str(tmp_path / "r.yaml"), "--frozen", str(written)]
+    )
+    assert done.exit_code == 2 and "protocol.pair_seed: frozen 11, this run 0" in done.output
+
+
+def test_the_protocol_round_trips(tmp_path):
+    p = study_protocol(quick=True, date="2026-12-05")
+    write_protocol(tmp_path / "protocol.yaml", p)
+    back = read_protocol(tmp_path / "protocol.yaml")
+    assert back == p and back.digest() == p.digest() and back.to_yaml() == p.to_yaml()
+    assert p.seeds == 1 and p.cases == ["tunnel", "orientation"]
+    # name and date describe the document: no part of the comparison nor of the digest
+    renamed = p.model_copy(update={"name": "another", "date": "2030-01-01"})
+    assert protocols.compared(p, renamed) is None and renamed.digest() == p.digest()
+
+
+@pytest.mark.parametrize(
+    ("text", "error"),
+    [
+        ("version: 2\n", "a protocol of version 2, not 1"),
+        ("version: 1\nrisk:\n  factr: 9\n", "protocol.risk.factr"),
+        ("version: 1\nrisk:\n  factor: -1\n", "protocol.risk.factor"),
+        ("- 1\n", "a mapping of its fields"),
+        ("version: [\n", "not YAML"),
+    ],
+)
+def test_a_bad_protocol_file_is_one_line_naming_it(tmp_path, text, error):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(ProtocolError, match=None) as err:
+        read_protocol(path)
+    assert error in str(err.value) and str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_folder_made_under_another_protocol_is_refused(tmp_path):
+    """Replays made under one protocol are never mixed with another's: the run refuses
+    the folder in one line; another odometry (labelled apart) is welcome."""
+    from lf3pm.experiments.benefit import study
+
+    out = tmp_path / "out"
+    write_protocol(out / "protocol.yaml", study_protocol(quick=True, pair_seed=3))
+    with pytest.raises(ProtocolError, match=r"made under another protocol \(protocol\.pair_seed: the folder's 3"):
+        study.run(out, quick=True)
+    assert sorted(p.name for p in out.iterdir()) == ["protocol.yaml"]
+    other = study_protocol(quick=True, pair_seed=3, odometry="genz")
+    protocols.check_folder(out / "protocol.yaml", other)  # no error
+
+
+def test_the_cases_digest_is_their_content():
+    """A case's digest changes with its content, not with a field added at its default."""
+    from dataclasses import replace
+
+    from lf3pm.experiments.benefit.cases import CASES
+
+    base = protocols.cases_digest(CASES)
+    assert protocols.cases_digest(CASES) == base
+    assert protocols.cases_digest((replace(CASES[0], min_distance=29.0), *CASES[1:])) != base
+    assert protocols.cases_digest(CASES[::-1]) != base  # a case's pairs are drawn from its index
+
+
+def test_the_risk_rules_first_form_is_a_setting():
+    """median all_headings: the map's median over every cell and heading (the rule as
+    first written), against best_heading (each cell's best)."""
+    from lf3pm.experiments.risk import map_median, risk_share
+    from lf3pm.solm.grid import SolmGrid
+
+    class Solm:
+        grid_spec = SolmGrid("se2", 0.0, 0.0, 1.0, 10, 10, yaw_bins=4)
+        q = np.full((4, 10, 10), 15.0)
+        q[0] = 1.0
+
+        def channel(self, name):
+            return self.q if name == "q_n" else np.zeros((4, 10, 10), bool)
+
+    class Line:
+        def sample(self, rate):
+            t = np.arange(0.0, 10.0 + 1e-9, 1.0 / rate)
+            return {"t": t, "x": t, "y": np.full_like(t, 3.5), "yaw": np.full_like(t, math.pi / 2)}
+
+    first = protocols.RiskRule(median="all_headings")
+    assert map_median(Solm()) == 1.0 and map_median(Solm(), first.median) == 15.0
+    assert risk_share(Solm(), Line()) == 1.0 and risk_share(Solm(), Line(), rule=first) == 0.0
