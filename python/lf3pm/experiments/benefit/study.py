@@ -39,6 +39,7 @@ from lf3pm.experiments.benefit.records import (
     Pair,
     Parameters,
     Plan,
+    Redraw,
     SeedReplays,
     StudyFolder,
     Summary,
@@ -112,14 +113,14 @@ def run(
     started = time.perf_counter()
     folder.root.mkdir(parents=True, exist_ok=True)
     write_protocol(folder.root / "protocol.yaml", protocol)
-    pairs, tasks = [], []
+    pairs, tasks, redrawn = [], [], []
     lio_runs = {case.name: lio_run(case, odometry, replay) for case in cases}
     options = {case: lio_options(run.odometry, replay) for case, run in lio_runs.items()}
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
         solm_path = build_case_solm(case, folder.solm(case.name))
         drawn = plan_pairs(
-            case, solm_path, folder, np.random.SeedSequence([pair_seed, number]), guidance, protocol.risk
+            case, solm_path, folder, np.random.SeedSequence([pair_seed, number]), guidance, protocol.risk, redrawn
         )
         for pair in drawn:
             pairs.append(pair)
@@ -173,6 +174,8 @@ def run(
         lio_beyond_bound=analysis.lio_beyond_bound(pairs),
         goal=analysis.goal(comparisons),
         localization_error=ErrorFit(fit),
+        map_analysis=analysis.analyse(pairs, [c.name for c in cases]),
+        redrawn=tuple(redrawn),
     )
     write_outputs(folder, summary)
     return summary
@@ -232,14 +235,17 @@ def study_protocol(
 def write_outputs(folder: StudyFolder, summary: Summary) -> None:
     """summary.json, the report and the figures of ``summary`` into ``folder``."""
     from lf3pm.atomic import atomic_write
-    from lf3pm.experiments.benefit.figures import example_figures, ratio_figure, scatter_figure
+    from lf3pm.experiments.benefit.figures import example_figures, forest_figure, ratio_figure, scatter_figure
+    from lf3pm.experiments.benefit.records import write_records
     from lf3pm.experiments.benefit.report import report
 
     write_summary(folder.summary, summary)
+    write_records(folder, summary)
     with atomic_write(folder.report) as fp:
         fp.write(report(summary).encode())
     scatter_figure(summary, folder.root / "scatter.png")
     ratio_figure(summary, folder.root / "ratios.png")
+    forest_figure(summary, folder.forest)
     example_figures(summary, folder)
 
 
@@ -253,10 +259,11 @@ def plan_pairs(
     seed: np.random.SeedSequence,
     guidance: tuple,
     rule: RiskRule = RISK,
+    redrawn: list | None = None,
 ) -> list[Pair]:
     """``case.pairs`` seeded pairs, each planned with every guidance (a draw that some
     guidance cannot plan is replaced), trajectories written as CSV; at risk or not by
-    ``rule`` (the protocol's)."""
+    ``rule`` (the protocol's). Each draw replaced is appended to ``redrawn`` (records.Redraw)."""
     from lf3pm.planner.plan import Planner
     from lf3pm.solm import Solm
     from lf3pm.trajectory.robots import Robot
@@ -278,6 +285,11 @@ def plan_pairs(
         ends = ("goal", "start") if case.both_ways and number % 2 else ("start", "goal")
         a, b = (_draw(planner, zones[end], robot, rng) for end in ends)
         if a is None or b is None or math.hypot(b[0] - a[0], b[1] - a[1]) < case.min_distance:
+            if redrawn is not None:
+                why = (
+                    "no free cell in a zone" if a is None or b is None else f"ends closer than {case.min_distance:g} m"
+                )
+                redrawn.append(Redraw(case.name, attempts - 1, why))
             continue
         heading = math.atan2(b[1] - a[1], b[0] - a[0])
         start, goal = (a[0], a[1], heading), (b[0], b[1], heading)
@@ -298,7 +310,11 @@ def plan_pairs(
                     violations=summary["violations"],
                     solm_mean=_solm_means(planner, plan),
                 )
-        except Lf3pmError:
+        except Lf3pmError as err:
+            if redrawn is not None:
+                redrawn.append(
+                    Redraw(case.name, attempts - 1, f"{g.name} could not plan it: {str(err).splitlines()[0]}")
+                )
             continue
         pairs.append(Pair(case.name, number, robot.kind, start, goal, risk, at_risk(risk, rule), plans))
     return pairs
