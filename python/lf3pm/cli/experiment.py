@@ -103,7 +103,17 @@ def experiment_benefit(
         "--out",
         help="Output folder (an interrupted study resumes there; required but with --write-protocol).",
     ),
-    quick: bool = typer.Option(False, help="Two small maps, one pair each, one seed (a few minutes)."),
+    quick: bool = typer.Option(
+        False,
+        help="One seed, on two small maps with one pair each (config/benefit_quick.yaml) or on --cases' maps.",
+    ),
+    cases: Path | None = typer.Option(
+        None,
+        "--cases",
+        metavar="FILE.yaml",
+        help='The maps, sensors, zones and pairs to study (docs/benefit.md, "Your own maps"; '
+        "default: the repository's config/benefit_cases.yaml).",
+    ),
     seeds: int | None = option("benefit.seeds"),
     workers: int | None = option("benefit.workers"),
     pair_seed: int | None = option("benefit.pair_seed"),
@@ -161,8 +171,12 @@ def experiment_benefit(
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
+        from lf3pm.experiments.benefit.case_file import load_cases
+
+        chosen = load_cases(cases) if cases is not None else None
         settings = dict(
             quick=quick,
+            cases=chosen,
             seeds=study.seeds,
             workers=study.workers,
             pair_seed=study.pair_seed,

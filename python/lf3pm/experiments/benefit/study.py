@@ -49,7 +49,7 @@ from lf3pm.experiments.benefit.records import (
     write_summary,
 )
 from lf3pm.experiments.guidance import GUIDANCE, UNGUIDED
-from lf3pm.experiments.map_cases import MapCase, build_case_solm, load_case_map
+from lf3pm.experiments.map_cases import MapCase, build_case_solm, in_polygon, is_polygon, load_case_map, zone_box
 from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
 from lf3pm.experiments.risk import at_risk, risk_share
 
@@ -270,6 +270,7 @@ def plan_pairs(
 
     _, zones = load_case_map(case)
     planner = Planner(Solm.open(solm_path))
+    _check_zones(case, zones, planner.esdf.grid)
     rng = np.random.default_rng(seed)
     trajectories = folder.trajectories(case.name)
     trajectories.mkdir(parents=True, exist_ok=True)
@@ -292,7 +293,8 @@ def plan_pairs(
                 redrawn.append(Redraw(case.name, attempts - 1, why))
             continue
         heading = math.atan2(b[1] - a[1], b[0] - a[0])
-        start, goal = (a[0], a[1], heading), (b[0], b[1], heading)
+        yaw_a, yaw_b = (_yaw(case, end, heading, rng) for end in ends)
+        start, goal = (a[0], a[1], yaw_a), (b[0], b[1], yaw_b)
         plans, risk = {}, None
         try:
             for g in (UNGUIDED,) + guidance:
@@ -336,14 +338,40 @@ def _solm_means(planner, plan) -> dict:
 
 
 def _draw(planner, zone, robot, rng, tries: int = 200):
-    """A random traversable cell centre inside ``zone`` (None if none found)."""
+    """A random traversable cell centre inside ``zone`` (None if none found): a point
+    uniform in the zone's box (a polygon's: points outside the polygon count as tries)."""
     free, grid = planner.esdf.traversable(robot.r_safe), planner.esdf.grid
-    xmin, ymin, xmax, ymax = zone
+    polygon = zone if is_polygon(zone) else None
+    xmin, ymin, xmax, ymax = zone_box(zone)
     for _ in range(tries):
-        cell = grid.cell_of(rng.uniform(xmin, xmax), rng.uniform(ymin, ymax))
+        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+        if polygon is not None and not in_polygon(polygon, x, y):
+            continue
+        cell = grid.cell_of(x, y)
         if cell is not None and free[cell[1], cell[0]]:
             return grid.centre(*cell)
     return None
+
+
+def _yaw(case: MapCase, end: str, heading: float, rng) -> float:
+    """The yaw of a pose drawn in zone ``end``: uniform in the case's yaw range for it,
+    else ``heading`` (no draw: the pairs of cases without yaw ranges stay as they were)."""
+    lo_hi = (case.yaw_ranges or {}).get(end)
+    return heading if lo_hi is None else float(rng.uniform(*lo_hi))
+
+
+def _check_zones(case: MapCase, zones: dict, grid) -> None:
+    """Lf3pmError naming the case and zone when a zone lies wholly off the SOLM's grid
+    (no pair could ever be drawn there)."""
+    gx0, gy0 = grid.x0, grid.y0
+    gx1, gy1 = gx0 + grid.nx * grid.res, gy0 + grid.ny * grid.res
+    for end in ("start", "goal"):
+        xmin, ymin, xmax, ymax = zone_box(zones[end])
+        if xmax < gx0 or xmin > gx1 or ymax < gy0 or ymin > gy1:
+            raise Lf3pmError(
+                f"map case {case.name}: its {end} zone ({xmin:g}, {ymin:g}, {xmax:g}, {ymax:g}) lies outside "
+                f"the map's grid ({gx0:g}, {gy0:g}, {gx1:g}, {gy1:g})"
+            )
 
 
 # --- replays --------------------------------------------------------------------------
