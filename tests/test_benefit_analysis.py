@@ -198,3 +198,16 @@ def test_issue39_report_and_summary_come_out_of_its_records(tmp_path):
     regenerate(tmp_path)
     for name in ("benefit.md", "summary.json", "ratios.png", "scatter.png", "maps.png"):
         assert (tmp_path / name).read_bytes() == (ISSUE39 / name).read_bytes(), name
+
+
+@pytest.mark.slow  # the CLI's first import: over 2 s on 2 cores
+def test_benefit_report_without_records_is_one_line(tmp_path):
+    from typer.testing import CliRunner
+
+    from lf3pm.cli import app
+
+    done = CliRunner().invoke(app, ["experiment", "benefit-report", str(tmp_path)])
+    assert done.exit_code == 2, done.output
+    lines = done.output.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith(f"lf3pm: error: {tmp_path}: no summary.json (a benefit study's records")
