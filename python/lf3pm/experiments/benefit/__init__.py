@@ -14,10 +14,14 @@ default and unguided ones only). Per pair, a plan's error is its APE rmse
 (translation, no alignment), the median over seeds; paired_stats.py compares each
 guidance with ``none`` (``analysis``).
 
-Outputs: DIR/summary.json (every pair, plan and replay, the comparisons and the
-parameters: ``records.Summary``), DIR/benefit.md (the tables: ``report``),
-DIR/scatter.png (errors of guided against unguided plans), DIR/ratios.png (ratios per
-map), DIR/examples/*.png (one pair per map over its SOLM: ``figures``). Intermediate
+Outputs: DIR/summary.json (every pair, plan and replay, the comparisons, the analysis
+at the level of the map and the parameters: ``records.Summary``), the records
+DIR/pairs.jsonl and DIR/replays.jsonl (one pair, one replay a line), DIR/benefit.md (the
+tables: ``report``), DIR/scatter.png (errors of guided against unguided plans),
+DIR/ratios.png (ratios per map), DIR/maps.png (each map's effect with its interval),
+DIR/examples/*.png (one pair per map over its SOLM: ``figures``). ``lf3pm experiment
+benefit-report DIR`` makes the report, figures and summary again from the records alone
+(``report.regenerate``). Intermediate
 results (SOLMs, trajectories, one JSON per replay) stay in DIR, so an interrupted
 study resumes where it stopped. Replays run in ``workers`` processes (spawn:
 small_gicp and the simulator use threads).
