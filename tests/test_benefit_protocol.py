@@ -69,6 +69,7 @@ CHANGES = [
     ("lio.rest_speed_limit", 0.1, "protocol.lio.rest_speed_limit: frozen 0.1, this run 0.05"),
     ("statistics.lio_bound_m", 0.5, "protocol.statistics.lio_bound_m: frozen 0.5, this run 0.3"),
     ("analysis.equivalence_low", 0.8, "protocol.analysis.equivalence_low: frozen 0.8, this run 0.9"),
+    ("cases.7.sensor", "vlp16", 'protocol.cases[7].sensor: frozen "vlp16", this run "mid70"'),
     ("cases_sha256", "0" * 64, "protocol.cases_sha256: frozen"),
 ]
 
@@ -121,7 +122,7 @@ def test_the_protocol_round_trips(tmp_path):
     write_protocol(tmp_path / "protocol.yaml", p)
     back = read_protocol(tmp_path / "protocol.yaml")
     assert back == p and back.digest() == p.digest() and back.to_yaml() == p.to_yaml()
-    assert p.seeds == 1 and p.cases == ["tunnel", "orientation"]
+    assert p.seeds == 1 and [c["name"] for c in p.cases] == ["tunnel", "orientation"]
     # name and date describe the document: no part of the comparison nor of the digest
     renamed = p.model_copy(update={"name": "another", "date": "2030-01-01"})
     assert protocols.compared(p, renamed) is None and renamed.digest() == p.digest()
@@ -193,3 +194,21 @@ def test_the_risk_rules_first_form_is_a_setting():
     first = protocols.RiskRule(median="all_headings")
     assert map_median(Solm()) == 1.0 and map_median(Solm(), first.median) == 15.0
     assert risk_share(Solm(), Line()) == 1.0 and risk_share(Solm(), Line(), rule=first) == 0.0
+
+
+def test_the_variants_are_protocols_this_lf3pm_runs():
+    """config/benefit_protocol_variants: each earlier setting as a protocol, differing
+    from the frozen one where it says; the risk rule's by --rules, GenZ-LIO's by a
+    configuration's replay.odometries."""
+    from lf3pm.config import DEFAULTS
+
+    folder = FROZEN.parent / "benefit_protocol_variants"
+    frozen = read_protocol(FROZEN)
+    variants = {path.stem: read_protocol(path) for path in sorted(folder.glob("*.yaml"))}
+    assert set(variants) >= {"risk_all_headings", "corridor_vlp16", "corridor_first_zones", "genz_voxels_0_5"}
+    for name, variant in variants.items():
+        assert protocols.compared(frozen, variant) is not None, name
+    rule = variants["risk_all_headings"]
+    assert study_protocol(rules=rule).digest() == rule.digest()
+    voxels = DEFAULTS.replay.model_copy(update={"odometries": {"genz": {"mapping": {"voxel_size": 0.5}}}})
+    assert study_protocol(replay=voxels).digest() == variants["genz_voxels_0_5"].digest()

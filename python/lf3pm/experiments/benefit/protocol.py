@@ -1,8 +1,8 @@
 """The benefit study's protocol: every setting that decides its outcome, in one versioned
 document (docs/benefit.md, "The protocol").
 
-A :class:`Protocol` holds the pair seed and the replay seeds, the cases (their names and
-a SHA-256 of their content), the guidance compared with its weights, the LIO's
+A :class:`Protocol` holds the pair seed and the replay seeds, the cases (each one's
+content and a SHA-256 of them all), the guidance compared with its weights, the LIO's
 odometry with each chosen odometry's settings, the replays' and localization's
 settings, lf3pm's defaults the plans are made with (SOLM, planner, robot), the at-risk
 rule (:class:`RiskRule`), the localization-error fit's sampling
@@ -110,7 +110,9 @@ class Protocol(Section):
     date: str = ""
     pair_seed: int = 0
     seeds: int = 3
-    cases: list[str] = []
+    #: Each case's fields that differ from MapCase's defaults (:func:`case_content`), in
+    #: order (a case's pairs are drawn from its index), and their digest.
+    cases: list[dict[str, Any]] = []
     cases_sha256: str = ""
     guidance: list[GuidanceEntry] = []
     lio: Lio = Lio()
@@ -178,7 +180,8 @@ def case_content(case) -> dict:
             continue
         if value != default:
             out[f.name] = value
-    return json.loads(canonical(out))
+    plain = json.loads(canonical(out))
+    return {"name": plain.pop("name"), **plain} if "name" in plain else plain
 
 
 def cases_digest(cases) -> str:
@@ -224,7 +227,7 @@ def build(
         date=date,
         pair_seed=pair_seed,
         seeds=seeds,
-        cases=[case.name for case in cases],
+        cases=[case_content(case) for case in cases],
         cases_sha256=cases_digest(cases),
         guidance=[GuidanceEntry(**asdict(g)) for g in guidance],
         lio=Lio(
