@@ -1,8 +1,9 @@
 """The benefit study: do SOLM-guided plans localize better than the shortest ones?
 
-    lf3pm experiment benefit -o DIR [--quick] [--seeds 3] [--workers 2]
+    lf3pm experiment benefit -o DIR [--cases FILE.yaml] [--quick] [--seeds 3] [--workers 2]
 
-On several maps (procedural scenes built for the question and real maps; ``cases``),
+On several maps (procedural scenes built for the question and real maps; ``cases``, read
+from config/benefit_cases.yaml, or a user's own cases file: ``case_file``),
 seeded start/goal pairs are drawn from each map's start and goal zones. Each pair is
 planned for one robot (omni or diff, alternating) with no metric (``none``) and with
 each guidance of :data:`~lf3pm.experiments.guidance.GUIDANCE` (the SOLM channels q_n,
@@ -27,7 +28,8 @@ study resumes where it stopped. Replays run in ``workers`` processes (spawn:
 small_gicp and the simulator use threads).
 
 Modules: ``records`` (the data model and the folder's layout), ``cases`` (the maps),
-``study`` (running it: pairs, plans, replays), ``analysis`` (statistics), ``report``
+``case_file`` (reading cases files), ``study`` (running it: pairs, plans, replays),
+``analysis`` (statistics), ``report``
 and ``figures`` (which read the records only). The names below are loaded on first
 use, so that importing the records does not import the study.
 """
