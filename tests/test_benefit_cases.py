@@ -358,6 +358,17 @@ def test_cli_bad_case_file_exits_2_with_one_line(site):
     assert missing.exit_code == 2 and "cannot read the cases file" in missing.output
 
 
+def test_cli_checks_the_repository_cases_maps_before_any_work(tmp_path, monkeypatch):
+    from lf3pm.cli import app
+
+    monkeypatch.setenv("LF3PM_DATA", str(tmp_path))  # no shared data: the real maps are nowhere
+    out = tmp_path / "out"
+    done = CliRunner().invoke(app, ["experiment", "benefit", "-o", str(out)])
+    assert done.exit_code == 2, done.output
+    assert done.output.startswith(f"lf3pm: error: {CASES_FILE}: case street: map: no file outdoor_urban64")
+    assert not out.exists()
+
+
 def _user_site(folder):
     """A user's own map (the boxes room as a PLY file) and a cases file beside it: one
     case, one pair, R2, a polygon start zone."""

@@ -171,9 +171,10 @@ def experiment_benefit(
         from lf3pm.experiments.guidance import parse_guidance
 
         candidates = [parse_guidance(g) for g in guidance] if guidance else None
-        from lf3pm.experiments.benefit.case_file import load_cases
+        from lf3pm.experiments.benefit.case_file import CASES_FILE, QUICK_FILE, load_cases
 
-        chosen = load_cases(cases) if cases is not None else None
+        # The repository's cases are read here too, so that a map file missing stops a run at once.
+        chosen = load_cases(cases or (QUICK_FILE if quick else CASES_FILE), check_files=write_protocol is None)
         settings = dict(
             quick=quick,
             cases=chosen,
