@@ -97,12 +97,7 @@ def experiment_gobi(
 
 @experiment_app.command("benefit")
 def experiment_benefit(
-    out: Path | None = typer.Option(
-        None,
-        "-o",
-        "--out",
-        help="Output folder (an interrupted study resumes there; required but with --write-protocol).",
-    ),
+    out: Path | None = typer.Option(None, "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(
         False,
         help="One seed, on two small maps with one pair each (config/benefit_quick.yaml) or on --cases' maps.",
@@ -131,35 +126,15 @@ def experiment_benefit(
         help="Parameters from a YAML file: its benefit section, and its replay section's odometry "
         "settings and rest limits for the LIO replays (flags given override it).",
     ),
-    frozen: Path | None = typer.Option(
-        None,
-        "--frozen",
-        metavar="PROTOCOL.yaml",
-        help="Refuse to run (one line, exit 2) unless this run's protocol is the one frozen in the file "
-        '(docs/benefit.md, "The protocol").',
-    ),
-    write_protocol: Path | None = typer.Option(
-        None,
-        "--write-protocol",
-        metavar="FILE.yaml",
-        help="Write the protocol this run would use to FILE (to freeze it) and run nothing.",
-    ),
+    frozen: Path | None = typer.Option(None, metavar="PROTOCOL.yaml", help="Run only this protocol (docs/benefit.md)."),
+    write_protocol: Path | None = typer.Option(None, metavar="FILE.yaml", help="Write this run's protocol only."),
     rules: Path | None = typer.Option(
-        None,
-        "--rules",
-        metavar="PROTOCOL.yaml",
-        help="Take the at-risk rule, the localization-error fit and the statistics from this protocol "
-        "(a sensitivity variant; default: lf3pm's).",
+        None, metavar="PROTOCOL.yaml", help="Its risk rule, fit, statistics and analysis (a variant)."
     ),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
     with user_errors():
-        from lf3pm.errors import Lf3pmError
-
-        if out is None and write_protocol is None:
-            raise Lf3pmError("-o/--out is required (but with --write-protocol)")
-        check_output(out, folder=True, parents=True)
-        check_output(write_protocol, parents=True)
+        check_output(out or write_protocol, folder=out is not None, parents=True)
         from lf3pm.experiments import benefit
         from lf3pm.experiments.benefit import protocol as protocols
         from lf3pm.replays import registry
@@ -187,18 +162,11 @@ def experiment_benefit(
             replay=cfg.replay,
             rules=protocols.DEFAULT_PROTOCOL if rules is None else protocols.read_protocol(rules),
         )
-        if write_protocol is not None:
-            import datetime
+        if write_protocol is not None or out is None:
+            from lf3pm.experiments.benefit.study import freeze
 
-            from lf3pm.experiments.benefit.study import study_protocol
-
-            today = datetime.datetime.now(datetime.timezone.utc).date().isoformat()
-            written = study_protocol(**settings, date=today)
-            if frozen is not None:
-                protocols.check_frozen(protocols.read_protocol(frozen), written, frozen)
-            protocols.write_protocol(write_protocol, written)
-            console.print(f"wrote {write_protocol} (protocol sha256 {written.digest()})", soft_wrap=True)
-            return
+            digest = freeze(write_protocol, frozen, **settings).digest()
+            return console.print(f"wrote {write_protocol} (protocol sha256 {digest})", soft_wrap=True)
         with progress_bar() as step:
             benefit.run(out, **settings, frozen=frozen, progress=step)
         console.print((out / "benefit.md").read_text())

@@ -15,18 +15,41 @@ follows q_n with slope 0.97 in log-log over the benefit study's 240 plans
 order of magnitude worse than the map's typical place. A pair is at risk when
 at least :data:`AT_RISK_SHARE` of its unguided plan's poses are.
 
-The rule's settings are the benefit study's protocol's (``protocol.risk``: a
-:class:`~lf3pm.experiments.benefit.protocol.RiskRule`); the constants below are its
-defaults, and each function takes another rule (``median="all_headings"``: the median
-over every cell and heading, the rule's first form).
+The rule's settings are a :class:`RiskRule`, the benefit study's protocol's ``risk``
+(lf3pm.experiments.benefit.protocol); the constants below are its defaults, and each
+function takes another rule (``median="all_headings"``: the median over every cell
+and heading, the rule's first form).
 """
 
 from __future__ import annotations
 
-import numpy as np
+from typing import Literal
 
-from lf3pm.experiments.benefit.protocol import RISK, RiskRule
+import numpy as np
+from pydantic import Field
+
+from lf3pm.config import Section
 from lf3pm.grid import Space
+
+
+class RiskRule(Section):
+    """Which pairs are at risk, from the unguided plan and its SOLM alone
+    (lf3pm.experiments.risk): a pose is at risk when its cell is degenerate or its q_n
+    is at least ``factor`` times the map's median; a pair when ``share`` of its
+    unguided plan's poses (sampled at ``rate`` Hz) are."""
+
+    factor: float = Field(10.0, gt=0, description="A pose is at risk at q_n >= factor x the map's median q_n.")
+    share: float = Field(0.1, gt=0, le=1, description="A pair is at risk when this share of its poses is.")
+    rate: float = Field(10.0, gt=0, le=1000, description="Poses per second of trajectory the rule looks at.")
+    median: Literal["best_heading", "all_headings"] = Field(
+        "best_heading",
+        description="The map's median on an SE(2) SOLM: over each cell's best heading (the minimum over "
+        "yaw), or over every cell and heading (the rule's first form).",
+    )
+
+
+#: The rule's defaults (the benefit study's protocol's ``risk``).
+RISK = RiskRule()
 
 #: A pose is at risk at q_n >= RISK_FACTOR x the map's median q_n (or degenerate).
 RISK_FACTOR = RISK.factor

@@ -7,8 +7,9 @@ odometry with each chosen odometry's settings, the replays' and localization's
 settings, lf3pm's defaults the plans are made with (SOLM, planner, robot), the at-risk
 rule (:class:`RiskRule`), the localization-error fit's sampling
 (:class:`LocalizationFit`) and the statistics (:class:`Statistics`). The field
-defaults are the study's constants, written once here: ``risk``, ``analysis``,
-``records`` and ``localization_error`` read them from :data:`DEFAULT_PROTOCOL`.
+defaults are the study's constants, written once here (the at-risk rule's in
+lf3pm.experiments.risk, whose :class:`RiskRule` this takes): ``analysis``, ``records``
+and ``localization_error`` read them from :data:`DEFAULT_PROTOCOL`.
 
 Every run writes its protocol to ``DIR/protocol.yaml`` and its :func:`digest` into
 summary.json; ``lf3pm experiment benefit --frozen FILE`` refuses to start where the
@@ -30,6 +31,7 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError
 
 from lf3pm.config import ConfigError, Section, describe
+from lf3pm.experiments.risk import RISK, RiskRule
 
 #: The version of the protocol's schema: a document of another is refused.
 VERSION = 1
@@ -39,22 +41,6 @@ METADATA = ("name", "date")
 
 class ProtocolError(ConfigError):
     """A protocol that cannot be read, or that differs from the one a run would use."""
-
-
-class RiskRule(Section):
-    """Which pairs are at risk, from the unguided plan and its SOLM alone
-    (lf3pm.experiments.risk): a pose is at risk when its cell is degenerate or its q_n
-    is at least ``factor`` times the map's median; a pair when ``share`` of its
-    unguided plan's poses (sampled at ``rate`` Hz) are."""
-
-    factor: float = Field(10.0, gt=0, description="A pose is at risk at q_n >= factor x the map's median q_n.")
-    share: float = Field(0.1, gt=0, le=1, description="A pair is at risk when this share of its poses is.")
-    rate: float = Field(10.0, gt=0, le=1000, description="Poses per second of trajectory the rule looks at.")
-    median: Literal["best_heading", "all_headings"] = Field(
-        "best_heading",
-        description="The map's median on an SE(2) SOLM: over each cell's best heading (the minimum over "
-        "yaw), or over every cell and heading (the rule's first form).",
-    )
 
 
 class Statistics(Section):
@@ -147,7 +133,6 @@ class Protocol(Section):
 
 #: The protocol's defaults: the study's constants (risk, statistics, the fit's sampling).
 DEFAULT_PROTOCOL = Protocol()
-RISK = DEFAULT_PROTOCOL.risk
 STATISTICS = DEFAULT_PROTOCOL.statistics
 FIT = DEFAULT_PROTOCOL.localization_fit
 
@@ -202,6 +187,7 @@ def build(
     seeds: int,
     lio: str,
     odometry: str,
+    chosen: dict[str, str],
     replay,
     risk: RiskRule = RISK,
     statistics: Statistics = STATISTICS,
@@ -211,15 +197,14 @@ def build(
     date: str = "",
 ) -> Protocol:
     """The protocol of a run with these settings: ``cases`` (MapCases), ``guidance``
-    (Guidance, without none), ``replay`` (the replay section whose odometries' settings
-    and rest limits the LIO runs with; its other settings are lf3pm's defaults, which
-    the replays run with)."""
+    (Guidance, without none), ``chosen`` (the odometry the LIO runs on each case, for
+    ``odometry``: study.lio_run), ``replay`` (the replay section whose odometries'
+    settings and rest limits the LIO runs with; its other settings are lf3pm's defaults,
+    which the replays run with), ``analysis`` (records.AnalysisSettings' fields)."""
     from lf3pm.config import DEFAULTS
-    from lf3pm.experiments.benefit.study import lio_run
     from lf3pm.replays import registry
 
-    runs = {case.name: lio_run(case, odometry, replay) for case in cases}
-    chosen = sorted({run.odometry for run in runs.values()})
+    keys = sorted(set(chosen.values()))
     sections = registry.settings(replay.odometries)
     fixed = DEFAULTS.replay.model_dump(mode="json")
     return Protocol(
@@ -233,9 +218,9 @@ def build(
         lio=Lio(
             plans=lio,
             odometry=odometry,
-            chosen={case: run.odometry for case, run in runs.items()},
-            settings={key: sections[key].model_dump(mode="json") for key in chosen},
-            versions={key: _version(registry.odometry(key)) for key in chosen},
+            chosen=dict(chosen),
+            settings={key: sections[key].model_dump(mode="json") for key in keys},
+            versions={key: _version(registry.odometry(key)) for key in keys},
             rest_window=replay.rest_window,
             rest_speed_limit=replay.rest_speed_limit,
         ),
@@ -245,19 +230,8 @@ def build(
         risk=risk,
         statistics=statistics,
         localization_fit=localization_fit,
-        analysis=analysis_settings(analysis),
+        analysis=dict(analysis or {}),
     )
-
-
-def analysis_settings(given: dict | None = None) -> dict:
-    """records.AnalysisSettings' fields with ``given`` over its defaults (ProtocolError in
-    one line for a field it has not)."""
-    from lf3pm.experiments.benefit.records import AnalysisSettings
-
-    try:
-        return asdict(AnalysisSettings(**(given or {})))
-    except TypeError as err:
-        raise ProtocolError(f"protocol.analysis: {err}") from None
 
 
 def _version(adapter) -> str:

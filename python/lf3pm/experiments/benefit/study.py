@@ -205,7 +205,10 @@ def study_protocol(
 ) -> Protocol:
     """The protocol a :func:`run` with these arguments runs under (its settings checked
     first: ConfigError or Lf3pmError in one line); ``rules``: the protocol whose risk
-    rule, fit and statistics it takes (``name`` too)."""
+    rule, fit, statistics and analysis it takes (``name`` too)."""
+    from dataclasses import asdict
+
+    from lf3pm.experiments.benefit.records import AnalysisSettings
     from lf3pm.replays import registry
 
     validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio, odometry=odometry)
@@ -215,6 +218,10 @@ def study_protocol(
     reserved = (NONE, *Comparisons.GROUPS)
     if len(set(names)) != len(names) or any(n in reserved for n in names):
         raise Lf3pmError(f"guidance names must be distinct and none of {', '.join(reserved)}, got {', '.join(names)}")
+    try:
+        settings = asdict(AnalysisSettings(**rules.analysis))
+    except TypeError as err:
+        raise ProtocolError(f"protocol.analysis: {err}") from None
     return build(
         cases=cases,
         guidance=guidance,
@@ -222,14 +229,32 @@ def study_protocol(
         seeds=seeds,
         lio=lio,
         odometry=odometry,
+        chosen={case.name: lio_run(case, odometry, replay).odometry for case in cases},
         replay=replay,
         risk=rules.risk,
         statistics=rules.statistics,
         localization_fit=rules.localization_fit,
-        analysis=rules.analysis,
+        analysis=settings,
         name=rules.name,
         date=date,
     )
+
+
+def freeze(path: Path | None, frozen: Path | None = None, **settings) -> Protocol:
+    """Writes the protocol a :func:`run` with ``settings`` would use, dated today, to
+    ``path`` (checked against the protocol file ``frozen`` first, when given); ``path``
+    None: ConfigError (the study's -o/--out or --write-protocol is needed)."""
+    import datetime
+
+    from lf3pm.config import ConfigError
+
+    if path is None:
+        raise ConfigError("-o/--out is required (or --write-protocol FILE)")
+    protocol = study_protocol(**settings, date=datetime.datetime.now(datetime.UTC).date().isoformat())
+    if frozen is not None:
+        check_frozen(read_protocol(frozen), protocol, frozen)
+    write_protocol(path, protocol)
+    return protocol
 
 
 def write_outputs(folder: StudyFolder, summary: Summary) -> None:
