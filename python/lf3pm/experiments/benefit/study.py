@@ -33,6 +33,7 @@ from lf3pm.experiments.benefit.records import (
     LIO,
     LOCALIZATION,
     NONE,
+    AnalysisSettings,
     Comparisons,
     ErrorFit,
     LioRun,
@@ -174,7 +175,7 @@ def run(
         lio_beyond_bound=analysis.lio_beyond_bound(pairs),
         goal=analysis.goal(comparisons),
         localization_error=ErrorFit(fit),
-        map_analysis=analysis.analyse(pairs, [c.name for c in cases]),
+        map_analysis=analysis.analyse(pairs, [c.name for c in cases], AnalysisSettings(**protocol.analysis)),
         redrawn=tuple(redrawn),
     )
     write_outputs(folder, summary)
