@@ -4,9 +4,10 @@ document (docs/benefit.md, "The protocol").
 A :class:`Protocol` holds the pair seed and the replay seeds, the cases (each one's
 content and a SHA-256 of them all), the guidance compared with its weights, the LIO's
 odometry with each chosen odometry's settings, the replays' and localization's
-settings, lf3pm's defaults the plans are made with (SOLM, planner, robot), the at-risk
-rule (:class:`RiskRule`), the localization-error fit's sampling
-(:class:`LocalizationFit`) and the statistics (:class:`Statistics`). The field
+settings, lf3pm's defaults the plans and replays are made with (SOLM, planner, robot,
+scan), the at-risk rule (:class:`RiskRule`), the localization-error fit's sampling
+(:class:`LocalizationFit`), the per-pair statistics (:class:`Statistics`) and the
+analysis over maps (``analysis``: records.AnalysisSettings' fields). The field
 defaults are the study's constants, written once here (the at-risk rule's in
 lf3pm.experiments.risk, whose :class:`RiskRule` this takes): ``analysis``, ``records``
 and ``localization_error`` read them from :data:`DEFAULT_PROTOCOL`.
