@@ -99,6 +99,11 @@ def test_quick_study_end_to_end(tmp_path):
     raw = json.loads((out / "summary.json").read_text())
     summary = read_summary(out / "summary.json")
     assert summary.to_json() == raw or json.dumps(summary.to_json()) == json.dumps(raw)  # NaN != NaN
+    # The run's protocol, beside its summary, which carries its digest (test_benefit_protocol.py).
+    from lf3pm.experiments.benefit.protocol import read_protocol
+
+    assert read_protocol(out / "protocol.yaml").digest() == raw["protocol_sha256"] == summary.protocol_sha256
+    assert f"sha256 {raw['protocol_sha256']}" in (out / "benefit.md").read_text()
     assert len(summary.pairs) == 2 and {p.case for p in summary.pairs} == {"tunnel", "orientation"}
     for pair in summary.pairs:
         assert set(pair.plans) == {"none", "q_n", "q_min", "step_norm", "default"}
@@ -137,7 +142,7 @@ def test_quick_study_end_to_end(tmp_path):
     # A rerun resumes: every replay is on disk, nothing is recomputed.
     replays = sorted((out / "replays").rglob("*.json"))
     stamps = [p.stat().st_mtime_ns for p in replays]
-    again = subprocess.run(command, capture_output=True, text=True)
+    again = subprocess.run(command + ["--frozen", str(out / "protocol.yaml")], capture_output=True, text=True)
     assert again.returncode == 0 and [p.stat().st_mtime_ns for p in replays] == stamps
     # Another odometry in the same folder: only the LIO replays it changes are run (GenZ-LIO
     # on the tunnel's VLP-16, beside DLIO's; on the Mid-70 map GenZ-LIO is auto's anyway).
