@@ -30,7 +30,8 @@ from lf3pm.experiments.benefit.records import (
     read_records,
     write_records,
 )
-from lf3pm.experiments.benefit.report import redrawn_line, regenerate
+from lf3pm.experiments.benefit.regenerate import regenerate
+from lf3pm.experiments.benefit.report import redrawn_line
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURE = ROOT / "tests" / "data" / "benefit_records"

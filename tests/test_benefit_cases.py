@@ -22,7 +22,7 @@ from lf3pm.experiments.map_cases import MapCase, in_polygon, zone_box
 from lf3pm.grid import Grid, Space
 
 # The study's cases as lf3pm.experiments.benefit.cases held them in Python (743613d), before
-# they moved to config/benefit_cases.yaml: the same values draw the same pairs.
+# they moved to python/lf3pm/experiments/benefit/cases.yaml: the same values draw the same pairs.
 _REDUCED_GOBI = {
     "length": 115.0,
     "width": 90.0,

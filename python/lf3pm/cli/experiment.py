@@ -100,14 +100,14 @@ def experiment_benefit(
     out: Path | None = typer.Option(None, "-o", "--out", help="Output folder (an interrupted study resumes there)."),
     quick: bool = typer.Option(
         False,
-        help="One seed, on two small maps with one pair each (config/benefit_quick.yaml) or on --cases' maps.",
+        help="One seed, on two small maps with one pair each (the package's quick_cases.yaml) or on --cases' maps.",
     ),
     cases: Path | None = typer.Option(
         None,
         "--cases",
         metavar="FILE.yaml",
         help='The maps, sensors, zones and pairs to study (docs/benefit.md, "Your own maps"; '
-        "default: the repository's config/benefit_cases.yaml).",
+        "default: the study package's cases.yaml).",
     ),
     seeds: int | None = option("benefit.seeds"),
     workers: int | None = option("benefit.workers"),
@@ -187,7 +187,7 @@ def experiment_benefit_report(
                 raise Lf3pmError(f"{records}: no {name} (a benefit study's records: lf3pm experiment benefit -o DIR)")
         if out is not None:
             check_output(out, folder=True, parents=True)
-        from lf3pm.experiments.benefit.report import regenerate
+        from lf3pm.experiments.benefit.regenerate import regenerate
 
         regenerate(records, out)
         where = out if out is not None else records

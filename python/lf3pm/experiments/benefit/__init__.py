@@ -3,7 +3,7 @@
     lf3pm experiment benefit -o DIR [--cases FILE.yaml] [--quick] [--seeds 3] [--workers 2]
 
 On several maps (procedural scenes built for the question and real maps; ``cases``, read
-from config/benefit_cases.yaml, or a user's own cases file: ``case_file``),
+from cases.yaml beside this package's modules, or a user's own cases file: ``case_file``),
 seeded start/goal pairs are drawn from each map's start and goal zones. Each pair is
 planned for one robot (omni or diff, alternating) with no metric (``none``) and with
 each guidance of :data:`~lf3pm.experiments.guidance.GUIDANCE` (the SOLM channels q_n,
@@ -22,7 +22,7 @@ tables: ``report``), DIR/scatter.png (errors of guided against unguided plans),
 DIR/ratios.png (ratios per map), DIR/maps.png (each map's effect with its interval),
 DIR/examples/*.png (one pair per map over its SOLM: ``figures``). ``lf3pm experiment
 benefit-report DIR`` makes the report, figures and summary again from the records alone
-(``report.regenerate``). Intermediate
+(``regenerate``). Intermediate
 results (SOLMs, trajectories, one JSON per replay) stay in DIR, so an interrupted
 study resumes where it stopped. Replays run in ``workers`` processes (spawn:
 small_gicp and the simulator use threads).

@@ -34,7 +34,7 @@ goal. A scene's zone takes a yaw range alone (``start: {yaw_deg: [-30, 30]}``).
 :func:`load_cases` reads a file into :class:`~lf3pm.experiments.map_cases.MapCase`
 objects; a bad file raises :class:`~lf3pm.config.ConfigError` in one line naming the
 file, the case (by name, else ``#N`` from 1) and the field. The study's own cases are
-the repository's ``config/benefit_cases.yaml`` (``--quick``: ``benefit_quick.yaml``).
+``cases.yaml`` beside this module (``--quick``: ``quick_cases.yaml``).
 """
 
 from __future__ import annotations
@@ -50,14 +50,14 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 
 from lf3pm.config import MAX_RES, MAX_SEED, ROBOT_KINDS, ConfigError, Section, SolmConfig, describe
 from lf3pm.errors import Lf3pmError
-from lf3pm.experiments.data import REPO, shared_data_dir
+from lf3pm.experiments.data import shared_data_dir
 from lf3pm.experiments.map_cases import MapCase
 from lf3pm.grid import Space
 from lf3pm.limits import clip, excerpt, load_yaml, read_text_file
 
 #: The study's cases (``lf3pm experiment benefit``) and its quick run's (``--quick``).
-CASES_FILE = REPO / "config" / "benefit_cases.yaml"
-QUICK_FILE = REPO / "config" / "benefit_quick.yaml"
+CASES_FILE = Path(__file__).with_name("cases.yaml")
+QUICK_FILE = Path(__file__).with_name("quick_cases.yaml")
 
 #: MapCase's defaults: what a case leaves out (one source for both).
 _DEFAULT = {f.name: f.default for f in fields(MapCase) if f.default is not MISSING}

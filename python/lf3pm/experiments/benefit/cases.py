@@ -1,6 +1,6 @@
 """The benefit study's maps: procedural scenes built for the question and two real maps,
-each a :class:`~lf3pm.experiments.map_cases.MapCase`, read from the repository's cases
-files (one source: config/benefit_cases.yaml, and config/benefit_quick.yaml for
+each a :class:`~lf3pm.experiments.map_cases.MapCase`, read from the package's cases
+files (one source: cases.yaml beside this package's modules, and quick_cases.yaml for
 ``--quick``; the schema: :mod:`lf3pm.experiments.benefit.case_file`)."""
 
 from __future__ import annotations
