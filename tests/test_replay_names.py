@@ -15,6 +15,7 @@ BOUNDARY = ("config.py", "cli/", "replays/registry.py", "replays/methods.py")
 #: registry: (module, string) and why.
 OTHER_MEANINGS = {
     ("solm/cluster.py", "auto"): "Ray's address of a running cluster, not an odometry",
+    ("experiments/benefit/protocol.py", "odometry"): "the replay section's field of that name, not the KISS-ICP method",
 }
 
 
