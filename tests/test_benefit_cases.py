@@ -18,6 +18,7 @@ from lf3pm.config import ConfigError
 from lf3pm.experiments.benefit import cases as builtin
 from lf3pm.experiments.benefit.case_file import CASES_FILE, QUICK_FILE, load_cases
 from lf3pm.experiments.benefit.study import _draw, _yaw
+from lf3pm.experiments.data import shared_data_dir
 from lf3pm.experiments.map_cases import MapCase, in_polygon, zone_box
 from lf3pm.grid import Grid, Space
 
@@ -138,6 +139,16 @@ EXPECTED_QUICK = (
 def _typed(case: MapCase) -> list:
     """A case's values with their types (30 and 30.0 would draw alike, but say so)."""
     return [(name, value, type(value)) for name, value in vars(case).items()]
+
+
+def test_a_run_folder_is_a_map(site):
+    """A recorded run's folder (scans at TUM poses) beside the file or in the shared data."""
+    (site / "run" / "scans").mkdir(parents=True)
+    np.save(site / "run" / "scans" / "1.000000.npy", np.eye(3))
+    (site / "run" / "poses_tum.txt").write_text("1.0 0 0 0 0 0 0 1\n")
+    local, shared = load_cases(_write(site, [_case(map="run"), _case(name="b", map="real_hall_run")]))
+    assert local.source == str(site / "run") and shared.source == "real_hall_run"
+    assert (shared_data_dir() / shared.source / "poses_tum.txt").is_file()
 
 
 def test_repository_cases_are_the_cases_the_study_ran():

@@ -2,7 +2,8 @@
 
 Formats, chosen by the file suffix: PCD (``.pcd``, ascii / binary /
 binary_compressed), PLY (``.ply``), LAS and LAZ (``.las``, ``.laz``) and NumPy
-(``.npy``, ``.npz``). Readers return a C-contiguous float64 ``(N, 3)`` array;
+(``.npy``, ``.npz``); and a recorded run's folder of scans with their poses, read
+as the map they make (:mod:`lf3pm.io.run_folder`). Readers return a C-contiguous float64 ``(N, 3)`` array;
 every problem with a file raises :class:`lf3pm.errors.MapError` with one line
 that names the file.
 """

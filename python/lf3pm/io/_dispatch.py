@@ -39,6 +39,10 @@ def load_points(path, voxel: float | None = None) -> np.ndarray:
     ``voxel`` (> 0) the cloud is then reduced to one point per voxel, the
     centroid of its points (:func:`lf3pm.io.voxel_downsample`).
 
+    ``path`` may also be a run folder (scans named by their time and a TUM poses
+    file, :mod:`lf3pm.io.run_folder`): its scans in the world frame, one point per
+    ``voxel`` (default ``RUN_MAP_VOXEL``).
+
     Raises MapError, with one line that names the file, when the file is
     missing, has an unknown suffix, is corrupt or truncated, holds an array of
     the wrong shape, holds no points or no finite point, or ``voxel`` is not > 0.
@@ -48,6 +52,11 @@ def load_points(path, voxel: float | None = None) -> np.ndarray:
         check_voxel(voxel)
     if not os.path.exists(name):
         raise MapError(f"{name}: no such file")
+    if os.path.isdir(name):
+        from lf3pm.io.run_folder import is_run_folder, run_map
+
+        if is_run_folder(name):
+            return run_map(name, voxel)
     if not os.path.isfile(name):
         raise MapError(f"{name}: not a regular file")
     module, reader, _ = _format(name)

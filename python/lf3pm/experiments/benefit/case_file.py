@@ -6,7 +6,8 @@ A cases file is a mapping with one key, ``cases``: a list of cases, each a mappi
 
     cases:
       - name: hall                  # letters, digits, _ . - (the outputs' folder names)
-        map: hall.ply               # a map file lf3pm reads (.pcd .ply .las .laz .npy ...):
+        map: hall.ply               # a map file lf3pm reads (.pcd .ply .las .laz .npy ...)
+                                    #   or a run folder (scans at TUM poses, lf3pm.io.run_folder):
                                     #   relative to this file's folder, absolute, or a
                                     #   name in the shared data folder; or scene:NAME
         sensor: vlp16               # a preset, or a sensor YAML (relative to this file)
@@ -344,12 +345,19 @@ def _map_file(text: str, folder: Path, check: bool) -> str:
     or given absolute), or a name in the shared data folder (as given)."""
     from lf3pm.io import SUPPORTED_SUFFIXES
 
+    from lf3pm.io.run_folder import is_run_folder
+
     path = Path(text).expanduser()
+    local = path if path.is_absolute() else folder / path
+    if is_run_folder(local):
+        return str(local.resolve())
+    if is_run_folder(shared_data_dir() / text):
+        return text
     if not text.lower().endswith(SUPPORTED_SUFFIXES):
         raise ValueError(
-            f"map: {text} is no map file lf3pm reads (suffixes: {' '.join(SUPPORTED_SUFFIXES)}) nor scene:NAME"
+            f"map: {text} is no map file lf3pm reads (suffixes: {' '.join(SUPPORTED_SUFFIXES)}), "
+            "no run folder (scans/ and poses_tum.txt) nor scene:NAME"
         )
-    local = path if path.is_absolute() else folder / path
     if local.is_file():
         return str(local.resolve())
     if (shared_data_dir() / text).is_file() or not check:
