@@ -212,3 +212,44 @@ def test_benefit_report_without_records_is_one_line(tmp_path):
     lines = done.output.strip().splitlines()
     assert len(lines) == 1
     assert lines[0].startswith(f"lf3pm: error: {tmp_path}: no summary.json (a benefit study's records")
+
+
+def test_the_report_says_what_each_goal_is_with_the_protocols_threshold():
+    """The goals' section: one row a goal judged by measure, in the protocol's words and
+    thresholds (other goals, other words), the length overhead a line; a verdict the
+    goals do not describe is still shown, by its key."""
+    from lf3pm.experiments.benefit.protocol import GOALS, Goals
+    from lf3pm.experiments.benefit.report import goal_lines
+
+    summary = read_records(FIXTURE)
+    text = "\n".join(goal_lines(summary.goal, GOALS.described()))
+    assert "| goal | localization | LIO | LIO, steady starts |" in text
+    assert "| at risk: the median APE ratio over pairs at most 0.3 | yes | yes | yes |" in text
+    assert "The median length overhead (every pair) at most 15 %: yes." in text
+    other = Goals(at_risk_ratio_max=0.25, length_overhead_max=0.1)
+    verdicts = {k.replace("at_most_0.3", "at_most_0.25").replace("15pct", "10pct"): v for k, v in summary.goal.items()}
+    text = "\n".join(goal_lines(verdicts, other.described()))
+    assert "| at risk: the median APE ratio over pairs at most 0.25 | yes | yes | yes |" in text
+    assert "The median length overhead (every pair) at most 10 %: yes." in text
+    text = "\n".join(goal_lines({**verdicts, "some_other_goal": False}, other.described()))
+    assert "Other goals: some other goal: no." in text
+
+
+@pytest.mark.slow
+def test_regenerate_judges_by_the_folders_protocol(tmp_path):
+    """benefit-report takes the statistics and goals of the folder's protocol.yaml: other
+    goals, other keys and words; another failure line, other failure rates."""
+    from lf3pm.experiments.benefit.protocol import DEFAULT_PROTOCOL, Goals, Statistics, write_protocol
+
+    for name in ("summary.json", "pairs.jsonl"):
+        shutil.copyfile(FIXTURE / name, tmp_path / name)
+    rules = DEFAULT_PROTOCOL.model_copy(
+        update={"goals": Goals(map_p_max=0.5), "statistics": Statistics(failure_ape_m=1e-3, bootstrap_draws=200)}
+    )
+    write_protocol(tmp_path / "protocol.yaml", rules)
+    summary = regenerate(tmp_path)
+    assert summary.goal["localization_at_risk_maps_sign_p_at_most_0.5"] is True
+    assert "| over the at-risk maps: the exact sign test's p at most 0.5 |" in (tmp_path / "benefit.md").read_text()
+    before = read_records(FIXTURE).compared(Measure(LOCALIZATION)).by_guidance["default"]
+    after = summary.compared(Measure(LOCALIZATION)).by_guidance["default"]
+    assert after.failure_rate_unguided > before.failure_rate_unguided

@@ -1,6 +1,7 @@
 """The benefit study's protocol (experiments/benefit/protocol.py): today's is the one
 frozen in config/benefit_protocol.yaml, `--frozen` refuses any run whose protocol
-differs in one line naming the field, before any work, and a protocol round-trips."""
+differs in one line naming the field, before any work, a protocol round-trips, and a
+run judges by its protocol's statistics and goals."""
 
 import math
 from pathlib import Path
@@ -13,7 +14,7 @@ from typer.testing import CliRunner
 from lf3pm.cli import app
 from lf3pm.experiments.benefit import protocol as protocols
 from lf3pm.experiments.benefit.protocol import ProtocolError, read_protocol, write_protocol
-from lf3pm.experiments.benefit.study import study_protocol
+from lf3pm.experiments.benefit.study import StudySettings, study_protocol
 
 FROZEN = Path(__file__).resolve().parents[1] / "config" / "benefit_protocol.yaml"
 
@@ -24,13 +25,13 @@ def test_the_default_run_has_the_frozen_protocol():
     frozen protocol, made on purpose."""
     frozen, current = read_protocol(FROZEN), study_protocol()
     assert protocols.compared(frozen, current) is None, protocols.compared(frozen, current)
-    assert frozen.digest() == current.digest() and frozen.version == protocols.VERSION == 1
+    assert frozen.digest() == current.digest() and frozen.version == protocols.VERSION == 2
     assert f"sha256 of its content (name and date aside): {frozen.digest()}" in FROZEN.read_text()
 
 
 def test_the_module_constants_are_the_protocols_defaults():
-    """The constants the study's modules keep read the protocol's defaults (one source),
-    and paired_stats' (not yet read from it) hold the same numbers."""
+    """The constants the study's modules keep read the protocol's defaults (one source);
+    the per-pair statistics' defaults are paired_stats' (which the protocol's give it)."""
     from lf3pm.experiments import paired_stats, risk
     from lf3pm.experiments.benefit import analysis, localization_error, records
 
@@ -40,13 +41,22 @@ def test_the_module_constants_are_the_protocols_defaults():
     assert (localization_error.FIT_RATE, localization_error.MIN_PLANS) == (1.0, 10)
     assert analysis.LIO_BOUND == p.statistics.lio_bound_m == 0.3
     assert records.APE_FLOOR == p.statistics.ape_floor_m == 1e-4
-    assert paired_stats.FAILURE_APE == p.statistics.failure_ape_m
-    assert paired_stats.WORSE_MARGIN == p.statistics.worse_margin_m
+    assert p.statistics.paired() == paired_stats.PAIRED == paired_stats.PairedSettings()
+    assert (p.statistics.failure_ape_m, p.statistics.worse_margin_m, p.statistics.ci_level) == (1.0, 0.01, 0.95)
+    assert p.goals == protocols.GOALS == analysis.GOALS
+
+
+def _default_protocol(tmp_path) -> Path:
+    """The protocol a default run builds, written (the frozen file's when in step)."""
+    path = tmp_path / "default.yaml"
+    write_protocol(path, study_protocol())
+    return path
 
 
 def _changed(tmp_path, path: str, value) -> Path:
-    """config/benefit_protocol.yaml with the field at dotted ``path`` set to ``value``."""
-    data = yaml.safe_load(FROZEN.read_text())
+    """The default run's protocol (config/benefit_protocol.yaml's, whose own test is
+    the one above) with the field at dotted ``path`` set to ``value``."""
+    data = yaml.safe_load(_default_protocol(tmp_path).read_text())
     *head, last = path.split(".")
     node = data
     for key in head:
@@ -69,6 +79,7 @@ CHANGES = [
     ("lio.rest_speed_limit", 0.1, "protocol.lio.rest_speed_limit: frozen 0.1, this run 0.05"),
     ("statistics.lio_bound_m", 0.5, "protocol.statistics.lio_bound_m: frozen 0.5, this run 0.3"),
     ("analysis.equivalence_low", 0.8, "protocol.analysis.equivalence_low: frozen 0.8, this run 0.9"),
+    ("goals.map_p_max", 0.05, "protocol.goals.map_p_max: frozen 0.05, this run 0.01"),
     ("cases.7.sensor", "vlp16", 'protocol.cases[7].sensor: frozen "vlp16", this run "mid70"'),
     ("cases_sha256", "0" * 64, "protocol.cases_sha256: frozen"),
 ]
@@ -118,7 +129,7 @@ def test_a_setting_given_to_the_run_is_in_its_protocol(tmp_path):
 
 
 def test_the_protocol_round_trips(tmp_path):
-    p = study_protocol(quick=True, date="2026-12-05")
+    p = study_protocol(StudySettings.of(quick=True), date="2026-12-05")
     write_protocol(tmp_path / "protocol.yaml", p)
     back = read_protocol(tmp_path / "protocol.yaml")
     assert back == p and back.digest() == p.digest() and back.to_yaml() == p.to_yaml()
@@ -131,9 +142,11 @@ def test_the_protocol_round_trips(tmp_path):
 @pytest.mark.parametrize(
     ("text", "error"),
     [
-        ("version: 2\n", "a protocol of version 2, not 1"),
-        ("version: 1\nrisk:\n  factr: 9\n", "protocol.risk.factr"),
-        ("version: 1\nrisk:\n  factor: -1\n", "protocol.risk.factor"),
+        ("version: 3\n", "a protocol of version 3, not 2"),
+        ("version: 1\n", "a protocol of version 1, not 2 (version 1 has no goals section: write it again"),
+        ("version: 2\nrisk:\n  factr: 9\n", "protocol.risk.factr"),
+        ("version: 2\nrisk:\n  factor: -1\n", "protocol.risk.factor"),
+        ("version: 2\ngoals:\n  no_risk_ratio_low: 1.2\n", "no_risk_ratio_low 1.2 exceeds no_risk_ratio_high 1.05"),
         ("- 1\n", "a mapping of its fields"),
         ("version: [\n", "not YAML"),
     ],
@@ -152,11 +165,11 @@ def test_a_folder_made_under_another_protocol_is_refused(tmp_path):
     from lf3pm.experiments.benefit import study
 
     out = tmp_path / "out"
-    write_protocol(out / "protocol.yaml", study_protocol(quick=True, pair_seed=3))
+    write_protocol(out / "protocol.yaml", study_protocol(StudySettings.of(quick=True, pair_seed=3)))
     with pytest.raises(ProtocolError, match=r"made under another protocol \(protocol\.pair_seed: the folder's 3"):
-        study.run(out, quick=True)
+        study.run(out, StudySettings.of(quick=True))
     assert sorted(p.name for p in out.iterdir()) == ["protocol.yaml"]
-    other = study_protocol(quick=True, pair_seed=3, odometry="genz")
+    other = study_protocol(StudySettings.of(quick=True, pair_seed=3, odometry="genz"))
     protocols.check_folder(out / "protocol.yaml", other)  # no error
 
 
@@ -203,12 +216,51 @@ def test_the_variants_are_protocols_this_lf3pm_runs():
     from lf3pm.config import DEFAULTS
 
     folder = FROZEN.parent / "benefit_protocol_variants"
-    frozen = read_protocol(FROZEN)
+    frozen = study_protocol()  # config/benefit_protocol.yaml's (test_the_default_run_has_the_frozen_protocol)
     variants = {path.stem: read_protocol(path) for path in sorted(folder.glob("*.yaml"))}
     assert set(variants) >= {"risk_all_headings", "corridor_vlp16", "corridor_first_zones", "genz_voxels_0_5"}
     for name, variant in variants.items():
         assert protocols.compared(frozen, variant) is not None, name
     rule = variants["risk_all_headings"]
-    assert study_protocol(rules=rule).digest() == rule.digest()
+    assert study_protocol(StudySettings(rules=rule)).digest() == rule.digest()
     voxels = DEFAULTS.replay.model_copy(update={"odometries": {"genz": {"mapping": {"voxel_size": 0.5}}}})
-    assert study_protocol(replay=voxels).digest() == variants["genz_voxels_0_5"].digest()
+    assert study_protocol(StudySettings(replay=voxels)).digest() == variants["genz_voxels_0_5"].digest()
+
+
+def test_a_run_judges_by_its_protocols_statistics(tmp_path, monkeypatch):
+    """A protocol with other statistics is run with them, not refused: the run gets past
+    its checks and writes them into its protocol.yaml (stopped there: no map is built);
+    only another APE floor, which the records and figures fix, is refused before any work."""
+    from lf3pm.experiments.benefit import study
+
+    class Stop(Exception):
+        pass
+
+    def stop(*args, **kwargs):
+        raise Stop
+
+    monkeypatch.setattr(study, "build_case_solm", stop)
+    other = protocols.Statistics(bootstrap_draws=500, ci_level=0.9, failure_ape_m=2.0, worse_margin_m=0.02)
+    rules = protocols.DEFAULT_PROTOCOL.model_copy(update={"statistics": other})
+    with pytest.raises(Stop):
+        study.run(tmp_path / "out", StudySettings.of(quick=True, rules=rules))
+    assert read_protocol(tmp_path / "out" / "protocol.yaml").statistics == other
+    floor = rules.model_copy(update={"statistics": other.model_copy(update={"ape_floor_m": 1e-3})})
+    with pytest.raises(ProtocolError, match=r"protocol\.statistics\.ape_floor_m: this lf3pm floors errors at 0\.0001"):
+        study.run(tmp_path / "floor", StudySettings.of(quick=True, rules=floor))
+    assert not (tmp_path / "floor").exists()
+
+
+def test_the_goals_keys_and_texts_are_named_from_their_thresholds():
+    """summary.json's goal keys and the report's words carry each threshold: the
+    defaults' keys are those the committed outputs hold; other thresholds, other keys."""
+    keys = protocols.GOALS.keys()
+    assert keys["no_risk_ci_upper"] == "no_risk_ci_upper_at_most_1.10"
+    assert keys["length_overhead"] == "length_overhead_at_most_15pct"
+    assert keys["maps_ci_upper"] == "at_risk_maps_ci_upper_below_1"
+    other = protocols.Goals(at_risk_ratio_max=0.5, no_risk_ci_upper_max=1.125, map_p_max=0.05, length_overhead_max=0.2)
+    described = other.described()
+    assert described["at_risk_ratio_at_most_0.5"] == "at risk: the median APE ratio over pairs at most 0.5"
+    assert "no_risk_ci_upper_at_most_1.125" in described and "length_overhead_at_most_20pct" in described
+    assert described["at_risk_maps_sign_p_at_most_0.05"].endswith("at most 0.05")
+    assert len(described) == len(other.keys()) == 9

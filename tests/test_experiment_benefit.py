@@ -320,3 +320,68 @@ def test_lio_beyond_bound_lists_the_default_plans_past_it():
     out = lio_beyond_bound([pair(0, LIO_BOUND + 0.01, 0.05), pair(1, LIO_BOUND - 0.01, 2.0), pair(2, 5.0, 5.0, False)])
     assert out.pairs_replayed == 2 and out.bound_m == LIO_BOUND
     assert [(b.pair, b.guided_m, b.unguided_m) for b in out.pairs] == [(0, LIO_BOUND + 0.01, 0.05)]
+
+
+def test_compare_judges_by_its_settings():
+    """paired_stats.compare takes its settings whole (the benefit study: its protocol's
+    statistics): the failure line, the worse margin and the bootstrap are its, not
+    constants of the module."""
+    from lf3pm.experiments.benefit.protocol import Statistics
+    from lf3pm.experiments.paired_stats import PAIRED, PairedSettings
+
+    guided, unguided = [0.5, 1.5, 0.2, 2.5], [1.2, 3.0, 0.1, 2.0]
+    seeds_g = [[0.50, 0.51, 0.49], [1.5, 1.5, 1.5], [0.200, 0.201, 0.199], [2.5, 2.6, 2.4]]
+    seeds_u = [[1.2, 1.2, 1.2], [3.0, 3.0, 3.0], [0.100, 0.101, 0.099], [2.0, 2.1, 1.9]]
+    default = compare(guided, unguided, guided_seeds=seeds_g, unguided_seeds=seeds_u)
+    assert default == compare(guided, unguided, guided_seeds=seeds_g, unguided_seeds=seeds_u, settings=PAIRED)
+    assert (default.failure_rate_guided, default.failure_rate_unguided) == (0.5, 0.75)
+    assert default.share_worse_beyond_noise_and_margin == 0.5  # worse by 0.1 m and by 0.5 m
+    other = PairedSettings(bootstrap_draws=300, bootstrap_seed=5, ci_level=0.5, failure_ape_m=2.2, worse_margin_m=0.2)
+    c = compare(guided, unguided, guided_seeds=seeds_g, unguided_seeds=seeds_u, settings=other)
+    assert (c.failure_rate_guided, c.failure_rate_unguided) == (0.25, 0.25)
+    assert c.share_worse_beyond_noise_and_margin == 0.25  # the 0.1 m one is within the margin now
+    ratios = np.asarray(guided) / np.asarray(unguided)
+    assert c.median_ratio_ci95 == median_ratio_ci(ratios, draws=300, level=0.5, seed=5) != default.median_ratio_ci95
+    # The protocol's statistics give compare its settings, their defaults paired_stats'.
+    assert Statistics(failure_ape_m=2.2, worse_margin_m=0.2).paired().failure_ape_m == 2.2
+    assert Statistics().paired() == PAIRED
+
+
+def test_goal_reads_its_thresholds_and_judges_the_at_risk_maps():
+    """The goals' thresholds are the protocol's (goals), named into the keys; over the
+    at-risk maps the interval's upper end and the tests over maps are judged too."""
+    from lf3pm.experiments.benefit.analysis import AT_RISK, goal
+    from lf3pm.experiments.benefit.protocol import Goals
+    from lf3pm.experiments.benefit.records import (
+        MEASURES,
+        AnalysisSettings,
+        Comparison,
+        Comparisons,
+        Effect,
+        MapAnalysis,
+        MeasureAnalysis,
+        RiskSplit,
+    )
+
+    risky = Comparison(10, median_ratio=0.4, median_ratio_ci95=(0.2, 0.6), wilcoxon_p=0.002)
+    safe = Comparison(10, median_ratio=1.06, median_ratio_ci95=(0.97, 1.08), share_worse_beyond_noise_and_margin=0.1)
+    overall = {"default": Comparison(20, median_length_overhead=0.18)}
+    comparisons = {m.key: Comparisons(overall, {"default": RiskSplit(risky, safe)}) for m in MEASURES}
+    over = Effect(AT_RISK, 4, 32, 0.08, (0.04, 0.2), 0.125, 0.125, 0.125, 4)
+    analysed = MeasureAnalysis((), (), (Effect("every pair", 9, 64, 0.3, (0.1, 0.7)), over), (), (), (), None)
+    maps = MapAnalysis(AnalysisSettings(), {"localization": analysed})
+    out = goal(comparisons, maps)
+    assert out["localization_at_risk_ratio_at_most_0.3"] is False and out["lio_at_risk_wilcoxon_p_below_0.01"]
+    assert out["localization_at_risk_maps_ci_upper_below_1"] is True
+    assert out["localization_at_risk_maps_wilcoxon_p_at_most_0.01"] is False
+    assert out["localization_at_risk_maps_sign_p_at_most_0.01"] is False
+    assert "lio_at_risk_maps_ci_upper_below_1" not in out  # the LIO not analysed over maps here
+    assert out["localization_no_risk_ratio_within_0.95_1.05"] is False
+    assert out["length_overhead_at_most_15pct"] is False
+    lenient = Goals(at_risk_ratio_max=0.5, no_risk_ratio_high=1.1, length_overhead_max=0.2, map_p_max=0.2)
+    out = goal(comparisons, maps, lenient)
+    assert out["localization_at_risk_ratio_at_most_0.5"] is True
+    assert out["localization_no_risk_ratio_within_0.95_1.1"] is True
+    assert out["localization_at_risk_maps_sign_p_at_most_0.2"] is True
+    assert out["length_overhead_at_most_20pct"] is True
+    assert set(out) <= {f"{m.key}_{k}" for m in MEASURES for k in lenient.described()} | set(lenient.described())

@@ -285,5 +285,5 @@ def test_the_benefit_study_takes_a_plugin_odometry_and_its_settings(tmp_path, mo
     stated = DEFAULTS.replay.model_copy(update={"odometries": {"toy": {"drift": 0.0}}})
     assert study.lio_run(case, "toy", stated) == LioRun("toy", "lio-toy")  # the defaults, stated
     with pytest.raises(ConfigError, match="benefit.odometry must be 'auto', .*'toy', got 'nothing'"):
-        study.run(tmp_path / "out", odometry="nothing")
+        study.run(tmp_path / "out", study.StudySettings.of(odometry="nothing"))
     assert not (tmp_path / "out").exists()

@@ -129,7 +129,7 @@ def experiment_benefit(
     frozen: Path | None = typer.Option(None, metavar="PROTOCOL.yaml", help="Run only this protocol (docs/benefit.md)."),
     write_protocol: Path | None = typer.Option(None, metavar="FILE.yaml", help="Write this run's protocol only."),
     rules: Path | None = typer.Option(
-        None, metavar="PROTOCOL.yaml", help="Its risk rule, fit, statistics and analysis (a variant)."
+        None, metavar="PROTOCOL.yaml", help="Its risk rule, fit, statistics, analysis and goals (a variant)."
     ),
 ):
     """Guided against unguided plans on several maps, judged by localization and LIO replays."""
@@ -150,25 +150,21 @@ def experiment_benefit(
 
         # The repository's cases are read here too, so that a map file missing stops a run at once.
         chosen = load_cases(cases or (QUICK_FILE if quick else CASES_FILE), check_files=write_protocol is None)
-        settings = dict(
+        from lf3pm.experiments.benefit.study import StudySettings, freeze
+
+        settings = StudySettings(
+            study,
+            cfg.replay,
             quick=quick,
             cases=chosen,
-            seeds=study.seeds,
-            workers=study.workers,
-            pair_seed=study.pair_seed,
             guidance=candidates,
-            lio=study.lio,
-            odometry=study.odometry,
-            replay=cfg.replay,
             rules=protocols.DEFAULT_PROTOCOL if rules is None else protocols.read_protocol(rules),
         )
         if write_protocol is not None or out is None:
-            from lf3pm.experiments.benefit.study import freeze
-
-            digest = freeze(write_protocol, frozen, **settings).digest()
+            digest = freeze(write_protocol, settings, frozen).digest()
             return console.print(f"wrote {write_protocol} (protocol sha256 {digest})", soft_wrap=True)
         with progress_bar() as step:
-            benefit.run(out, **settings, frozen=frozen, progress=step)
+            benefit.run(out, settings, frozen=frozen, progress=step)
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, protocol.yaml, benefit.md, scatter.png, ratios.png, examples/")
 

@@ -11,8 +11,12 @@ For each start/goal pair i there is one error per plan, a_i (guided) and b_i
   the replays' own noise: given each plan's errors over seeds, the guided mean
   exceeds the unguided by more than twice the standard error of their difference
   (NaN with one seed);
-- failure rates: the share of pairs whose error exceeds ``failure`` (1 m);
+- failure rates: the share of pairs whose error exceeds ``failure_ape_m`` (1 m);
 - the median overheads of path length and duration, a_len / b_len - 1.
+
+How it judges (the bootstrap's resamples, seed and level, the failure line, the margin
+of "meaningfully worse") is a :class:`PairedSettings`, its defaults written once here;
+a study passes its own (the benefit study: its protocol's ``statistics`` section).
 """
 
 from __future__ import annotations
@@ -24,12 +28,26 @@ import numpy as np
 
 from lf3pm.errors import Lf3pmError
 
-#: An error above this (m) counts as a localization failure.
-FAILURE_APE = 1.0
-#: A guided plan counts as meaningfully worse when its mean error exceeds the unguided
-#: one's beyond seed noise and by more than this (m): a centimetre, below which a
-#: localization error does not matter to a ground robot's planning.
-WORSE_MARGIN = 0.01
+
+@dataclass(frozen=True)
+class PairedSettings:
+    """How :func:`compare` judges, with the defaults written once here:
+    ``bootstrap_draws`` resamples of the pairs for the median ratio's percentile
+    interval, drawn from ``bootstrap_seed``, at confidence ``ci_level``; an error above
+    ``failure_ape_m`` (m) counts as a localization failure; a guided plan counts as
+    meaningfully worse when its mean error exceeds the unguided one's beyond seed noise
+    and by more than ``worse_margin_m`` (m): a centimetre, below which a localization
+    error does not matter to a ground robot's planning."""
+
+    bootstrap_draws: int = 2000
+    bootstrap_seed: int = 0
+    ci_level: float = 0.95
+    failure_ape_m: float = 1.0
+    worse_margin_m: float = 0.01
+
+
+#: The default settings (:class:`PairedSettings`' defaults).
+PAIRED = PairedSettings()
 
 
 @dataclass(frozen=True)
@@ -63,7 +81,13 @@ class Comparison:
         return cls(**d)
 
 
-def median_ratio_ci(ratios, *, draws: int = 2000, level: float = 0.95, seed: int = 0) -> tuple[float, float]:
+def median_ratio_ci(
+    ratios,
+    *,
+    draws: int = PAIRED.bootstrap_draws,
+    level: float = PAIRED.ci_level,
+    seed: int = PAIRED.bootstrap_seed,
+) -> tuple[float, float]:
     """Percentile bootstrap interval of the median of ``ratios`` (resampling pairs)."""
     r = np.asarray(ratios, dtype=np.float64)
     if r.size == 0:
@@ -111,11 +135,14 @@ def compare(
     unguided_duration=None,
     guided_seeds=None,
     unguided_seeds=None,
-    failure: float = FAILURE_APE,
-    seed: int = 0,
+    settings: PairedSettings = PAIRED,
 ) -> Comparison:
-    """The paired comparison of the module docstring. Errors must be positive and finite;
-    ``*_seeds``: each pair's per-seed errors (for the share worse beyond noise)."""
+    """The paired comparison of the module docstring, judged by ``settings`` (the
+    bootstrap, the failure line, the worse margin). Errors must be positive and finite;
+    ``*_seeds``: each pair's per-seed errors (for the share worse beyond noise). The
+    interval's level is ``settings.ci_level`` (the field ``median_ratio_ci95`` keeps its
+    name: 0.95 by default)."""
+    s = settings
     a, b = np.asarray(guided, float), np.asarray(unguided, float)
     if a.shape != b.shape or a.ndim != 1:
         raise Lf3pmError(f"paired errors need two equal-length lists, got {a.shape} and {b.shape}")
@@ -125,17 +152,17 @@ def compare(
     out = dict(
         pairs=int(a.size),
         median_ratio=float(np.median(ratios)) if a.size else math.nan,
-        median_ratio_ci95=median_ratio_ci(ratios, seed=seed),
+        median_ratio_ci95=median_ratio_ci(ratios, draws=s.bootstrap_draws, level=s.ci_level, seed=s.bootstrap_seed),
         wilcoxon_p=wilcoxon_p(a, b),
         share_worse=float(np.mean(ratios > 1.0)) if a.size else math.nan,
         share_worse_beyond_noise=(
             worse_beyond_noise(guided_seeds, unguided_seeds) if guided_seeds is not None else math.nan
         ),
         share_worse_beyond_noise_and_margin=(
-            worse_beyond_noise(guided_seeds, unguided_seeds, WORSE_MARGIN) if guided_seeds is not None else math.nan
+            worse_beyond_noise(guided_seeds, unguided_seeds, s.worse_margin_m) if guided_seeds is not None else math.nan
         ),
-        failure_rate_guided=float(np.mean(a > failure)) if a.size else math.nan,
-        failure_rate_unguided=float(np.mean(b > failure)) if a.size else math.nan,
+        failure_rate_guided=float(np.mean(a > s.failure_ape_m)) if a.size else math.nan,
+        failure_rate_unguided=float(np.mean(b > s.failure_ape_m)) if a.size else math.nan,
         median_error_guided=float(np.median(a)) if a.size else math.nan,
         median_error_unguided=float(np.median(b)) if a.size else math.nan,
     )

@@ -1,6 +1,8 @@
 """The benefit study's statistics: each guidance against none (paired_stats), by map,
 robot and risk, which SOLM channel predicts each replay's error, the LIO's bound and
-the issue's goal, all from the study's records."""
+the issue's goals, all from the study's records, judged by the protocol's settings
+(its ``statistics``, ``analysis`` and ``goals`` sections; their defaults where none is
+given)."""
 
 from __future__ import annotations
 
@@ -8,7 +10,7 @@ import math
 
 import numpy as np
 
-from lf3pm.experiments.benefit.protocol import STATISTICS
+from lf3pm.experiments.benefit.protocol import GOALS, STATISTICS, Goals, Statistics
 from lf3pm.experiments.benefit.records import (
     APE_FLOOR,
     DEFAULT,
@@ -44,6 +46,9 @@ from lf3pm.experiments.paired_stats import (
     wilcoxon_exact_p,
 )
 
+#: The name of the effect over the at-risk maps (MeasureAnalysis.over_maps), which the goals judge.
+AT_RISK = "at risk"
+
 #: SOLM channels whose mean along each trajectory the summary records (calibration).
 CHANNELS = ("q_n", "q_min", "q_max", "step_norm")
 
@@ -70,8 +75,10 @@ def paired(pair: Pair, guidance: str, measure: Measure) -> tuple[SeedReplays, Se
     return a.on_seeds(keep), b.on_seeds(keep)
 
 
-def comparison(pairs: list[Pair], guidance: str, measure: Measure) -> Comparison:
-    """Plans of ``guidance`` against the unguided ones over ``pairs``, by ``measure``."""
+def comparison(pairs: list[Pair], guidance: str, measure: Measure, statistics: Statistics = STATISTICS) -> Comparison:
+    """Plans of ``guidance`` against the unguided ones over ``pairs``, by ``measure``,
+    judged by ``statistics`` (the protocol's: paired_stats.compare's settings; errors
+    floored at ``APE_FLOOR``)."""
     rows = [(pair, both) for pair in pairs if (both := paired(pair, guidance, measure)) is not None]
     if not rows:
         return Comparison(0)
@@ -86,26 +93,38 @@ def comparison(pairs: list[Pair], guidance: str, measure: Measure) -> Comparison
         unguided_duration=[p.duration_s for p in unguided],
         guided_seeds=[list(a.ape_per_seed) for _, (a, _) in rows],
         unguided_seeds=[list(b.ape_per_seed) for _, (_, b) in rows],
+        settings=statistics.paired(),
     )
 
 
-def comparisons(pairs: list[Pair], cases: list[str], guidance: list[str], lio_guidance: list[str]) -> dict:
+def comparisons(
+    pairs: list[Pair],
+    cases: list[str],
+    guidance: list[str],
+    lio_guidance: list[str],
+    statistics: Statistics = STATISTICS,
+) -> dict:
     """summary.comparisons: by each measure (:data:`MEASURES`, by key), every guidance
     its method replayed (``guidance``: all, ``lio_guidance``: the LIO's) against none,
     over all pairs and at risk or not; where the default guidance ran at all, the
-    default per map (``cases``' order) and per robot."""
+    default per map (``cases``' order) and per robot; each judged by ``statistics``
+    (:func:`comparison`)."""
+
+    def compared(group: list[Pair], name: str, measure: Measure) -> Comparison:
+        return comparison(group, name, measure, statistics)
+
     risky, safe = [p for p in pairs if p.at_risk], [p for p in pairs if not p.at_risk]
     robots = sorted({p.robot for p in pairs})
     out = {}
     for measure in MEASURES:
-        compared = guidance if measure.method == LOCALIZATION else lio_guidance
+        names = guidance if measure.method == LOCALIZATION else lio_guidance
         by_map = by_robot = None
         if DEFAULT in guidance:
-            by_map = {case: comparison([p for p in pairs if p.case == case], DEFAULT, measure) for case in cases}
-            by_robot = {kind: comparison([p for p in pairs if p.robot == kind], DEFAULT, measure) for kind in robots}
+            by_map = {case: compared([p for p in pairs if p.case == case], DEFAULT, measure) for case in cases}
+            by_robot = {kind: compared([p for p in pairs if p.robot == kind], DEFAULT, measure) for kind in robots}
         out[measure.key] = Comparisons(
-            {name: comparison(pairs, name, measure) for name in compared},
-            {name: RiskSplit(comparison(risky, name, measure), comparison(safe, name, measure)) for name in compared},
+            {name: compared(pairs, name, measure) for name in names},
+            {name: RiskSplit(compared(risky, name, measure), compared(safe, name, measure)) for name in names},
             by_map,
             by_robot,
         )
@@ -174,31 +193,54 @@ def rest_counts(pairs: list[Pair]) -> dict[str, RestCount]:
     return {case: RestCount(*c) for case, c in counts.items()}
 
 
-def goal(comparisons: dict[str, Comparisons]) -> dict:
-    """The issue's goals for the default guidance, each True or False: on the at-risk
-    pairs a median APE ratio of at most 0.3 with Wilcoxon p < 0.01; on the others a
-    median ratio within [0.95, 1.05] whose 95 % interval ends at most at 1.10, and
-    meaningfully worse (beyond seed noise and by more than paired_stats.WORSE_MARGIN)
-    on at most 10 % of them; each by every measure; a median length overhead of at most
-    15 %. None where a goal cannot be judged: seed noise needs two seeds."""
-    out = {}
+def goal(comparisons: dict[str, Comparisons], maps: MapAnalysis | None = None, goals: Goals = GOALS) -> dict:
+    """The goals (the protocol's ``goals``: protocol.Goals) for the default guidance,
+    each True or False, keyed as :meth:`~protocol.Goals.keys` names them (after the
+    measure's key): on the at-risk pairs a median APE ratio of at most
+    ``at_risk_ratio_max`` with Wilcoxon p below ``at_risk_p_below``; over the at-risk
+    maps (``maps``: :func:`analyse`'s, for the guidance it judges) a geometric-mean
+    ratio whose interval ends below ``map_ci_upper_below``, with the exact Wilcoxon and
+    sign tests over maps each at p at most ``map_p_max``; on the other pairs a median
+    ratio within [``no_risk_ratio_low``, ``no_risk_ratio_high``] whose interval ends at
+    most at ``no_risk_ci_upper_max``, and meaningfully worse (beyond seed noise and by
+    more than the statistics' worse margin) on at most ``no_risk_worse_max_share`` of
+    them; each by every measure; a median length overhead of at most
+    ``length_overhead_max``. None where a goal cannot be judged: seed noise needs two
+    seeds."""
+    names, out = goals.keys(), {}
     for measure in MEASURES:
         split = comparisons[measure.key].by_risk.get(DEFAULT)
         if split is None:
             continue
         risky, safe, key = split.at_risk, split.no_risk, measure.key
         if risky.pairs:
-            out[f"{key}_at_risk_ratio_at_most_0.3"] = risky.median_ratio <= 0.3
-            out[f"{key}_at_risk_wilcoxon_p_below_0.01"] = bool(risky.wilcoxon_p < 0.01)
+            out[f"{key}_{names['at_risk_ratio']}"] = risky.median_ratio <= goals.at_risk_ratio_max
+            out[f"{key}_{names['at_risk_p']}"] = bool(risky.wilcoxon_p < goals.at_risk_p_below)
+        over = _at_risk_over_maps(maps, measure)
+        if over is not None:
+            out[f"{key}_{names['maps_ci_upper']}"] = bool(over.ci[1] < goals.map_ci_upper_below)
+            out[f"{key}_{names['maps_wilcoxon_p']}"] = bool(over.wilcoxon_p <= goals.map_p_max)
+            out[f"{key}_{names['maps_sign_p']}"] = bool(over.sign_p <= goals.map_p_max)
         if safe.pairs:
-            out[f"{key}_no_risk_ratio_within_0.95_1.05"] = 0.95 <= safe.median_ratio <= 1.05
-            out[f"{key}_no_risk_ci_upper_at_most_1.10"] = safe.median_ratio_ci95[1] <= 1.10
+            low, high = goals.no_risk_ratio_low, goals.no_risk_ratio_high
+            out[f"{key}_{names['no_risk_ratio']}"] = low <= safe.median_ratio <= high
+            out[f"{key}_{names['no_risk_ci_upper']}"] = safe.median_ratio_ci95[1] <= goals.no_risk_ci_upper_max
             worse = safe.share_worse_beyond_noise_and_margin
-            out[f"{key}_no_risk_worse_on_at_most_10pct"] = bool(worse <= 0.1) if math.isfinite(worse) else None
+            judged = bool(worse <= goals.no_risk_worse_max_share) if math.isfinite(worse) else None
+            out[f"{key}_{names['no_risk_worse']}"] = judged
     overall = comparisons[Measure(LOCALIZATION).key].by_guidance.get(DEFAULT)
     if overall is not None and overall.pairs:
-        out["length_overhead_at_most_15pct"] = overall.median_length_overhead <= 0.15
+        out[names["length_overhead"]] = overall.median_length_overhead <= goals.length_overhead_max
     return out
+
+
+def _at_risk_over_maps(maps: MapAnalysis | None, measure: Measure) -> Effect | None:
+    """The effect over the at-risk maps by ``measure`` in ``maps`` (None: not analysed,
+    or no at-risk map)."""
+    if maps is None or maps.settings.guidance != DEFAULT or measure.key not in maps.by_measure:
+        return None
+    found = [e for e in maps.by_measure[measure.key].over_maps if e.name == AT_RISK and e.maps]
+    return found[0] if found else None
 
 
 # --- at the level of the map ----------------------------------------------------------
@@ -312,7 +354,7 @@ def measure_analysis(pairs: list[Pair], cases: list[str], measure: Measure, s: A
         for robot in robots
         if (ratios := [_ratio(a, b) for p, a, b in rows if p.case == case and p.robot == robot])
     ]
-    groups = [("every pair", rows), ("at risk", risky), ("no risk", safe)]
+    groups = [("every pair", rows), (AT_RISK, risky), ("no risk", safe)]
     groups += [(f"{robot} robot", [r for r in rows if r[0].robot == robot]) for robot in robots]
     return MeasureAnalysis(
         by_map=tuple(map_effect(case, ratios, s) for case, ratios in by_map.items()),

@@ -6,11 +6,14 @@ content and a SHA-256 of them all), the guidance compared with its weights, the 
 odometry with each chosen odometry's settings, the replays' and localization's
 settings, lf3pm's defaults the plans and replays are made with (SOLM, planner, robot,
 scan), the at-risk rule (:class:`RiskRule`), the localization-error fit's sampling
-(:class:`LocalizationFit`), the per-pair statistics (:class:`Statistics`) and the
-analysis over maps (``analysis``: records.AnalysisSettings' fields). The field
-defaults are the study's constants, written once here (the at-risk rule's in
-lf3pm.experiments.risk, whose :class:`RiskRule` this takes): ``analysis``, ``records``
-and ``localization_error`` read them from :data:`DEFAULT_PROTOCOL`.
+(:class:`LocalizationFit`), the per-pair statistics (:class:`Statistics`), the
+analysis over maps (``analysis``: records.AnalysisSettings' fields) and the goals the
+study is judged by (:class:`Goals`). The field defaults are the study's constants,
+written once here (the at-risk rule's in lf3pm.experiments.risk, whose
+:class:`RiskRule` this takes; the per-pair comparison's in
+lf3pm.experiments.paired_stats, whose :class:`~lf3pm.experiments.paired_stats.PairedSettings`
+:meth:`Statistics.paired` gives): ``analysis``, ``records`` and ``localization_error``
+read them from :data:`DEFAULT_PROTOCOL`, and a run judges by its protocol's.
 
 Every run writes its protocol to ``DIR/protocol.yaml`` and its :func:`digest` into
 summary.json; ``lf3pm experiment benefit --frozen FILE`` refuses to start where the
@@ -29,13 +32,15 @@ from dataclasses import MISSING, asdict, fields
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, model_validator
 
 from lf3pm.config import ConfigError, Section, describe
+from lf3pm.experiments.paired_stats import PAIRED, PairedSettings
 from lf3pm.experiments.risk import RISK, RiskRule
 
-#: The version of the protocol's schema: a document of another is refused.
-VERSION = 1
+#: The version of the protocol's schema: a document of another is refused (2: the
+#: ``goals`` section added; 1 had none).
+VERSION = 2
 #: Fields that describe the document rather than the study: not compared, not hashed.
 METADATA = ("name", "date")
 
@@ -45,17 +50,137 @@ class ProtocolError(ConfigError):
 
 
 class Statistics(Section):
-    """How plans are compared (paired_stats, analysis, records)."""
+    """How plans are compared pair by pair (paired_stats.compare, through
+    :meth:`paired`; analysis, records): its first five fields' defaults are
+    paired_stats.PairedSettings'."""
 
-    bootstrap_draws: int = Field(2000, ge=1, description="Bootstrap resamples of the median ratio's interval.")
-    bootstrap_seed: int = Field(0, ge=0, description="The bootstrap's seed.")
-    ci_level: float = Field(0.95, gt=0, lt=1, description="The intervals' confidence level.")
-    failure_ape_m: float = Field(1.0, gt=0, description="An APE above this (m) is a failure.")
+    bootstrap_draws: int = Field(
+        PAIRED.bootstrap_draws, ge=1, description="Bootstrap resamples of the median ratio's interval."
+    )
+    bootstrap_seed: int = Field(PAIRED.bootstrap_seed, ge=0, description="The bootstrap's seed.")
+    ci_level: float = Field(PAIRED.ci_level, gt=0, lt=1, description="The intervals' confidence level.")
+    failure_ape_m: float = Field(PAIRED.failure_ape_m, gt=0, description="An APE above this (m) is a failure.")
     worse_margin_m: float = Field(
-        0.01, ge=0, description="A guided plan is meaningfully worse beyond seed noise and by more than this (m)."
+        PAIRED.worse_margin_m,
+        ge=0,
+        description="A guided plan is meaningfully worse beyond seed noise and by more than this (m).",
     )
     ape_floor_m: float = Field(1e-4, gt=0, description="Errors are floored to this (m) before ratios and logs.")
     lio_bound_m: float = Field(0.3, gt=0, description="The LIO's bound along a guided plan (m).")
+
+    def paired(self) -> PairedSettings:
+        """The settings paired_stats.compare judges each comparison by."""
+        return PairedSettings(
+            bootstrap_draws=self.bootstrap_draws,
+            bootstrap_seed=self.bootstrap_seed,
+            ci_level=self.ci_level,
+            failure_ape_m=self.failure_ape_m,
+            worse_margin_m=self.worse_margin_m,
+        )
+
+
+def _number(value: float, decimals: int = 0) -> str:
+    """``value`` as a goal's key writes it: shortest (``%g``), with at least ``decimals``
+    decimals (1.10)."""
+    short = f"{value:g}"
+    fixed = f"{value:.{decimals}f}"
+    return fixed if decimals and float(fixed) == value and len(fixed) > len(short) else short
+
+
+class Goals(Section):
+    """The goals the study is judged by (analysis.goal; docs/benefit.md, "The
+    protocol"): the judged guidance (``analysis.guidance``) against none, each goal by
+    every measure (localization, LIO, LIO from steady starts) but the length overhead.
+    Each goal's key in summary.json's ``goal`` is named from its threshold
+    (:meth:`described`)."""
+
+    at_risk_ratio_max: float = Field(
+        0.3, gt=0, description="At risk: the median APE ratio (guided / none) over pairs at most this."
+    )
+    at_risk_p_below: float = Field(
+        0.01, gt=0, lt=1, description="At risk: the Wilcoxon signed-rank p over pairs below this."
+    )
+    no_risk_ratio_low: float = Field(0.95, gt=0, description="No risk: the median APE ratio at least this.")
+    no_risk_ratio_high: float = Field(1.05, gt=0, description="No risk: the median APE ratio at most this.")
+    no_risk_ci_upper_max: float = Field(
+        1.10, gt=0, description="No risk: the median ratio's interval (statistics.ci_level) ends at most here."
+    )
+    no_risk_worse_max_share: float = Field(
+        0.10,
+        ge=0,
+        le=1,
+        description="No risk: the share of pairs meaningfully worse (beyond seed noise and by more than "
+        "statistics.worse_margin_m) at most this (not judged with one seed).",
+    )
+    length_overhead_max: float = Field(
+        0.15, ge=0, description="The median path length overhead (guided / none - 1, every pair) at most this."
+    )
+    map_ci_upper_below: float = Field(
+        1.0,
+        gt=0,
+        description="Over the at-risk maps: the geometric-mean ratio's interval (analysis.level; maps, then "
+        "pairs, resampled) ends below this.",
+    )
+    map_p_max: float = Field(
+        0.01,
+        gt=0,
+        lt=1,
+        description="Over the at-risk maps: the exact Wilcoxon signed-rank and sign tests of the maps' log "
+        "ratios, each at p at most this.",
+    )
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if self.no_risk_ratio_low > self.no_risk_ratio_high:
+            raise ValueError(
+                f"no_risk_ratio_low {self.no_risk_ratio_low:g} exceeds no_risk_ratio_high {self.no_risk_ratio_high:g}"
+            )
+        return self
+
+    def keys(self) -> dict[str, str]:
+        """Each goal (by name) and its key in summary.json's ``goal``, named from its
+        threshold; after ``<measure>_`` for those judged by measure (all but
+        ``length_overhead``)."""
+        share = self.no_risk_worse_max_share
+        return {
+            "at_risk_ratio": f"at_risk_ratio_at_most_{_number(self.at_risk_ratio_max)}",
+            "at_risk_p": f"at_risk_wilcoxon_p_below_{_number(self.at_risk_p_below)}",
+            "maps_ci_upper": f"at_risk_maps_ci_upper_below_{_number(self.map_ci_upper_below)}",
+            "maps_wilcoxon_p": f"at_risk_maps_wilcoxon_p_at_most_{_number(self.map_p_max)}",
+            "maps_sign_p": f"at_risk_maps_sign_p_at_most_{_number(self.map_p_max)}",
+            "no_risk_ratio": (
+                f"no_risk_ratio_within_{_number(self.no_risk_ratio_low)}_{_number(self.no_risk_ratio_high)}"
+            ),
+            "no_risk_ci_upper": f"no_risk_ci_upper_at_most_{_number(self.no_risk_ci_upper_max, 2)}",
+            "no_risk_worse": f"no_risk_worse_on_at_most_{_number(100 * share)}pct",
+            "length_overhead": f"length_overhead_at_most_{_number(100 * self.length_overhead_max)}pct",
+        }
+
+    def described(self) -> dict[str, str]:
+        """Each goal's key (:meth:`keys`) and what it says, with its threshold."""
+        texts = {
+            "at_risk_ratio": f"at risk: the median APE ratio over pairs at most {self.at_risk_ratio_max:g}",
+            "at_risk_p": f"at risk: the Wilcoxon signed-rank p over pairs below {self.at_risk_p_below:g}",
+            "maps_ci_upper": (
+                f"over the at-risk maps: the geometric-mean ratio's interval ends below {self.map_ci_upper_below:g}"
+            ),
+            "maps_wilcoxon_p": f"over the at-risk maps: the exact Wilcoxon p at most {self.map_p_max:g}",
+            "maps_sign_p": f"over the at-risk maps: the exact sign test's p at most {self.map_p_max:g}",
+            "no_risk_ratio": (
+                f"no risk: the median APE ratio within [{self.no_risk_ratio_low:g}, {self.no_risk_ratio_high:g}]"
+            ),
+            "no_risk_ci_upper": (
+                f"no risk: the median ratio's interval ends at most at {_number(self.no_risk_ci_upper_max, 2)}"
+            ),
+            "no_risk_worse": (
+                f"no risk: meaningfully worse (beyond seed noise and the worse margin) on at most "
+                f"{_number(100 * self.no_risk_worse_max_share)} % of the pairs"
+            ),
+            "length_overhead": (
+                f"the median length overhead (every pair) at most {_number(100 * self.length_overhead_max)} %"
+            ),
+        }
+        return {key: texts[name] for name, key in self.keys().items()}
 
 
 class LocalizationFit(Section):
@@ -113,6 +238,8 @@ class Protocol(Section):
     #: fields by name: bootstrap, level, failure APE, equivalence margins and alpha, the
     #: tail's largest share, the guidance judged); empty: its defaults.
     analysis: dict[str, Any] = {}
+    #: The goals the study is judged by (analysis.goal).
+    goals: Goals = Goals()
 
     def content(self) -> dict:
         """What is compared and hashed: the document less :data:`METADATA`, as JSON."""
@@ -132,10 +259,11 @@ class Protocol(Section):
         return head + yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False, width=100)
 
 
-#: The protocol's defaults: the study's constants (risk, statistics, the fit's sampling).
+#: The protocol's defaults: the study's constants (risk, statistics, the fit's sampling, goals).
 DEFAULT_PROTOCOL = Protocol()
 STATISTICS = DEFAULT_PROTOCOL.statistics
 FIT = DEFAULT_PROTOCOL.localization_fit
+GOALS = DEFAULT_PROTOCOL.goals
 
 
 def canonical(data) -> str:
@@ -194,6 +322,7 @@ def build(
     statistics: Statistics = STATISTICS,
     localization_fit: LocalizationFit = FIT,
     analysis: dict | None = None,
+    goals: Goals = GOALS,
     name: str = DEFAULT_PROTOCOL.name,
     date: str = "",
 ) -> Protocol:
@@ -231,6 +360,7 @@ def build(
         risk=risk,
         statistics=statistics,
         localization_fit=localization_fit,
+        goals=goals,
         analysis=dict(analysis or {}),
     )
 
@@ -307,7 +437,12 @@ def read_protocol(path) -> Protocol:
     if not isinstance(data, dict):
         raise ProtocolError(f"{path}: a protocol is a mapping of its fields")
     if data.get("version") != VERSION:
-        raise ProtocolError(f"{path}: a protocol of version {data.get('version')!r}, not {VERSION}")
+        again = (
+            " (version 1 has no goals section: write it again with --write-protocol)"
+            if data.get("version") == 1
+            else ""
+        )
+        raise ProtocolError(f"{path}: a protocol of version {data.get('version')!r}, not {VERSION}{again}")
     try:
         return Protocol(**data)
     except ValidationError as err:

@@ -1,4 +1,5 @@
-"""The benefit study's Markdown report (DIR/benefit.md), from its summary alone."""
+"""The benefit study's Markdown report (DIR/benefit.md), from its summary and the
+descriptions of the goals it was judged by (its protocol's ``goals`` section)."""
 
 from __future__ import annotations
 
@@ -36,8 +37,10 @@ def _row(name: str, c: Comparison) -> str:
     )
 
 
-def report(summary: Summary) -> str:
-    """The Markdown tables of a summary."""
+def report(summary: Summary, goals) -> str:
+    """The Markdown tables of a summary; ``goals``: the protocol's goals section
+    (protocol.Goals) its goals were judged by, which says what each is with its
+    threshold (:func:`goal_lines`)."""
     p = summary.parameters
     header = (
         "| guidance | pairs | median APE ratio [95 % CI] | Wilcoxon p | worse (beyond seed noise, "
@@ -170,16 +173,49 @@ def report(summary: Summary) -> str:
             rho = "n/a" if v.spearman_within_map is None else f"{v.spearman_within_map:.2f}"
             lines += [f"| {name} | {v.plans} | {100 * v.share_inside_interval:.0f} % | {rho} | {v.median_factor:.2f} |"]
     if summary.goal:
-        lines += [
-            "",
-            "Goal (issue): "
-            + "; ".join(f"{k.replace('_', ' ')}: {_VERDICT[v]}" for k, v in summary.goal.items())
-            + ".",
-        ]
+        lines += goal_lines(summary.goal, goals.described())
     if summary.map_analysis is not None:
         lines += map_sections(summary.map_analysis, summary)
     lines += ["", redrawn_line(summary)]
     return "\n".join(lines) + "\n"
+
+
+def goal_lines(verdicts: dict, described: dict[str, str]) -> list[str]:
+    """The goals' section: each goal judged by measure as a row (what it is, with its
+    threshold: ``described``, by the goal's key after the measure's), one column a
+    measure; the others (the length overhead) a line each; a verdict whose key is not
+    described, by its key's words."""
+    measures = sorted(MEASURES, key=lambda m: -len(m.key))
+    table: dict[str, dict[str, bool | None]] = {}
+    columns, alone, other = [], [], []
+    for key, verdict in verdicts.items():
+        measure = next(
+            (m for m in measures if key.startswith(f"{m.key}_") and key[len(m.key) + 1 :] in described), None
+        )
+        if measure is not None:
+            table.setdefault(key[len(measure.key) + 1 :], {})[measure.key] = verdict
+            columns += [m for m in MEASURES if m == measure and m not in columns]
+        elif key in described:
+            alone.append((described[key], verdict))
+        else:
+            other.append(f"{key.replace('_', ' ')}: {_VERDICT[verdict]}")
+    columns = [m for m in MEASURES if m in columns]
+    lines = ["", f"## Goals ({DEFAULT} guidance against none; the protocol's goals section)", ""]
+    if table:
+        lines += [
+            "| goal | " + " | ".join(m.title for m in columns) + " |",
+            "|---|" + "---|" * len(columns),
+        ]
+        lines += [
+            f"| {described[name]} | " + " | ".join(_VERDICT[row[m.key]] if m.key in row else "" for m in columns) + " |"
+            for name in described
+            if (row := table.get(name))
+        ]
+    if alone or other:
+        lines += [""] if table else []
+        lines += [f"{text[:1].upper()}{text[1:]}: {_VERDICT[verdict]}." for text, verdict in alone]
+        lines += [f"Other goals: {'; '.join(other)}."] if other else []
+    return lines
 
 
 def _p(v: float) -> str:

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS, BenefitConfig, ReplayConfig, validated
+from lf3pm.config import DEFAULTS, BenefitConfig, Config, ReplayConfig, configured
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.benefit import analysis
 from lf3pm.experiments.benefit.cases import CASES, QUICK
@@ -19,6 +19,7 @@ from lf3pm.experiments.benefit.protocol import (
     DEFAULT_PROTOCOL,
     RISK,
     STATISTICS,
+    Goals,
     Protocol,
     ProtocolError,
     RiskRule,
@@ -55,67 +56,72 @@ from lf3pm.experiments.replay_tasks import ReplayTask, run_replays, write_plan
 from lf3pm.experiments.risk import at_risk, risk_share
 
 
-def run(
-    out: Path,
-    *,
-    quick: bool = False,
-    seeds: int = DEFAULTS.benefit.seeds,
-    workers: int = DEFAULTS.benefit.workers,
-    pair_seed: int = DEFAULTS.benefit.pair_seed,
-    cases: tuple | None = None,
-    guidance: tuple | None = None,
-    lio: str = DEFAULTS.benefit.lio,
-    odometry: str = DEFAULTS.benefit.odometry,
-    replay: ReplayConfig = DEFAULTS.replay,
-    rules: Protocol = DEFAULT_PROTOCOL,
-    frozen: Path | None = None,
-    progress=None,
-) -> Summary:
-    """Runs (or resumes) the study into ``out`` and returns its summary. ``guidance``
-    replaces :data:`~lf3pm.experiments.guidance.GUIDANCE` (candidates to compare, e.g.
-    when choosing the default). ``lio``: which plans the LIO replays too: ``all``, or
-    ``default`` (the one named default and the unguided one: a shorter run).
-    ``odometry``: the LIO's (:func:`lio_run`); the replays of each keep their own JSONs,
-    so that a second odometry's run in the same folder reuses the SOLMs, plans and
-    localization replays. ``replay``: the replay section whose ``odometries`` settings
-    the LIO runs with and whose rest limits judge its rests (:func:`lio_options`).
-    ``rules``: the protocol whose at-risk rule, localization-error fit and statistics
-    the run uses (its other fields are this run's arguments': :func:`study_protocol`).
-    ``frozen``: a protocol file the run's protocol must equal (ProtocolError naming the
-    first field that differs, before any work). The run writes its protocol to
-    DIR/protocol.yaml, and refuses a folder made under another."""
+@dataclass(frozen=True)
+class StudySettings:
+    """What a run of the study is run with (:func:`run`, :func:`study_protocol`): the
+    configuration's ``benefit`` section (replay seeds, workers, pair seed, which plans
+    the LIO replays, its odometry) and ``replay`` section (whose ``odometries`` settings
+    the LIO runs with and whose rest limits judge its rests: :func:`lio_options`), both
+    whole; ``quick``: one seed, on the quick cases unless ``cases`` are given; ``cases``
+    (MapCases; None: the study's) and ``guidance`` (None:
+    :data:`~lf3pm.experiments.guidance.GUIDANCE`; others: candidates to compare, e.g.
+    when choosing the default); ``rules``: the protocol whose at-risk rule,
+    localization-error fit, statistics, analysis, goals and name the run takes (a
+    variant's). :meth:`of` makes one from a Config and fields by name."""
+
+    benefit: BenefitConfig = DEFAULTS.benefit
+    replay: ReplayConfig = DEFAULTS.replay
+    quick: bool = False
+    cases: tuple | None = None
+    guidance: tuple | None = None
+    rules: Protocol = DEFAULT_PROTOCOL
+
+    @classmethod
+    def of(cls, config: Config | None = None, **given) -> StudySettings:
+        """``config``'s benefit and replay sections (None: lf3pm's defaults) with
+        ``given``: this class's other fields, and the benefit section's by name
+        (``pair_seed=3``; validated there: ConfigError naming ``benefit.<name>``)."""
+        own = {k: given.pop(k) for k in ("quick", "cases", "guidance", "rules") if k in given}
+        config = configured(config, ("benefit",), "the benefit study", **given)
+        return cls(config.benefit, config.replay, **own)
+
+
+#: A run of the study with lf3pm's defaults.
+STUDY = StudySettings()
+
+
+def run(out: Path, settings: StudySettings = STUDY, *, frozen: Path | None = None, progress=None) -> Summary:
+    """Runs (or resumes) the study with ``settings`` (:class:`StudySettings`) into
+    ``out`` and returns its summary. The replays of each LIO odometry (the benefit
+    section's ``odometry``: :func:`lio_run`) keep their own JSONs, so that a second
+    odometry's run in the same folder reuses the SOLMs, plans and localization
+    replays. ``frozen``: a protocol file the run's protocol (:func:`study_protocol`)
+    must equal (ProtocolError naming the first field that differs, before any work).
+    The run judges by its protocol's statistics, analysis and goals, writes its
+    protocol to DIR/protocol.yaml, and refuses a folder made under another."""
     folder = StudyFolder(Path(out))
-    protocol = study_protocol(
-        quick=quick,
-        seeds=seeds,
-        workers=workers,
-        pair_seed=pair_seed,
-        cases=cases,
-        guidance=guidance,
-        lio=lio,
-        odometry=odometry,
-        replay=replay,
-        rules=rules,
-    )
+    protocol = study_protocol(settings)
     if frozen is not None:
         fixed = read_protocol(frozen)
         check_frozen(fixed, protocol, frozen)
         protocol = protocol.model_copy(update={"name": fixed.name, "date": fixed.date})
-    if protocol.statistics != STATISTICS:
+    if protocol.statistics.ape_floor_m != STATISTICS.ape_floor_m:
         raise ProtocolError(
-            "protocol.statistics: this lf3pm's analysis judges by the default statistics only "
-            f"({STATISTICS.model_dump()})"
+            f"protocol.statistics.ape_floor_m: this lf3pm floors errors at {STATISTICS.ape_floor_m:g} m only "
+            f"(records.APE_FLOOR: its analysis and figures), not {protocol.statistics.ape_floor_m:g}"
         )
     check_folder(folder.root / "protocol.yaml", protocol)
-    cases, guidance, seeds = _resolved(quick, seeds, cases, guidance)
+    study, replay = settings.benefit, settings.replay
+    cases, guidance, seeds = _resolved(settings)
+    pair_seed, statistics = study.pair_seed, protocol.statistics
     names = [g.name for g in guidance]
-    lio_names = [NONE] + (names if lio == "all" else [n for n in names if n == DEFAULT])
+    lio_names = [NONE] + (names if study.lio == "all" else [n for n in names if n == DEFAULT])
     step = progress or (lambda label, total, advance=1, restart=False: None)
     started = time.perf_counter()
     folder.root.mkdir(parents=True, exist_ok=True)
     write_protocol(folder.root / "protocol.yaml", protocol)
     pairs, tasks, redrawn = [], [], []
-    lio_runs = {case.name: lio_run(case, odometry, replay) for case in cases}
+    lio_runs = {case.name: lio_run(case, study.odometry, replay) for case in cases}
     options = {case: lio_options(run.odometry, replay) for case, run in lio_runs.items()}
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
@@ -133,13 +139,14 @@ def run(
                         path = folder.replay(case.name, pair.number, name, label, seed)
                         tasks.append(ReplayTask(case, str(folder.root / plan.csv), method, seed, path, given))
         step(f"{case.name}: {len(drawn)} pairs planned", len(cases))
-    run_replays(tasks, workers, step)
+    run_replays(tasks, study.workers, step)
     seconds = time.perf_counter() - started  # the runtime the report states: to the replays' end
     pairs, replay_seconds = with_replays(folder, pairs, lio_runs, lio_names, seeds)
-    comparisons = analysis.comparisons(pairs, [c.name for c in cases], names, lio_names[1:])
+    comparisons = analysis.comparisons(pairs, [c.name for c in cases], names, lio_names[1:], statistics)
     fit, predictors = localization_error_fit(
         folder.root, cases, pairs, seeds=seeds, pair_seed=pair_seed, step=step, fit=protocol.localization_fit
     )
+    map_analysis = analysis.analyse(pairs, [c.name for c in cases], AnalysisSettings(**protocol.analysis))
     pairs = [
         replace(
             pair,
@@ -160,8 +167,8 @@ def run(
         odometry_names=odometry_names(lio_runs),
         replay_cpu_s=replay_seconds,
         parameters=Parameters(
-            protocol.statistics.failure_ape_m,
-            protocol.statistics.worse_margin_m,
+            statistics.failure_ape_m,
+            statistics.worse_margin_m,
             protocol.risk.share,
             protocol.risk.factor,
             replay.rest_speed_limit,
@@ -172,76 +179,68 @@ def run(
         comparisons=comparisons,
         lio_rest=analysis.rest_counts(pairs),
         calibration=analysis.calibration(pairs),
-        lio_beyond_bound=analysis.lio_beyond_bound(pairs),
-        goal=analysis.goal(comparisons),
+        lio_beyond_bound=analysis.lio_beyond_bound(pairs, statistics.lio_bound_m),
+        goal=analysis.goal(comparisons, map_analysis, protocol.goals),
         localization_error=ErrorFit(fit),
-        map_analysis=analysis.analyse(pairs, [c.name for c in cases], AnalysisSettings(**protocol.analysis)),
+        map_analysis=map_analysis,
         redrawn=tuple(redrawn),
     )
-    write_outputs(folder, summary)
+    write_outputs(folder, summary, protocol.goals)
     return summary
 
 
-def _resolved(quick: bool, seeds: int, cases, guidance) -> tuple[tuple, tuple, int]:
-    """(cases, guidance, replay seeds) a run uses: the given ones or the study's (the
-    quick mode's cases and one seed)."""
+def _resolved(settings: StudySettings) -> tuple[tuple, tuple, int]:
+    """(cases, guidance, replay seeds) a run with ``settings`` uses: the given ones or
+    the study's (the quick mode's cases and one seed)."""
+    quick, cases, guidance = settings.quick, settings.cases, settings.guidance
     cases = tuple(cases) if cases is not None else (QUICK if quick else CASES)
     guidance = tuple(guidance) if guidance is not None else GUIDANCE
-    return cases, guidance, 1 if quick else seeds
+    return cases, guidance, 1 if quick else settings.benefit.seeds
 
 
-def study_protocol(
-    *,
-    quick: bool = False,
-    seeds: int = DEFAULTS.benefit.seeds,
-    workers: int = DEFAULTS.benefit.workers,
-    pair_seed: int = DEFAULTS.benefit.pair_seed,
-    cases: tuple | None = None,
-    guidance: tuple | None = None,
-    lio: str = DEFAULTS.benefit.lio,
-    odometry: str = DEFAULTS.benefit.odometry,
-    replay: ReplayConfig = DEFAULTS.replay,
-    rules: Protocol = DEFAULT_PROTOCOL,
-    date: str = "",
-) -> Protocol:
-    """The protocol a :func:`run` with these arguments runs under (its settings checked
-    first: ConfigError or Lf3pmError in one line); ``rules``: the protocol whose risk
-    rule, fit, statistics and analysis it takes (``name`` too)."""
+def study_protocol(settings: StudySettings = STUDY, *, date: str = "") -> Protocol:
+    """The protocol a :func:`run` with ``settings`` runs under (its settings checked
+    first: ConfigError or Lf3pmError in one line): the cases, guidance, seeds and LIO
+    of ``settings``, and its ``rules``' risk rule, fit, statistics, analysis, goals
+    and name."""
     from dataclasses import asdict
 
+    from lf3pm.config import validated
     from lf3pm.experiments.benefit.records import AnalysisSettings
     from lf3pm.replays import registry
 
-    validated(BenefitConfig, "benefit", seeds=seeds, workers=workers, pair_seed=pair_seed, lio=lio, odometry=odometry)
-    registry.check_name(odometry, "benefit.odometry")
-    cases, guidance, seeds = _resolved(quick, seeds, cases, guidance)
+    study, replay, rules = settings.benefit, settings.replay, settings.rules
+    validated(BenefitConfig, "benefit", **study.model_dump())
+    registry.check_name(study.odometry, "benefit.odometry")
+    cases, guidance, seeds = _resolved(settings)
     names = [g.name for g in guidance]
     reserved = (NONE, *Comparisons.GROUPS)
     if len(set(names)) != len(names) or any(n in reserved for n in names):
         raise Lf3pmError(f"guidance names must be distinct and none of {', '.join(reserved)}, got {', '.join(names)}")
     try:
-        settings = asdict(AnalysisSettings(**rules.analysis))
+        analysed = asdict(AnalysisSettings(**rules.analysis))
     except TypeError as err:
         raise ProtocolError(f"protocol.analysis: {err}") from None
     return build(
         cases=cases,
         guidance=guidance,
-        pair_seed=pair_seed,
+        pair_seed=study.pair_seed,
         seeds=seeds,
-        lio=lio,
-        odometry=odometry,
-        chosen={case.name: lio_run(case, odometry, replay).odometry for case in cases},
+        lio=study.lio,
+        odometry=study.odometry,
+        chosen={case.name: lio_run(case, study.odometry, replay).odometry for case in cases},
         replay=replay,
         risk=rules.risk,
         statistics=rules.statistics,
         localization_fit=rules.localization_fit,
-        analysis=settings,
+        analysis=analysed,
+        goals=rules.goals,
         name=rules.name,
         date=date,
     )
 
 
-def freeze(path: Path | None, frozen: Path | None = None, **settings) -> Protocol:
+def freeze(path: Path | None, settings: StudySettings = STUDY, frozen: Path | None = None) -> Protocol:
     """Writes the protocol a :func:`run` with ``settings`` would use, dated today, to
     ``path`` (checked against the protocol file ``frozen`` first, when given); ``path``
     None: ConfigError (the study's -o/--out or --write-protocol is needed)."""
@@ -251,15 +250,16 @@ def freeze(path: Path | None, frozen: Path | None = None, **settings) -> Protoco
 
     if path is None:
         raise ConfigError("-o/--out is required (or --write-protocol FILE)")
-    protocol = study_protocol(**settings, date=datetime.datetime.now(datetime.UTC).date().isoformat())
+    protocol = study_protocol(settings, date=datetime.datetime.now(datetime.UTC).date().isoformat())
     if frozen is not None:
         check_frozen(read_protocol(frozen), protocol, frozen)
     write_protocol(path, protocol)
     return protocol
 
 
-def write_outputs(folder: StudyFolder, summary: Summary) -> None:
-    """summary.json, the report and the figures of ``summary`` into ``folder``."""
+def write_outputs(folder: StudyFolder, summary: Summary, goals: Goals) -> None:
+    """summary.json, the report (its goals described by ``goals``, the protocol's) and
+    the figures of ``summary`` into ``folder``."""
     from lf3pm.atomic import atomic_write
     from lf3pm.experiments.benefit.figures import example_figures, forest_figure, ratio_figure, scatter_figure
     from lf3pm.experiments.benefit.records import write_records
@@ -268,7 +268,7 @@ def write_outputs(folder: StudyFolder, summary: Summary) -> None:
     write_summary(folder.summary, summary)
     write_records(folder, summary)
     with atomic_write(folder.report) as fp:
-        fp.write(report(summary).encode())
+        fp.write(report(summary, goals).encode())
     scatter_figure(summary, folder.root / "scatter.png")
     ratio_figure(summary, folder.root / "ratios.png")
     forest_figure(summary, folder.forest)
