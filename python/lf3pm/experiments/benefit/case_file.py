@@ -344,7 +344,6 @@ def _map_file(text: str, folder: Path, check: bool) -> str:
     """What MapCase reads the map from: an absolute path (a file beside the cases file,
     or given absolute), or a name in the shared data folder (as given)."""
     from lf3pm.io import SUPPORTED_SUFFIXES
-
     from lf3pm.io.run_folder import is_run_folder
 
     path = Path(text).expanduser()
