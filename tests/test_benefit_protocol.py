@@ -17,13 +17,16 @@ from lf3pm.experiments.benefit.protocol import ProtocolError, read_protocol, wri
 from lf3pm.experiments.benefit.study import StudySettings, study_protocol
 
 FROZEN = Path(__file__).resolve().parents[1] / "config" / "benefit_protocol.yaml"
+#: The frozen run's settings: lf3pm's defaults, a pair seed never drawn before the run
+#: and the LIO on the default's and the unguided plans only.
+FROZEN_RUN = StudySettings.of(pair_seed=20261205, lio="default")
 
 
-def test_the_default_run_has_the_frozen_protocol():
-    """The protocol a default run builds (lf3pm's cases, guidance, replay settings and
-    constants) is config/benefit_protocol.yaml's; a change to any of them must be a new
-    frozen protocol, made on purpose."""
-    frozen, current = read_protocol(FROZEN), study_protocol()
+def test_the_frozen_protocol_is_todays_defaults_at_its_pair_seed():
+    """The protocol a run builds with lf3pm's cases, guidance, replay settings and
+    constants, at the frozen pair seed and LIO plans, is config/benefit_protocol.yaml's;
+    a change to any of them must be a new frozen protocol, made on purpose."""
+    frozen, current = read_protocol(FROZEN), study_protocol(FROZEN_RUN)
     assert protocols.compared(frozen, current) is None, protocols.compared(frozen, current)
     assert frozen.digest() == current.digest() and frozen.version == protocols.VERSION == 2
     assert f"sha256 of its content (name and date aside): {frozen.digest()}" in FROZEN.read_text()
@@ -90,8 +93,9 @@ def test_frozen_refuses_a_run_whose_protocol_differs(tmp_path, path, value, line
     """One line naming the first field that differs with both values, exit 2, and
     nothing made: not even the output folder."""
     out = tmp_path / "out"
+    given = ["--pair-seed", "0"]  # given: a frozen file settles only what no flag sets (test below)
     done = CliRunner().invoke(
-        app, ["experiment", "benefit", "-o", str(out), "--frozen", str(_changed(tmp_path, path, value))]
+        app, ["experiment", "benefit", "-o", str(out), *given, "--frozen", str(_changed(tmp_path, path, value))]
     )
     assert done.exit_code == 2, done.output
     lines = [line for line in done.output.splitlines() if line.strip()]
@@ -124,8 +128,9 @@ def test_a_setting_given_to_the_run_is_in_its_protocol(tmp_path):
     assert done.exit_code == 0, done.output
     done = CliRunner().invoke(
         app, ["experiment", "benefit", "--write-protocol", str(tmp_path / "r.yaml"), "--frozen", str(written)]
-    )
-    assert done.exit_code == 2 and "protocol.pair_seed: frozen 11, this run 0" in done.output
+    )  # the pair seed from the frozen file, the odometry's settings not (a configuration's)
+    assert done.exit_code == 2, done.output
+    assert "protocol.lio.settings.genz.noise_inflation: frozen 10.0, this run 100.0" in done.output
 
 
 def test_the_protocol_round_trips(tmp_path):
@@ -216,15 +221,29 @@ def test_the_variants_are_protocols_this_lf3pm_runs():
     from lf3pm.config import DEFAULTS
 
     folder = FROZEN.parent / "benefit_protocol_variants"
-    frozen = study_protocol()  # config/benefit_protocol.yaml's (test_the_default_run_has_the_frozen_protocol)
+    frozen = study_protocol(FROZEN_RUN)  # config/benefit_protocol.yaml's (the first test)
     variants = {path.stem: read_protocol(path) for path in sorted(folder.glob("*.yaml"))}
     assert set(variants) >= {"risk_all_headings", "corridor_vlp16", "corridor_first_zones", "genz_voxels_0_5"}
     for name, variant in variants.items():
         assert protocols.compared(frozen, variant) is not None, name
     rule = variants["risk_all_headings"]
-    assert study_protocol(StudySettings(rules=rule)).digest() == rule.digest()
+    assert study_protocol(StudySettings(FROZEN_RUN.benefit, rules=rule)).digest() == rule.digest()
     voxels = DEFAULTS.replay.model_copy(update={"odometries": {"genz": {"mapping": {"voxel_size": 0.5}}}})
-    assert study_protocol(StudySettings(replay=voxels)).digest() == variants["genz_voxels_0_5"].digest()
+    assert study_protocol(StudySettings(FROZEN_RUN.benefit, voxels)).digest() == variants["genz_voxels_0_5"].digest()
+    for name, variant in variants.items():  # each differs from the frozen one in one setting
+        assert (variant.pair_seed, variant.seeds, variant.lio.plans) == (20261205, 3, "default"), name
+
+
+def test_frozen_alone_runs_the_frozen_protocol(tmp_path):
+    """`--frozen FILE` takes FILE's seeds, pair seed and LIO plans where no flag says
+    otherwise; a flag that does is refused, naming the field."""
+    out = tmp_path / "p.yaml"
+    result = CliRunner().invoke(app, ["experiment", "benefit", "--frozen", str(FROZEN), "--write-protocol", str(out)])
+    assert result.exit_code == 0, result.output
+    assert read_protocol(out).digest() == read_protocol(FROZEN).digest()
+    args = ["experiment", "benefit", "--frozen", str(FROZEN), "--pair-seed", "0", "--write-protocol", str(out)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2 and "protocol.pair_seed: frozen 20261205, this run 0" in result.output, result.output
 
 
 def test_a_run_judges_by_its_protocols_statistics(tmp_path, monkeypatch):

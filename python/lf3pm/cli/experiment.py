@@ -126,7 +126,11 @@ def experiment_benefit(
         help="Parameters from a YAML file: its benefit section, and its replay section's odometry "
         "settings and rest limits for the LIO replays (flags given override it).",
     ),
-    frozen: Path | None = typer.Option(None, metavar="PROTOCOL.yaml", help="Run only this protocol (docs/benefit.md)."),
+    frozen: Path | None = typer.Option(
+        None,
+        metavar="PROTOCOL.yaml",
+        help="Run only this protocol: its seeds, pair seed and LIO settings are the defaults (docs/benefit.md).",
+    ),
     write_protocol: Path | None = typer.Option(None, metavar="FILE.yaml", help="Write this run's protocol only."),
     rules: Path | None = typer.Option(
         None, metavar="PROTOCOL.yaml", help="Its risk rule, fit, statistics, analysis and goals (a variant)."
@@ -141,6 +145,10 @@ def experiment_benefit(
 
         cfg = configure(config, locals(), section_paths("benefit", "seeds", "workers", "pair_seed", "lio", "odometry"))
         study = cfg.benefit
+        if frozen is not None:
+            flags = {"seeds": seeds, "pair_seed": pair_seed, "lio": lio, "odometry": odometry}
+            given = {k for k, v in flags.items() if v is not None}
+            study = protocols.read_protocol(frozen).settle(study, given)
         registry.check_name(study.odometry, "--odometry" if odometry is not None else "benefit.odometry")
         registry.with_settings(cfg, config)  # the odometries' settings, checked by their sections
         from lf3pm.experiments.guidance import parse_guidance

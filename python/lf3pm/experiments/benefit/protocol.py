@@ -245,6 +245,25 @@ class Protocol(Section):
         """What is compared and hashed: the document less :data:`METADATA`, as JSON."""
         return {k: v for k, v in self.model_dump(mode="json").items() if k not in METADATA}
 
+    def settle(self, benefit, given: set[str] = frozenset()):
+        """The benefit section ``benefit`` (lf3pm.config.BenefitConfig) with what this
+        protocol settles (replay seeds, pair seed, the LIO's plans and odometry) where
+        it holds lf3pm's default and its name is not in ``given`` (flags set): a run
+        with ``--frozen FILE`` alone runs FILE's protocol, and one given another value
+        is refused by the protocol check."""
+        from lf3pm.config import DEFAULTS
+
+        settled = {
+            "seeds": self.seeds,
+            "pair_seed": self.pair_seed,
+            "lio": self.lio.plans,
+            "odometry": self.lio.odometry,
+        }
+        unset = {
+            k: v for k, v in settled.items() if k not in given and getattr(benefit, k) == getattr(DEFAULTS.benefit, k)
+        }
+        return benefit.model_copy(update=unset)
+
     def digest(self) -> str:
         """SHA-256 of the canonical JSON of :meth:`content`."""
         return hashlib.sha256(canonical(self.content()).encode()).hexdigest()
