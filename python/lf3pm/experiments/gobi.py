@@ -207,7 +207,8 @@ def _table(summary: dict) -> str:
         "# Gobi experiment (Mid-70, omnidirectional robot)",
         "",
         f"Start {summary['start']} (town square), goal {summary['goal']} (west of the warehouse). "
-        f"{summary['paper']}. APE: rmse of the translation error, median over {seeds} seed(s).",
+        f"{summary['paper']}. APE: rmse of the translation error, median over {seeds} seed(s) "
+        "(each seed's in brackets: a difference within their spread is no difference).",
         "",
         "| guidance | length (m) | duration (s) | S (sum of MDE) | MDE poses | localization APE (m) "
         "| degenerate scans | LIO APE (m) | LIO rests steady |",
@@ -219,8 +220,8 @@ def _table(summary: dict) -> str:
         rests = "n/a" if steady is None else f"{sum(steady)} of {len(steady)}"
         lines.append(
             f"| {name} | {r['trajectory_length_m']:.1f} | {r['duration_s']:.1f} | {r['S']:.4g} | "
-            f"{r['mde_poses'] - r['mde_refused']} | {loc['ape']:.3g} | "
-            f"{100 * loc['degenerate_share']:.0f} % | {lio['ape']:.3g} | {rests} |"
+            f"{r['mde_poses'] - r['mde_refused']} | {_seeds(loc)} | "
+            f"{100 * loc['degenerate_share']:.0f} % | {_seeds(lio)} | {rests} |"
         )
     f = summary["finding"]
     below = ", ".join(f"{k}: {'yes' if v else 'no'}" for k, v in f["default_below_none"].items())
@@ -233,6 +234,13 @@ def _table(summary: dict) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+def _seeds(replays: dict) -> str:
+    """The median APE and, over several seeds, each seed's."""
+    each = replays["ape_per_seed"]
+    spread = f" ({', '.join(f'{v:.3g}' for v in each)})" if len(each) > 1 else ""
+    return f"{replays['ape']:.3g}{spread}"
 
 
 def _figures(out: Path, solm: Solm, world, plans: dict, results: dict) -> None:
