@@ -10,8 +10,9 @@ what the map offers a robot free to choose where it looks. Over every cell and
 heading, a map that is mostly open would call its own bad views typical (the
 benefit study's orientation scene: median 2.29 over all headings, 0.10 over the
 best ones, its unguided plans 2.3-2.4 and 0.4-0.5 m APE). Localization APE
-follows q_n with slope 0.97 in log-log over the benefit study's 240 plans
-(docs/benefit.md, "Calibration"), so such a pose is predicted to localize an
+follows q_n with slope 1.03 in log-log over the benefit study's 320 plans
+(results/benefit_issue39/summary.json, "calibration"; within a map the rank
+correlation is weaker, 0.51 on average), so such a pose is predicted to localize an
 order of magnitude worse than the map's typical place. A pair is at risk when
 at least :data:`AT_RISK_SHARE` of its unguided plan's poses are.
 
