@@ -144,6 +144,23 @@ def test_quick_study_end_to_end(tmp_path):
     stamps = [p.stat().st_mtime_ns for p in replays]
     again = subprocess.run(command + ["--frozen", str(out / "protocol.yaml")], capture_output=True, text=True)
     assert again.returncode == 0 and [p.stat().st_mtime_ns for p in replays] == stamps
+    # A variant (the at-risk rule's first form) beside it takes its SOLMs, plans and
+    # replays from it (--reuse): every replay linked, none run again, the same records.
+    from lf3pm.experiments.benefit.protocol import write_protocol
+
+    base = read_protocol(out / "protocol.yaml")
+    rules = tmp_path / "rules.yaml"
+    write_protocol(rules, base.model_copy(update={"risk": base.risk.model_copy(update={"median": "all_headings"})}))
+    variant = tmp_path / "variant"
+    args = ["--rules", str(rules), "--reuse", str(out)]
+    reused = subprocess.run(command[:-1] + [str(variant), *args], capture_output=True, text=True)
+    assert reused.returncode == 0, reused.stderr[-2000:]
+    linked = sorted((variant / "replays").rglob("*.json"))
+    assert [p.relative_to(variant) for p in linked] == [p.relative_to(out) for p in replays]
+    assert all(a.stat().st_ino == b.stat().st_ino for a, b in zip(linked, replays))
+    assert read_protocol(variant / "protocol.yaml").risk.median == "all_headings"
+    ours, theirs = read_summary(variant / "summary.json"), read_summary(out / "summary.json")
+    assert [p.plans["default"].replays for p in ours.pairs] == [p.plans["default"].replays for p in theirs.pairs]
     # Another odometry in the same folder: only the LIO replays it changes are run (GenZ-LIO
     # on the tunnel's VLP-16, beside DLIO's; on the Mid-70 map GenZ-LIO is auto's anyway).
     bad = subprocess.run(command + ["--odometry", "fastlio"], capture_output=True, text=True)

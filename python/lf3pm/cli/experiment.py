@@ -132,6 +132,11 @@ def experiment_benefit(
         help="Run only this protocol: its seeds, pair seed and LIO settings are the defaults (docs/benefit.md).",
     ),
     write_protocol: Path | None = typer.Option(None, metavar="FILE.yaml", help="Write this run's protocol only."),
+    reuse: Path | None = typer.Option(
+        None,
+        metavar="DIR",
+        help="Take the SOLMs, plans and replays this run would make alike from DIR (a variant's run).",
+    ),
     rules: Path | None = typer.Option(
         None, metavar="PROTOCOL.yaml", help="Its risk rule, fit, statistics, analysis and goals (a variant)."
     ),
@@ -172,7 +177,7 @@ def experiment_benefit(
             digest = freeze(write_protocol, settings, frozen).digest()
             return console.print(f"wrote {write_protocol} (protocol sha256 {digest})", soft_wrap=True)
         with progress_bar() as step:
-            benefit.run(out, settings, frozen=frozen, progress=step)
+            benefit.run(out, settings, frozen=frozen, reuse=reuse, progress=step)
         console.print((out / "benefit.md").read_text())
         console.print(f"wrote {out}/summary.json, protocol.yaml, benefit.md, scatter.png, ratios.png, examples/")
 

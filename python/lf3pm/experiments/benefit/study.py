@@ -90,7 +90,9 @@ class StudySettings:
 STUDY = StudySettings()
 
 
-def run(out: Path, settings: StudySettings = STUDY, *, frozen: Path | None = None, progress=None) -> Summary:
+def run(
+    out: Path, settings: StudySettings = STUDY, *, frozen: Path | None = None, reuse: Path | None = None, progress=None
+) -> Summary:
     """Runs (or resumes) the study with ``settings`` (:class:`StudySettings`) into
     ``out`` and returns its summary. The replays of each LIO odometry (the benefit
     section's ``odometry``: :func:`lio_run`) keep their own JSONs, so that a second
@@ -98,7 +100,10 @@ def run(out: Path, settings: StudySettings = STUDY, *, frozen: Path | None = Non
     replays. ``frozen``: a protocol file the run's protocol (:func:`study_protocol`)
     must equal (ProtocolError naming the first field that differs, before any work).
     The run judges by its protocol's statistics, analysis and goals, writes its
-    protocol to DIR/protocol.yaml, and refuses a folder made under another."""
+    protocol to DIR/protocol.yaml, and refuses a folder made under another.
+    ``reuse``: a study folder made under another protocol (a sensitivity analysis
+    beside a frozen run) whose SOLMs, plans and replays this run takes where its
+    protocol makes them the same way (lf3pm.experiments.benefit.reuse)."""
     folder = StudyFolder(Path(out))
     protocol = study_protocol(settings)
     if frozen is not None:
@@ -123,6 +128,11 @@ def run(out: Path, settings: StudySettings = STUDY, *, frozen: Path | None = Non
     pairs, tasks, redrawn = [], [], []
     lio_runs = {case.name: lio_run(case, study.odometry, replay) for case in cases}
     options = {case: lio_options(run.odometry, replay) for case, run in lio_runs.items()}
+    if reuse is not None:
+        from lf3pm.experiments.benefit.reuse import link_reusable
+
+        taken = link_reusable(reuse, protocol, folder, {name: r.label for name, r in lio_runs.items()})
+        step(f"reused from {reuse}: {', '.join(f'{c} ({len(p)})' for c, p in taken.items()) or 'nothing'}", 1, 0)
     for number, case in enumerate(cases):
         step(f"{case.name}: map and SOLM", len(cases), 0, restart=number == 0)
         solm_path = build_case_solm(case, folder.solm(case.name))
