@@ -13,10 +13,13 @@ import numpy as np
 from lf3pm.experiments.benefit.protocol import GOALS, STATISTICS, Goals, Statistics
 from lf3pm.experiments.benefit.records import (
     APE_FLOOR,
+    AT_RISK,
     DEFAULT,
+    EVERY_PAIR,
     LIO,
     LOCALIZATION,
     MEASURES,
+    NO_RISK,
     NONE,
     AnalysisSettings,
     BeyondBound,
@@ -45,9 +48,6 @@ from lf3pm.experiments.paired_stats import (
     tost_t_p,
     wilcoxon_exact_p,
 )
-
-#: The name of the effect over the at-risk maps (MeasureAnalysis.over_maps), which the goals judge.
-AT_RISK = "at risk"
 
 #: SOLM channels whose mean along each trajectory the summary records (calibration).
 CHANNELS = ("q_n", "q_min", "q_max", "step_norm")
@@ -354,7 +354,7 @@ def measure_analysis(pairs: list[Pair], cases: list[str], measure: Measure, s: A
         for robot in robots
         if (ratios := [_ratio(a, b) for p, a, b in rows if p.case == case and p.robot == robot])
     ]
-    groups = [("every pair", rows), (AT_RISK, risky), ("no risk", safe)]
+    groups = [(EVERY_PAIR, rows), (AT_RISK, risky), (NO_RISK, safe)]
     groups += [(f"{robot} robot", [r for r in rows if r[0].robot == robot]) for robot in robots]
     return MeasureAnalysis(
         by_map=tuple(map_effect(case, ratios, s) for case, ratios in by_map.items()),
@@ -366,6 +366,7 @@ def measure_analysis(pairs: list[Pair], cases: list[str], measure: Measure, s: A
             failures(case, [r for r in rows if r[0].case == case], s.failure_ape_m) for case in by_map
         ),
         no_harm=no_harm(safe, cases, s),
+        at_risk_by_map=tuple(map_effect(case, ratios, s) for case, ratios in _by_map(risky, cases).items()),
     )
 
 

@@ -40,6 +40,10 @@ SCHEMA = 1
 #: statistics.ape_floor_m).
 APE_FLOOR = STATISTICS.ape_floor_m
 
+#: The names of the groups of pairs over maps (MeasureAnalysis.over_maps, both_succeed,
+#: failures); the goals judge the at-risk one.
+EVERY_PAIR, AT_RISK, NO_RISK = "every pair", "at risk", "no risk"
+
 
 def _method(name: str) -> str:
     """A replay method's name as lf3pm.config lists it (the names' one place)."""
@@ -666,7 +670,7 @@ class MeasureAnalysis:
     """One measure's analysis at the level of the map (the default guidance against
     none): each map's effect, each map and robot's, over maps for every pair, at risk,
     no risk and per robot; the same where both plans succeeded; failures overall, at
-    risk, no risk and per map; the no-harm test."""
+    risk, no risk and per map; the no-harm test; each map's effect on its at-risk pairs."""
 
     by_map: tuple[Effect, ...]
     by_map_robot: tuple[Effect, ...]
@@ -675,6 +679,7 @@ class MeasureAnalysis:
     failures: tuple[Failures, ...]
     failures_by_map: tuple[Failures, ...]
     no_harm: Equivalence | None
+    at_risk_by_map: tuple[Effect, ...] = ()
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -692,6 +697,7 @@ class MeasureAnalysis:
             tuple(Failures(**f) for f in d["failures"]),
             tuple(Failures(**f) for f in d["failures_by_map"]),
             None if d["no_harm"] is None else Equivalence.from_json(d["no_harm"]),
+            effects("at_risk_by_map") if "at_risk_by_map" in d else (),  # summaries before 2026-12-05
         )
 
 

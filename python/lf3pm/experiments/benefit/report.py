@@ -6,8 +6,10 @@ from __future__ import annotations
 import math
 
 from lf3pm.experiments.benefit.records import (
+    AT_RISK,
     DEFAULT,
     MEASURES,
+    NO_RISK,
     Comparison,
     Effect,
     Failures,
@@ -63,6 +65,7 @@ def report(summary: Summary, goals) -> str:
             if summary.protocol_sha256 is None
             else [f'Protocol: protocol.yaml, sha256 {summary.protocol_sha256} (docs/benefit.md, "The protocol").', ""]
         ),
+        *([] if summary.map_analysis is None else headline_lines(summary.map_analysis)),
         "## Localization (registration to the prior map from wheel odometry)",
         "",
         header,
@@ -232,6 +235,56 @@ def _failure_row(f: Failures) -> str:
     return (
         f"| {f.name} | {f.pairs} | {f.both} | {f.guided_only} | {f.unguided_only} | {f.neither} | {_p(f.mcnemar_p)} |"
     )
+
+
+def _pairs(n: int) -> str:
+    return f"{n} pair" if n == 1 else f"{n} pairs"
+
+
+def headline_lines(a: MapAnalysis) -> list[str]:
+    """The study's result in a few lines per measure, at the level of the map: each
+    at-risk map's effect on its at-risk pairs and their effect over maps, the same where
+    both plans succeed, failures apart, and the no-risk pairs' no-harm test."""
+    s = a.settings
+    measures = {m.key: m for m in MEASURES}
+    lines = [f"## Headline: at the level of the map ({s.guidance} guidance against none)", ""]
+    for key, m in a.by_measure.items():
+        over = {e.name: e for e in m.over_maps}
+        both = {e.name: e for e in m.both_succeed}
+        fails = {f.name: f for f in m.failures}
+        risky, safe = over.get(AT_RISK), over.get(NO_RISK)
+        text = [f"**{measures[key].title[:1].upper()}{measures[key].title[1:]}.**"]
+        if risky is not None and risky.pairs:
+            each = ", ".join(f"{e.name} {_ratio(e)}" for e in m.at_risk_by_map)
+            text.append(
+                f"At risk ({_pairs(risky.pairs)} on {risky.maps} maps), the APE ratio per map: {each}; over the "
+                f"maps {_ratio(risky)}, {risky.maps_below_1} of {risky.maps} maps below 1, Wilcoxon p over maps "
+                f"{_p(risky.wilcoxon_p)} (the least {risky.maps} maps allow: {_p(risky.minimum_p)})."
+            )
+            if AT_RISK in both:
+                text.append(
+                    f"Where both plans succeed (APE at most {s.failure_ape_m:g} m; {_pairs(both[AT_RISK].pairs)}): "
+                    f"{_ratio(both[AT_RISK])}."
+                )
+            if AT_RISK in fails:
+                f = fails[AT_RISK]
+                text.append(
+                    f"Failures at risk: both {f.both}, {s.guidance} only {f.guided_only}, none only "
+                    f"{f.unguided_only}, neither {f.neither} (McNemar p {_p(f.mcnemar_p)})."
+                )
+        else:
+            text.append("No pair at risk.")
+        if safe is not None and safe.pairs:
+            text.append(f"No risk ({_pairs(safe.pairs)} on {safe.maps} maps): {_ratio(safe)}")
+            if m.no_harm is not None:
+                e = m.no_harm
+                text[-1] += (
+                    f"; equivalent within [{e.low:.2f}, {e.high:.2f}]: {'yes' if e.equivalent else 'no'}, "
+                    f"not worse: {'yes' if e.not_worse else 'no'}"
+                )
+            text[-1] += "."
+        lines += [" ".join(text), ""]
+    return lines
 
 
 def map_sections(a: MapAnalysis, summary: Summary) -> list[str]:
