@@ -476,6 +476,60 @@ class KissIcpConfig(Section):
     deskew: bool = Field(True, description="KISS-ICP deskews each scan from its returns' firing times.")
 
 
+class RunConfig(Section):
+    """A recorded run (lf3pm.runs, docs/runs.md): where it is, its topics, the LiDAR's
+    mounting on the body whose poses the run holds, and the LiDAR's clock."""
+
+    source: str | None = Field(
+        None,
+        min_length=1,
+        description="The run: a folder of scans with a poses file, a ROS 1 .bag or a ROS 2 bag folder.",
+    )
+    scans_topic: str | None = Field(
+        None,
+        min_length=1,
+        description="The bag's PointCloud2 or Livox CustomMsg topic (none: the one topic of such a type).",
+    )
+    imu_topic: str | None = Field(
+        None, min_length=1, description="The bag's sensor_msgs/Imu topic (none: the one such topic, if any)."
+    )
+    poses_topic: str | None = Field(
+        None,
+        min_length=1,
+        description="The bag's reference poses: nav_msgs/Odometry, geometry_msgs/PoseStamped or nav_msgs/Path "
+        "(none: the one topic of those types, if any).",
+    )
+    lidar_translation: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="The LiDAR's position in the body frame (m): body = R lidar + t."
+    )
+    lidar_quaternion: tuple[float, float, float, float] | None = Field(
+        None, description="The LiDAR-to-body rotation as a unit quaternion x y z w (none: lidar_rpy)."
+    )
+    lidar_rpy: tuple[float, float, float] | None = Field(
+        None,
+        description="The LiDAR-to-body rotation as roll, pitch, yaw in degrees, R = Rz(yaw) Ry(pitch) Rx(roll) "
+        "(none with no lidar_quaternion: the identity).",
+    )
+    lidar_time_offset: float = Field(
+        0.0, ge=-1e6, le=1e6, description="Added to each LiDAR stamp to put it on the poses' and IMU's clock (s)."
+    )
+    max_pose_gap: float = Field(
+        1.0,
+        gt=0,
+        le=1e6,
+        description="Longest time between two reference poses across which a scan's pose is interpolated (s); "
+        "a scan in a longer gap has no pose.",
+    )
+
+    @model_validator(mode="after")
+    def _one_rotation(self):
+        if self.lidar_quaternion is not None and self.lidar_rpy is not None:
+            raise ValueError("give lidar_quaternion or lidar_rpy, not both")
+        if self.lidar_quaternion is not None and abs(math.hypot(*self.lidar_quaternion) - 1.0) > 1e-3:
+            raise ValueError(f"lidar_quaternion's norm is {math.hypot(*self.lidar_quaternion):.6g}, not 1")
+        return self
+
+
 def _seed(what: str):
     return Field(0, ge=0, le=MAX_SEED, description=f"Seed of {what}.")
 
@@ -577,6 +631,7 @@ class Config(Section):
     replay: ReplayConfig = ReplayConfig()
     localization: LocalizationConfig = LocalizationConfig()
     kiss_icp: KissIcpConfig = KissIcpConfig()
+    run: RunConfig = RunConfig()
     table1: Table1Config = Table1Config()
     correlation: CorrelationConfig = CorrelationConfig()
     benefit: BenefitConfig = BenefitConfig()
@@ -659,7 +714,7 @@ def describe(err: ValidationError, where: str = "", flags: dict | None = None) -
     """One line for a pydantic error: the parameter (its CLI flag when given), what is wrong, the value."""
     first = err.errors(include_url=False)[0]
     path = clip(_parameter(first["loc"]))
-    name = (flags or {}).get(path) or (f"{where}.{path}" if where else path)
+    name = (flags or {}).get(path) or (f"{where}.{path}" if where and path else where or path)
     message = first["msg"]
     if first["type"] == "invalid_key":  # a YAML key such as 1 or 2.5
         return f"{name + ': ' if name else ''}key {excerpt(first['input'])} is not a parameter name"

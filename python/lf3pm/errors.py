@@ -37,6 +37,12 @@ class MapError(Lf3pmError):
     """A map file cannot be read or holds no usable points."""
 
 
+class RunError(MapError):
+    """A recorded run (a folder of scans with poses, a ROS bag) cannot be read, or one of
+    its scans, messages or poses is unusable; the message names the file, or the topic
+    and the message's index or stamp. A MapError too: a run folder is also read as a map."""
+
+
 class SensorError(Lf3pmError):
     """A sensor name or sensor description is invalid."""
 

@@ -39,9 +39,9 @@ def load_points(path, voxel: float | None = None) -> np.ndarray:
     ``voxel`` (> 0) the cloud is then reduced to one point per voxel, the
     centroid of its points (:func:`lf3pm.io.voxel_downsample`).
 
-    ``path`` may also be a run folder (scans named by their time and a TUM poses
-    file, :mod:`lf3pm.io.run_folder`): its scans in the world frame, one point per
-    ``voxel`` (default ``RUN_MAP_VOXEL``).
+    ``path`` may also be a run folder (a scans folder and a TUM, KITTI or 4 x 4 poses
+    file, :mod:`lf3pm.io.run_folder`): its scans in the world frame at their poses, one
+    point per ``voxel`` (default ``RUN_MAP_VOXEL``).
 
     Raises MapError, with one line that names the file, when the file is
     missing, has an unknown suffix, is corrupt or truncated, holds an array of
