@@ -508,3 +508,47 @@ def test_a_file_that_is_no_bag_fails_in_one_line(tmp_path):
     with pytest.raises(RunError, match=r"broken.bag: not a readable bag \(") as err:
         Run(tmp_path / "broken.bag")
     assert "\n" not in str(err.value)
+
+
+def test_a_bag_without_message_definitions_reads_with_the_shipped_ones(tmp_path):
+    """A ROS 2 sqlite3 bag recorded without message definitions (Humble's) is read with
+    Humble's types and the Livox definitions shipped in lf3pm.runs: the same scans and poses."""
+    import sqlite3
+
+    path, points, times, _, poses = write_run(tmp_path, "sqlite3", "livox2", "odometry")
+    with Run(path) as run:
+        before = [(s.points, s.times, s.pose) for s in run.scans()]
+    database = sqlite3.connect(next(path.glob("*.db3")))
+    database.execute("DELETE FROM message_definitions")
+    database.commit()
+    database.close()
+    with Run(path) as run:
+        after = [(s.points, s.times, s.pose) for s in run.scans()]
+    assert len(after) == len(before) == 3
+    for got, want in zip(after, before):
+        for a, b in zip(got, want):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_an_organised_cloud_with_padded_rows_reads_row_by_row():
+    """height 2, each row padded by 8 bytes past its points: the rows' points, in order."""
+    from types import SimpleNamespace
+
+    from lf3pm.runs.pointcloud2 import decode_pointcloud2
+
+    grid = np.arange(2 * 3 * 3, dtype=np.float32).reshape(2, 3, 3)
+    rows = [row.tobytes() + bytes(8) for row in grid]
+    field = lambda name, offset: SimpleNamespace(name=name, offset=offset, datatype=7, count=1)  # noqa: E731
+    msg = SimpleNamespace(
+        header=SimpleNamespace(stamp=SimpleNamespace(sec=5, nanosec=0)),
+        height=2,
+        width=3,
+        fields=[field("x", 0), field("y", 4), field("z", 8)],
+        is_bigendian=False,
+        point_step=12,
+        row_step=44,
+        data=np.frombuffer(b"".join(rows), np.uint8),
+    )
+    stamp, points, times = decode_pointcloud2(msg, "organised")
+    assert stamp == 5.0 and times is None
+    np.testing.assert_array_equal(points, grid.reshape(-1, 3))
