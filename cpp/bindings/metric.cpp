@@ -44,13 +44,39 @@ const std::pair<const char*, double Metric::*> kMetricValues[] = {
     {"scaled_cov_trace", &Metric::scaled_cov_trace},
 };
 
+nb::list least_observable(const Metric& metric);
+
 nb::dict metric_dict(const Metric& metric) {
   nb::dict d;
   d["m"] = metric.m;
   d["n"] = metric.n;
   d["degenerate"] = metric.degenerate;
   for (const auto& [name, value] : kMetricValues) d[name] = metric.*value;
+  d["least_observable"] = least_observable(metric);
   return d;
+}
+
+nb::list least_observable(const Metric& metric) {
+  nb::list out;
+  for (int i = 0; i < metric.n; ++i) out.append(metric.least_observable[static_cast<std::size_t>(i)]);
+  return out;
+}
+
+// A scan's explicit observations as arrays: A (m x dof), b (m), points and sensor_points of
+// the scan's hits, row_hit (row -> hit).
+nb::dict observations_dict(PoseObservations& o, int dof_) {
+  const std::size_t rows = static_cast<std::size_t>(o.observations.b.size());
+  const std::size_t dof = static_cast<std::size_t>(dof_);
+  std::vector<double> a(rows * dof);
+  for (std::size_t r = 0; r < rows; ++r)
+    for (std::size_t c = 0; c < dof; ++c) a[r * dof + c] = o.observations.a(r, c);
+  nb::dict out;
+  out["A"] = to_numpy(std::move(a), {rows, dof});
+  out["b"] = to_numpy(std::vector<double>(o.observations.b.data(), o.observations.b.data() + rows), {rows});
+  out["points"] = points_to_numpy(o.scan.world_points);
+  out["sensor_points"] = points_to_numpy(o.scan.sensor_points);
+  out["row_hit"] = to_numpy(std::move(o.observations.hit), {rows});
+  return out;
 }
 
 // Columns (float64, `shape`) of metrics[i]: a SOLM chunk is thousands of poses, so no list of objects.
@@ -105,6 +131,8 @@ void bind_metric(nb::module_& m) {
                     .def_ro("degenerate", &Metric::degenerate)
                     .def("as_dict", &metric_dict, "Every value in a dict.");
   for (const auto& [name, value] : kMetricValues) metric.def_ro(name, value);
+  metric.def_prop_ro("least_observable", &least_observable,
+                     "Unit eigenvector of A^T A's smallest eigenvalue (n entries; largest entry positive).");
 
   nb::class_<PoseEvaluation>(m, "PoseEvaluation", "The metric at one pose with its ray and hit counts.")
       .def_ro("metric", &PoseEvaluation::metric)
@@ -131,22 +159,30 @@ void bind_metric(nb::module_& m) {
           nb::gil_scoped_release release;
           evaluation = evaluate_pose(map, ps, dirs.data(), dirs.shape(0), params, &o);
         }
-        const std::size_t rows = static_cast<std::size_t>(o.observations.b.size());
-        const std::size_t dof = static_cast<std::size_t>(params.dof);
-        std::vector<double> a(rows * dof);
-        for (std::size_t r = 0; r < rows; ++r)
-          for (std::size_t c = 0; c < dof; ++c) a[r * dof + c] = o.observations.a(r, c);
-        nb::dict out;
-        out["A"] = to_numpy(std::move(a), {rows, dof});
-        out["b"] = to_numpy(std::vector<double>(o.observations.b.data(), o.observations.b.data() + rows), {rows});
-        out["points"] = points_to_numpy(o.scan.world_points);
-        out["sensor_points"] = points_to_numpy(o.scan.sensor_points);
-        out["row_hit"] = to_numpy(std::move(o.observations.hit), {rows});
-        return nb::make_tuple(evaluation, out);
+        return nb::make_tuple(evaluation, observations_dict(o, params.dof));
       },
       "map"_a, "pose"_a, "directions"_a, "params"_a,
       "evaluate() and the explicit observations of the same scan: (PoseEvaluation, dict of A (m x dof), "
       "b (m), points and sensor_points of the scan's hits, row_hit (row -> hit)).");
+
+  m.def(
+      "evaluate_points",
+      [](const MapIndex& map, PoseIn pose, PointsIn points, const EvalParams& params, bool with_observations) {
+        const Pose ps = pose_from_matrix(pose.data());
+        PoseObservations o;
+        PoseEvaluation evaluation;
+        {
+          nb::gil_scoped_release release;
+          evaluation =
+              evaluate_points(map, ps, points.data(), points.shape(0), params, with_observations ? &o : nullptr);
+        }
+        if (!with_observations) return nb::make_tuple(evaluation, nb::none());
+        return nb::make_tuple(evaluation, observations_dict(o, params.dof));
+      },
+      "map"_a, "pose"_a, "points"_a, "params"_a, "observations"_a = false,
+      "The metric of a recorded scan: sensor-frame points (N x 3) at a 4x4 sensor-to-world pose, "
+      "downsampled (params.scan.scan_voxel) and evaluated as a simulated scan's hits are (k-NN "
+      "association): (PoseEvaluation, the observations dict as evaluate_with_observations' or None).");
 
   m.def(
       "evaluate_many",

@@ -80,4 +80,20 @@ void bind_scan(nb::module_& m) {
       "Simulated scan of a moving sensor: ray k cast from the 4x4 sensor-to-world pose ray_poses[k] "
       "(K x 4 x 4, one per direction). Dict as simulate_scan's; sensor_points in each ray's own frame, "
       "noise per ray as simulate_scan's.");
+
+  m.def(
+      "scan_of_points",
+      [](PoseIn pose, PointsIn points, const ScanParams& params) {
+        const Pose ps = pose_from_matrix(pose.data());
+        SimulatedScan scan;
+        {
+          nb::gil_scoped_release release;
+          scan = scan_of_points(ps, points.data(), points.shape(0), params);
+        }
+        return scan_dict(std::move(scan));
+      },
+      "pose"_a, "points"_a, "params"_a,
+      "A recorded scan (N x 3 sensor-frame points) as a scan's hits at a 4x4 sensor-to-world pose, "
+      "downsampled by params.scan_voxel as simulated hits are: dict as simulate_scan's (surfel none, "
+      "ray the point's index).");
 }

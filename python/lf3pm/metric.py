@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
+import numpy as np
+
 from lf3pm import _core
 from lf3pm.calibration import (
     LOCALIZATION_PACKAGED,
@@ -16,6 +18,7 @@ from lf3pm.calibration import (
     withheld_reason,
 )
 from lf3pm.config import DEFAULTS, Config, MetricConfig, configured, scan_params
+from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix
 from lf3pm.sensors import Sensor, as_sensor
@@ -43,7 +46,9 @@ class Evaluation:
     ``q = inf`` and ``degenerate = True`` when the observations cannot fix the
     pose (fewer than n + 1 rows or a rank-deficient A). ``m`` is the number of
     observation rows: q scales with 1/sqrt(m), so compare q at equal sensor and
-    downsampling settings only.
+    downsampling settings only. ``least_observable``: the unit eigenvector of AᵀA's
+    smallest eigenvalue (n entries: translation, then rotation, in the world frame;
+    its largest entry positive), the direction the observations fix worst.
     """
 
     sigma1: float
@@ -60,6 +65,7 @@ class Evaluation:
     m: int
     n: int
     degenerate: bool
+    least_observable: list
     rays: int
     hits: int
     predicted_mde: float | None
@@ -146,13 +152,66 @@ def evaluate(
         result, obs = _core.evaluate_with_observations(map.index, matrix, sensor.directions, params)
     else:
         result = _core.evaluate(map.index, matrix, sensor.directions, params)
+    return _evaluation(map, matrix, sensor.name, scan.noise is None, scan.noise_for(sensor), config, result, obs)
+
+
+def evaluate_points(
+    map: Map | str,
+    pose,
+    points,
+    config: Config | None = None,
+    *,
+    sensor_name: str = "recorded",
+    observations: bool = False,
+    **parameters,
+) -> Evaluation:
+    """The metric of a recorded scan: ``points`` (N x 3, the sensor frame, as
+    lf3pm.runs.Scan.points) seen from ``pose`` on ``map``, each point an observation
+    associated with the map as FAST-LIO does, through the code :func:`evaluate` runs on
+    a simulated scan's hits (the core's evaluate_scan: scan downsampling by the scan
+    section's ``scan_voxel``, k-NN association, Gram, metric), with the scan and metric
+    sections of ``config`` (fields also by name). Nothing is simulated and no range
+    limit applied; ``rays`` is the number of points given, ``hits`` those kept.
+
+    ``sensor_name`` only labels the result, and the predictions are made for it as
+    :func:`evaluate` makes them (the default "recorded" matches no fit, so they are
+    withheld, saying why); params' ``noise`` is None (the scan's own). The pose is not
+    checked against the map (a recorded pose is where the sensor was)."""
+    config = configured(config, ("scan", "metric"), "evaluate", **parameters)
+    if config.metric.association != "knn":
+        raise Lf3pmError("a recorded scan's points are associated by k-NN (metric.association knn)")
+    map = as_map(map)
+    matrix = pose_matrix(pose)
+    cloud = np.asarray(points, dtype=np.float64)
+    if cloud.ndim != 2 or cloud.shape[1] != 3 or not np.isfinite(cloud).all():
+        raise Lf3pmError(f"a scan's points must be a finite N x 3 array, got shape {cloud.shape}")
+    # Only the scan section's scan_voxel and threads apply: nothing is cast.
+    recorded = scan_params(0.0, math.inf, scan_voxel=config.scan.scan_voxel, threads=config.scan.threads)
+    params = config.metric.core(recorded)
+    result, obs = _core.evaluate_points(map.index, matrix, np.ascontiguousarray(cloud), params, observations)
+    return _evaluation(map, matrix, sensor_name, True, None, config, result, obs)
+
+
+def _evaluation(
+    map: Map,
+    matrix,
+    sensor_name: str,
+    noise_is_default: bool,
+    noise: float | None,
+    config: Config,
+    result,
+    obs: dict | None,
+) -> Evaluation:
+    """The Evaluation of a core result (simulated or recorded scan): the metric, the
+    predictions for ``sensor_name`` and what produced them."""
+    scan, metric = config.scan, config.metric
     values = result.metric.as_dict()
     conditions = {
-        "sensor": sensor.name,
+        "sensor": sensor_name,
         "dof": metric.dof,
         "association": metric.association,
         "scan_voxel": scan.scan_voxel,
-        "noise_is_default": scan.noise is None,
+        "noise_is_default": noise_is_default,
         "w1": metric.w1,
     }
     calibration = packaged_calibration()
@@ -168,7 +227,7 @@ def evaluate(
     )
     recorded = {
         "seed": scan.seed,
-        "noise": scan.noise_for(sensor),
+        "noise": noise,
         "dof": metric.dof,
         "w1": metric.w1,
         "scan_voxel": scan.scan_voxel,
@@ -181,6 +240,7 @@ def evaluate(
         m=values["m"],
         n=values["n"],
         degenerate=values["degenerate"],
+        least_observable=values["least_observable"],
         rays=result.rays,
         hits=result.hits,
         predicted_mde=prediction[0] if prediction else None,
@@ -190,7 +250,7 @@ def evaluate(
         predicted_mde_withheld=withheld_reason(calibration, mde_value, **conditions),
         predicted_localization_error_withheld=withheld_reason(fit, values["q_n"], **conditions),
         pose=matrix.tolist(),
-        sensor=sensor.name,
+        sensor=sensor_name,
         params=recorded,
         observations=obs,
     )

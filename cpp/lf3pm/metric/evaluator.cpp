@@ -71,19 +71,32 @@ Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params) {
                           std::llround(static_cast<double>(gram.rows()) * params.ray_weight), params.weights);
 }
 
-PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
+PoseEvaluation evaluate_scan(const MapIndex& map, const Pose& pose, SimulatedScan scan, std::int64_t rays,
                              const EvalParams& params, PoseObservations* observations) {
-  SimulatedScan scan = simulate_scan(map, pose, directions, count, params.scan);
   const GramAccumulator gram = scan_gram(map, pose, scan, params);
   PoseEvaluation out;
   out.metric = weighted_metric(gram, params);
-  out.rays = static_cast<std::int64_t>(count);
+  out.rays = rays;
   out.hits = static_cast<std::int64_t>(scan.world_points.size());
   if (observations != nullptr) {
     observations->observations = scan_observations(map, pose, scan, params);
     observations->scan = std::move(scan);
   }
   return out;
+}
+
+PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
+                             const EvalParams& params, PoseObservations* observations) {
+  return evaluate_scan(map, pose, simulate_scan(map, pose, directions, count, params.scan),
+                       static_cast<std::int64_t>(count), params, observations);
+}
+
+PoseEvaluation evaluate_points(const MapIndex& map, const Pose& pose, const double* points, std::size_t count,
+                               const EvalParams& params, PoseObservations* observations) {
+  if (params.association != Association::Knn)
+    throw std::invalid_argument("a recorded scan's points are associated by k-NN (no ray hit a map point)");
+  return evaluate_scan(map, pose, scan_of_points(pose, points, count, params.scan), static_cast<std::int64_t>(count),
+                       params, observations);
 }
 
 std::vector<PoseEvaluation> evaluate_poses(const MapIndex& map, const std::vector<Pose>& poses,

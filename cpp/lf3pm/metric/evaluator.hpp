@@ -41,6 +41,17 @@ struct PoseObservations {
 PoseEvaluation evaluate_pose(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
                              const EvalParams& params, PoseObservations* observations = nullptr);
 
+/// The metric of a scan's hits at `pose` (what evaluate_pose does once it has its scan):
+/// association, Gram and metric; `rays` is what PoseEvaluation reports as cast.
+PoseEvaluation evaluate_scan(const MapIndex& map, const Pose& pose, SimulatedScan scan, std::int64_t rays,
+                             const EvalParams& params, PoseObservations* observations = nullptr);
+
+/// The metric of a recorded scan: `count` sensor-frame points (x, y, z, row-major) at
+/// `pose`, downsampled and evaluated as a simulated scan's hits are (scan_of_points, then
+/// evaluate_scan). Needs k-NN association (no ray hit a map point); rays = count.
+PoseEvaluation evaluate_points(const MapIndex& map, const Pose& pose, const double* points, std::size_t count,
+                               const EvalParams& params, PoseObservations* observations = nullptr);
+
 /// The metric of an accumulated Gram, scaled by params.ray_weight.
 Metric weighted_metric(const GramAccumulator& gram, const EvalParams& params);
 

@@ -34,6 +34,13 @@ Metric metric_from_gram(const Eigen::MatrixXd& gram, std::int64_t m, const Metri
   out.zhang = e(0);
   out.sigma1 = std::sqrt(e_min);
   out.residual_norm = std::sqrt(std::max(btb, 0.0));
+  {
+    const Eigen::VectorXd weakest = eig.eigenvectors().col(0);
+    Eigen::Index largest = 0;
+    weakest.cwiseAbs().maxCoeff(&largest);
+    const double sign = weakest(largest) < 0 ? -1.0 : 1.0;
+    for (int i = 0; i < n; ++i) out.least_observable[static_cast<std::size_t>(i)] = sign * weakest(i);
+  }
   if (m < n + 1 || e_max <= 0.0 || e_min <= kRankTolerance * e_max) {
     out.degenerate = true;
     out.xi = out.q_min = out.q_n = out.q_max = inf;

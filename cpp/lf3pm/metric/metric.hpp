@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 
 namespace lf3pm {
@@ -27,6 +28,9 @@ struct Metric {
   double step_norm = 0.0;         // |dx*|, least-squares step at the true pose
   double residual_norm = 0.0;     // |r| = |A dx* - b|
   double scaled_cov_trace = 0.0;  // trace((A^T A)^-1) * |r|^2 / (m - n)
+  // The least observable direction: the unit eigenvector of A^T A's smallest eigenvalue
+  // (first n entries: translation, then rotation; its largest entry positive).
+  std::array<double, 6> least_observable{};
 };
 
 /// Metric from the Gram G = [A b]^T [A b] ((n+1) x (n+1), n = 3 or 6) of m rows.

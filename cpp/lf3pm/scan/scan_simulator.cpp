@@ -65,18 +65,11 @@ SimulatedScan simulate(const MapIndex& map, PoseOf pose_of, const double* direct
   scan.world_points.reserve(hits);
   scan.surfel.reserve(hits);
   scan.ray.reserve(hits);
-  std::unordered_set<std::uint64_t> kept_voxels;
-  const bool downsample = params.scan_voxel > 0;
+  FirstPerVoxel voxels(params.scan_voxel);
   for (std::size_t k = 0; k < count; ++k) {
     if (hit[k] == kNoHit) continue;
     const Eigen::Vector3d p = range[k] * Eigen::Vector3d(directions + 3 * k);
-    if (downsample) {
-      const auto q = [&](double v) {
-        return static_cast<std::uint64_t>(std::floor(v / params.scan_voxel) + (1 << 20)) & 0x1FFFFFu;
-      };
-      const std::uint64_t key = q(p.x()) | (q(p.y()) << 21) | (q(p.z()) << 42);
-      if (!kept_voxels.insert(key).second) continue;
-    }
+    if (!voxels.keep(p)) continue;
     const Pose& pose = pose_of(k);
     scan.sensor_points.push_back(p);
     scan.world_points.push_back(pose.rotation * p + pose.position);
@@ -89,6 +82,29 @@ SimulatedScan simulate(const MapIndex& map, PoseOf pose_of, const double* direct
 bool finite(const Pose& pose) { return pose.rotation.allFinite() && pose.position.allFinite(); }
 
 }  // namespace
+
+bool FirstPerVoxel::keep(const Eigen::Vector3d& p) {
+  if (!(edge_ > 0)) return true;
+  const auto q = [&](double v) { return static_cast<std::uint64_t>(std::floor(v / edge_) + (1 << 20)) & 0x1FFFFFu; };
+  const std::uint64_t key = q(p.x()) | (q(p.y()) << 21) | (q(p.z()) << 42);
+  return kept_.insert(key).second;
+}
+
+SimulatedScan scan_of_points(const Pose& pose, const double* points, std::size_t count, const ScanParams& params) {
+  if (!finite(pose)) throw std::invalid_argument("the pose is not finite");
+  SimulatedScan scan;
+  FirstPerVoxel voxels(params.scan_voxel);
+  for (std::size_t k = 0; k < count; ++k) {
+    const Eigen::Vector3d p(points + 3 * k);
+    if (!p.allFinite()) throw std::invalid_argument("point " + std::to_string(k) + " is not finite");
+    if (!voxels.keep(p)) continue;
+    scan.sensor_points.push_back(p);
+    scan.world_points.push_back(pose.rotation * p + pose.position);
+    scan.surfel.push_back(kNoHit);
+    scan.ray.push_back(static_cast<std::uint32_t>(k));
+  }
+  return scan;
+}
 
 SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double* directions, std::size_t count,
                             const ScanParams& params) {

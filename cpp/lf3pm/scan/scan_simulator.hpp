@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <unordered_set>
 #include <vector>
 
 #include "lf3pm/common/pose.hpp"
@@ -39,5 +40,24 @@ SimulatedScan simulate_scan(const MapIndex& map, const Pose& pose, const double*
 /// scan_voxel keys on those. The noise of ray k is the same as in simulate_scan.
 SimulatedScan simulate_scan(const MapIndex& map, const Pose* ray_poses, const double* directions, std::size_t count,
                             const ScanParams& params);
+
+/// The scan_voxel downsampling of a scan's hits: keeps a sensor-frame point when it is the
+/// first in its voxel of edge `edge` (0 = keep every point). Simulated and recorded scans
+/// share it.
+class FirstPerVoxel {
+ public:
+  explicit FirstPerVoxel(double edge) : edge_(edge) {}
+  bool keep(const Eigen::Vector3d& p);
+
+ private:
+  double edge_;
+  std::unordered_set<std::uint64_t> kept_;
+};
+
+/// A recorded scan as a scan's hits: `count` sensor-frame points (x, y, z, row-major) seen
+/// from `pose`, downsampled by params.scan_voxel as a simulated scan's hits are (no range
+/// limits applied: they are what the sensor returned). surfel is kNoHit (no ray hit a map
+/// point), ray the point's index.
+SimulatedScan scan_of_points(const Pose& pose, const double* points, std::size_t count, const ScanParams& params);
 
 }  // namespace lf3pm

@@ -113,6 +113,7 @@ def print_evaluation(out: dict) -> None:
         else:
             table.add_row(label, "withheld")
             reasons.append(f"{label.removesuffix(' (m)')} withheld: {out[withheld]}")
+    table.add_row("least observable direction", " ".join(f"{v:+.3f}" for v in out["least_observable"]))
     table.add_row("rows m", str(out["m"]))
     table.add_row("hits / rays", f"{out['hits']} / {out['rays']}")
     table.add_row("degenerate", str(out["degenerate"]))

@@ -15,7 +15,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lf3pm.config import DEFAULTS, Config, configured
+from lf3pm import _core
+from lf3pm.config import DEFAULTS, Config, configured, scan_params
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, as_map
 from lf3pm.pose import pose_matrix, se3_exp, se3_log
@@ -68,9 +69,15 @@ class MdeResult:
     pose: list
     sensor: str
     params: dict = field(default_factory=dict)
+    registered: list = field(default_factory=list, repr=False)  # per trial the 4 x 4 registered pose
+    converged_trials: list = field(default_factory=list, repr=False)  # per trial small_gicp's converged flag
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """JSON-ready dict, without the registered poses and per-trial flags."""
+        out = asdict(self)
+        out.pop("registered")
+        out.pop("converged_trials")
+        return out
 
 
 def mde(
@@ -92,14 +99,57 @@ def mde(
     map across calls. A pose within the scan section's ``clearance`` of a map point
     raises PoseError.
     """
-    import small_gicp
-
     config = configured(config, ("scan", "mde"), "mde", **parameters)
-    scan_config, disturbance = config.scan, config.mde
-    trials, sigma_t, sigma_r_deg = disturbance.trials, disturbance.sigma_t, disturbance.sigma_r
-    max_correspondence_distance, max_iterations = disturbance.max_correspondence_distance, disturbance.max_iterations
-    seed, threads = scan_config.seed, scan_config.threads
+    scan_config = config.scan
     map, sensor = as_map(map), as_sensor(sensor)
+    _check_disturbance(map, config.mde.sigma_t)
+    truth = pose_matrix(pose)
+    map.check_pose(truth, scan_config.clearance)
+    target = RegistrationTarget.for_map(map, target, scan_config.threads)
+    scan = simulate_scan(
+        map,
+        truth,
+        sensor.directions,
+        sensor.min_range,
+        sensor.max_range,
+        noise=scan_config.noise_for(sensor),
+        seed=scan_config.seed,
+        scan_voxel=scan_config.scan_voxel,
+        threads=scan_config.threads,
+    )
+    return _registered(map, truth, scan.sensor_points, config, target, sensor.name, scan_config.noise_for(sensor))
+
+
+def mde_of_points(
+    map: Map | str,
+    pose,
+    points,
+    config: Config | None = None,
+    *,
+    sensor_name: str = "recorded",
+    target: RegistrationTarget | None = None,
+    **parameters,
+) -> MdeResult:
+    """MDE of a recorded scan: ``points`` (N x 3, the sensor frame, as lf3pm.runs.Scan.points)
+    registered against ``map`` from the disturbed starts around ``pose`` that :func:`mde`
+    draws (same seed, same draws), by the same registration. The points are downsampled by
+    the scan section's ``scan_voxel`` as a simulated scan's hits are (lf3pm._core.scan_of_points,
+    the simulator's own filter); nothing is simulated, and ``pose`` is the reference the
+    errors are measured against (not checked against the map). ``sensor_name`` labels the result."""
+    config = configured(config, ("scan", "mde"), "mde", **parameters)
+    map = as_map(map)
+    _check_disturbance(map, config.mde.sigma_t)
+    truth = pose_matrix(pose)
+    cloud = np.asarray(points, dtype=np.float64)
+    if cloud.ndim != 2 or cloud.shape[1] != 3 or not np.isfinite(cloud).all():
+        raise Lf3pmError(f"a scan's points must be a finite N x 3 array, got shape {cloud.shape}")
+    params = scan_params(0.0, math.inf, scan_voxel=config.scan.scan_voxel, threads=config.scan.threads)
+    kept = _core.scan_of_points(truth, np.ascontiguousarray(cloud), params)["sensor_points"]
+    target = RegistrationTarget.for_map(map, target, config.scan.threads)
+    return _registered(map, truth, kept, config, target, sensor_name, None)
+
+
+def _check_disturbance(map: Map, sigma_t: float) -> None:
     # A start disturbed by more than the map is across is no registration problem, and
     # small_gicp would grind through it for minutes.
     extent = max(float(np.max(map.bounds[1] - map.bounds[0])), 1.0)
@@ -108,23 +158,19 @@ def mde(
             f"mde.sigma_t {sigma_t:g} m is larger than the map ({extent:.3g} m across): "
             "no registration starts that far off"
         )
-    sigma, scan_voxel = scan_config.noise_for(sensor), scan_config.scan_voxel
-    truth = pose_matrix(pose)
-    map.check_pose(truth, scan_config.clearance)
-    target = RegistrationTarget.for_map(map, target, threads)
 
-    scan = simulate_scan(
-        map,
-        truth,
-        sensor.directions,
-        sensor.min_range,
-        sensor.max_range,
-        noise=sigma,
-        seed=seed,
-        scan_voxel=scan_voxel,
-        threads=threads,
-    )
-    points = scan.sensor_points
+
+def _registered(
+    map: Map, truth: np.ndarray, points: np.ndarray, config: Config, target, sensor: str, noise
+) -> MdeResult:
+    """The registrations of a scan's sensor-frame ``points`` from disturbed starts around
+    ``truth`` (what :func:`mde` and :func:`mde_of_points` share)."""
+    import small_gicp
+
+    scan_config, disturbance = config.scan, config.mde
+    trials, sigma_t, sigma_r_deg = disturbance.trials, disturbance.sigma_t, disturbance.sigma_r
+    max_correspondence_distance, max_iterations = disturbance.max_correspondence_distance, disturbance.max_iterations
+    seed, threads, scan_voxel = scan_config.seed, scan_config.threads, scan_config.scan_voxel
     if len(points) < 10:
         raise Lf3pmError(f"the scan at this pose has only {len(points)} hits: nothing to register")
     source = small_gicp.PointCloud(np.ascontiguousarray(points))
@@ -132,7 +178,7 @@ def mde(
     # Disturbances from their own stream, so changing `trials` keeps earlier draws.
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x4D4445]))
     sigmas = np.r_[np.full(3, sigma_t), np.full(3, math.radians(sigma_r_deg))]
-    errors, t_err, r_err, converged = [], [], [], 0
+    errors, t_err, r_err, converged, finals, flags = [], [], [], 0, [], []
     truth_inv = np.linalg.inv(truth)
     for _ in range(trials):
         start = truth @ se3_exp(rng.normal(size=6) * sigmas)
@@ -151,9 +197,11 @@ def mde(
         t_err.append(float(np.linalg.norm((truth_inv @ result.T_target_source)[:3, 3])))
         r_err.append(float(math.degrees(np.linalg.norm(twist[3:]))))
         converged += bool(result.converged)
+        finals.append(np.asarray(result.T_target_source, dtype=np.float64).tolist())
+        flags.append(bool(result.converged))
     params = {
         "seed": int(seed),
-        "noise": sigma,
+        "noise": noise,
         "sigma_t": sigma_t,
         "sigma_r_deg": sigma_r_deg,
         "scan_voxel": scan_voxel,
@@ -171,6 +219,8 @@ def mde(
         converged=converged,
         hits=len(points),
         pose=truth.tolist(),
-        sensor=sensor.name,
+        sensor=sensor,
         params=params,
+        registered=finals,
+        converged_trials=flags,
     )
