@@ -1,0 +1,32 @@
+"""Audit a recorded run against its map (issue 42, item 2; docs/real.md): per scan at its
+reference pose, the metric of the real points, the simulated scan's metric and predicted
+localization error, and real registration from disturbed starts; their summary.
+
+- :func:`audit_run` -- every N-th scan of a run (lf3pm.runs), :class:`RunAudit`;
+- :func:`audit_scan` -- one scan, :class:`ScanAudit` (the per-scan record);
+- :func:`summarize` -- :class:`AuditSummary`: rank correlations of each prediction with
+  each real error, the share inside the predicted interval, the simulated/real ratio,
+  the scans furthest off;
+- :func:`write_audit` -- the CSV, the Markdown report and the figures (``lf3pm audit -o``).
+"""
+
+from lf3pm.audit.record import ScanAudit
+from lf3pm.audit.report import write_audit
+from lf3pm.audit.run_audit import RunAudit, audit_run, check_run
+from lf3pm.audit.scan_audit import audit_scan, spread
+from lf3pm.audit.summary import AuditSummary, Correlation, OffScan, spearman, summarize
+
+__all__ = [
+    "AuditSummary",
+    "Correlation",
+    "OffScan",
+    "RunAudit",
+    "ScanAudit",
+    "audit_run",
+    "audit_scan",
+    "check_run",
+    "spearman",
+    "spread",
+    "summarize",
+    "write_audit",
+]

@@ -1,0 +1,165 @@
+"""An audit's files (``lf3pm audit -o DIR``): the per-scan CSV, the Markdown report with the
+summary and the command, and the figures; each written atomically."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from lf3pm.atomic import atomic_write
+from lf3pm.audit.figures import along_run_figure, path_figure
+from lf3pm.audit.record import csv_columns
+from lf3pm.audit.run_audit import RunAudit
+from lf3pm.audit.summary import PREDICTIONS, REAL_ERRORS
+
+#: The files of an audit folder.
+CSV, REPORT, ALONG_RUN, PATH = "audit.csv", "report.md", "along_run.png", "path.png"
+
+
+def write_audit(audit: RunAudit, folder, map_points, command: str = "") -> list[Path]:
+    """Writes ``audit`` into ``folder`` (created if missing): audit.csv (one row per audited
+    scan), report.md (the summary, the bad scans and ``command``), along_run.png and
+    path.png (over ``map_points``, N x 3). Returns the paths written."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=csv_columns(), lineterminator="\n")
+    writer.writeheader()
+    for record in audit.records:
+        writer.writerow({k: _cell(v) for k, v in record.row().items()})
+    written = [folder / CSV, folder / REPORT, folder / ALONG_RUN, folder / PATH]
+    with atomic_write(written[0]) as fp:
+        fp.write(text.getvalue().encode())
+    with atomic_write(written[1]) as fp:
+        fp.write(report_text(audit, command).encode())
+    along_run_figure(audit.records, written[2])
+    path_figure(audit.records, map_points, written[3])
+    return written
+
+
+def _cell(value):
+    if isinstance(value, float):
+        return "" if math.isnan(value) else repr(value)
+    return "" if value is None else value
+
+
+def _num(value, fmt: str = ".3g") -> str:
+    return "-" if value is None or (isinstance(value, float) and not math.isfinite(value)) else format(value, fmt)
+
+
+def report_text(audit: RunAudit, command: str = "") -> str:
+    """The Markdown report of ``audit``."""
+    s, records = audit.summary, audit.records
+    timing = audit.to_dict()["timing"]
+    lines = [
+        f"# Audit of {audit.run}",
+        "",
+        f"Command: `{command}`" if command else "",
+        "",
+        f"- map: {audit.map['source']} ({audit.map['points']} points, sha256 {audit.map['sha256'][:12]})",
+        f"- sensor (simulated scans, predictions): {audit.sensor}",
+        f"- scans audited: {len(records)} (every {audit.every}), bad scans skipped: {len(audit.bad_scans)}",
+        f"- settings: {', '.join(f'{k} {v}' for k, v in audit.params.items())}",
+        f"- time: metric part {audit.metric_seconds:.1f} s ({_num(timing['metric_scans_per_second'])} scans/s), "
+        f"registration {audit.registration_seconds:.1f} s ({_num(timing['registration_scans_per_second'])} scans/s)",
+    ]
+    if _same_path(audit.map["source"], audit.run):
+        lines.append(
+            "- **the map is made of this run's own scans: each scan is registered against a map that contains it**, "
+            "which shrinks the real errors and the recorded scan's q_n (docs/real.md)"
+        )
+    lines += ["", "## Rank correlation (Spearman) of each prediction with each real error", ""]
+    lines.append("| prediction | " + " | ".join(REAL_ERRORS) + " |")
+    lines.append("|---|" + "---|" * len(REAL_ERRORS))
+    for prediction, label in PREDICTIONS.items():
+        cells = []
+        for real in REAL_ERRORS:
+            c = next(c for c in s.correlations if (c.prediction, c.real_error) == (prediction, real))
+            cells.append(f"{_num(c.rho, '+.2f')} ({c.scans} scans)")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    lines += ["", "Real errors: " + "; ".join(f"`{k}`: {v}" for k, v in REAL_ERRORS.items()) + ".", ""]
+    lines += ["## Real error inside the predicted [10 %, 90 %] interval", ""]
+    for real in REAL_ERRORS:
+        lines.append(f"- `{real}`: {_num(s.inside_interval[real], '.0%')} of {s.inside_scans[real]} scans")
+    withheld = Counter(r.predicted_error_withheld for r in records if r.predicted_error_withheld)
+    for reason, count in withheld.most_common():
+        lines.append(f"- prediction withheld on {count} scans: {reason}")
+    lines += [
+        "",
+        "## Simulated / recorded q_n",
+        "",
+        f"Median {_num(s.ratio_median)}, 10 % {_num(s.ratio_p10)}, 90 % {_num(s.ratio_p90)} "
+        f"over {s.ratio_scans} scans.",
+        "",
+        *_simulated_against_recorded(records),
+        "",
+        "## Scans where the prediction is furthest off",
+        "",
+    ]
+    if s.furthest_off:
+        lines.append("| scan | time (s) | x | y | z | yaw (rad) | predicted (m) | real (m) | ln(predicted/real) |")
+        lines.append("|---|---|---|---|---|---|---|---|---|")
+        for o in s.furthest_off:
+            lines.append(
+                f"| {o.index} {Path(o.name).name} | {o.stamp:.3f} | {o.x:.3f} | {o.y:.3f} | {o.z:.3f} | {o.yaw:.3f} "
+                f"| {_num(o.predicted_error_m)} | {_num(o.error_m)} | {o.log_ratio:+.2f} |"
+            )
+    else:
+        lines.append("None: no scan has both a prediction and a real error.")
+    problems = [(r.index, r.name, r.sim_error) for r in records if r.sim_error]
+    problems += [(r.index, r.name, r.registration_error) for r in records if r.registration_error]
+    lines += ["", "## Bad scans and failed parts", ""]
+    if not audit.bad_scans and not problems:
+        lines.append("None.")
+    for bad in audit.bad_scans:
+        lines.append(f"- scan {bad.index} skipped: {bad.reason}")
+    for index, _, reason in problems:
+        lines.append(f"- scan {index}: {reason}")
+    lines += [
+        "",
+        "## Files",
+        "",
+        f"- `{CSV}`: one row per audited scan (lf3pm.audit.ScanAudit's fields)",
+        f"- `{ALONG_RUN}`: errors and predictions along the run",
+        f"- `{PATH}`: the run over the map from above, coloured by real error",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _median(records, name: str) -> float:
+    values = np.array([getattr(r, name) for r in records], dtype=np.float64)
+    values = values[np.isfinite(values)]
+    return float(np.median(values)) if len(values) else math.nan
+
+
+def _simulated_against_recorded(records) -> list[str]:
+    """Medians over scans of what sets the two q_n apart: sigma1, the misfit left after
+    the least-squares step, the hits, and the angle between the least observable directions."""
+    angles = np.array([r.direction_angle_deg for r in records], dtype=np.float64)
+    angles = angles[np.isfinite(angles)]
+    within = f"{np.mean(angles <= 20.0):.0%}" if len(angles) else "-"
+    return [
+        "| median over scans | recorded | simulated |",
+        "|---|---|---|",
+        f"| hits (after scan_voxel) | {_num(_median(records, 'hits'), '.0f')} "
+        f"| {_num(_median(records, 'sim_hits'), '.0f')} |",
+        f"| sigma1 | {_num(_median(records, 'real_sigma1'))} | {_num(_median(records, 'sim_sigma1'))} |",
+        f"| RMS misfit after the step (m) | {_num(_median(records, 'real_residual_rms_m'))} "
+        f"| {_num(_median(records, 'sim_residual_rms_m'))} |",
+        "",
+        f"Angle between the least observable directions: median {_num(_median(records, 'direction_angle_deg'), '.1f')} "
+        f"deg, within 20 deg on {within} of {len(angles)} scans.",
+    ]
+
+
+def _same_path(a: str, b: str) -> bool:
+    try:
+        return Path(a).resolve() == Path(b).resolve()
+    except OSError:
+        return False

@@ -1,0 +1,152 @@
+"""Audit a recorded run against a map, scan by scan (lf3pm.runs streams it)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from lf3pm.audit.record import ScanAudit
+from lf3pm.audit.scan_audit import audit_scan
+from lf3pm.audit.summary import AuditSummary, summarize
+from lf3pm.config import DEFAULTS, Config
+from lf3pm.errors import Lf3pmError, RunError
+from lf3pm.map import Map, as_map
+from lf3pm.runs import BadScan, Run
+from lf3pm.sensors import Sensor, as_sensor
+from lf3pm.validation import RegistrationTarget
+
+
+@dataclass(frozen=True)
+class RunAudit:
+    """An audit of a run: one :class:`ScanAudit` per audited scan, the run's bad scans
+    (skipped, with the line saying why), the :class:`AuditSummary`, the time spent
+    (``metric_seconds``: the real and simulated metric with the prediction, over every
+    audited scan; ``registration_seconds``: the registrations) and what produced it."""
+
+    run: str
+    map: dict
+    sensor: str
+    every: int
+    records: tuple
+    bad_scans: tuple
+    summary: AuditSummary
+    metric_seconds: float
+    registration_seconds: float
+    params: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """JSON-ready: the per-scan records, the bad scans and the summary."""
+        scans = len(self.records)
+        return {
+            "run": self.run,
+            "map": self.map,
+            "sensor": self.sensor,
+            "every": self.every,
+            "params": self.params,
+            "timing": {
+                "metric_seconds": self.metric_seconds,
+                "registration_seconds": self.registration_seconds,
+                "metric_scans_per_second": _rate(scans, self.metric_seconds),
+                "registration_scans_per_second": _rate(scans, self.registration_seconds),
+            },
+            "summary": self.summary.to_dict(),
+            "bad_scans": [{"index": b.index, "name": b.name, "reason": b.reason} for b in self.bad_scans],
+            "scans": [r.to_dict() for r in self.records],
+        }
+
+
+def _rate(count: int, seconds: float) -> float | None:
+    return count / seconds if seconds > 0 else None
+
+
+def audit_run(
+    run,
+    map: Map | str,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    config: Config | None = None,
+    *,
+    every: int = 1,
+    register: bool = True,
+    progress: Callable[[int, int | None], None] | None = None,
+) -> RunAudit:
+    """Audits every ``every``-th scan (by its index in the run, bad scans counted) of the
+    recorded ``run`` (a path, read with ``config``'s run section, bad scans skipped and
+    kept) against ``map`` (in the frame of the run's reference poses) at its reference
+    pose: :func:`lf3pm.audit.audit_scan` with ``sensor`` (a preset, a YAML file or a
+    Sensor) and ``config``'s scan, metric and mde sections. ``progress(done, total)`` is
+    called after each scan read (total: the run's scans, None where unknown).
+    ``register=False`` leaves the registrations out. A run without reference poses, or
+    whose scans are all bad, raises RunError."""
+    config = DEFAULTS if config is None else config
+    if not (isinstance(every, int) and every >= 1):
+        raise Lf3pmError(f"every must be a whole number >= 1, got {every!r}")
+    sensor = as_sensor(sensor)
+    map = as_map(map)
+    records: list[ScanAudit] = []
+    with Run(run, config.run, skip_bad=True) as opened:
+        _check_poses(opened)
+        total = _scan_count(opened)
+        target = RegistrationTarget(map, threads=config.scan.threads) if register else None
+        first = None
+        seen = 0
+        for scan in opened.scans():
+            if scan.index % every == 0:
+                first = scan.stamp if first is None else first
+                records.append(
+                    audit_scan(map, scan, sensor, config, target=target, first_stamp=first, register=register)
+                )
+            seen = scan.index + 1
+            if progress is not None:
+                progress(seen, total)
+        bad: tuple[BadScan, ...] = tuple(opened.bad_scans)
+    if not records:
+        raise RunError(f"{run}: no scan to audit ({len(bad)} bad, every {every})")
+    return RunAudit(
+        run=str(run),
+        map=map.describe(),
+        sensor=sensor.name,
+        every=every,
+        records=tuple(records),
+        bad_scans=bad,
+        summary=summarize(records),
+        metric_seconds=math.fsum(r.metric_seconds for r in records),
+        registration_seconds=math.fsum(r.registration_seconds for r in records) if register else 0.0,
+        params={
+            "scan_voxel": config.scan.scan_voxel,
+            "seed": config.scan.seed,
+            "noise": config.scan.noise_for(sensor),
+            "dof": config.metric.dof,
+            "w1": config.metric.w1,
+            "association": config.metric.association,
+            "starts": config.mde.trials if register else 0,
+            "sigma_t": config.mde.sigma_t,
+            "sigma_r_deg": config.mde.sigma_r,
+            "max_correspondence_distance": config.mde.max_correspondence_distance,
+            "max_iterations": config.mde.max_iterations,
+            "registration": "small_gicp PLANE_ICP" if register else None,
+            **map.association_params,
+        },
+    )
+
+
+def check_run(run, config: Config | None = None) -> None:
+    """RunError in one line when ``run`` cannot be audited before any scan is read: it
+    cannot be opened (config's run section), or it has no reference poses."""
+    with Run(run, (DEFAULTS if config is None else config).run) as opened:
+        _check_poses(opened)
+
+
+def _check_poses(run: Run) -> None:
+    if run.reference is None:
+        raise RunError(f"{run.path}: the run has no reference poses: an audit measures each scan at its pose")
+
+
+def _scan_count(run: Run) -> int | None:
+    """The run's scan count without reading them: a bag's message count on its scans
+    topic, a folder's scan files."""
+    described = run.describe()
+    if "topics" in described:
+        return described["topics"].get(described.get("scans_topic"), {}).get("messages")
+    folder = getattr(run.source, "folder", None)
+    return len(folder.scans) if folder is not None else None

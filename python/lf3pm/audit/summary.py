@@ -1,0 +1,150 @@
+"""What an audit's scans say together: how each prediction ranks the scans by real error,
+how often the real error falls inside the predicted interval, the simulated/real metric
+ratio and the scans where the prediction is furthest off."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from lf3pm.audit.record import ScanAudit, _json
+
+#: The predictions ranked against real errors: ScanAudit field -> what it is.
+PREDICTIONS = {
+    "real_q_n": "q_n of the recorded scan",
+    "real_q_min": "q_min of the recorded scan",
+    "real_q_max": "q_max of the recorded scan",
+    "predicted_error_m": "predicted localization error (m)",
+    "sim_q_n": "q_n of the simulated scan",
+}
+#: The real errors: ScanAudit field -> what it is.
+REAL_ERRORS = {
+    "error_m": "registration error against the reference (mean over converged starts, m)",
+    "spread_m": "spread of the converged registrations (RMS, m)",
+}
+#: How many scans the summary lists where the prediction is furthest off.
+FURTHEST_OFF = 5
+
+
+@dataclass(frozen=True)
+class Correlation:
+    """Spearman's rank correlation of one prediction with one real error over the scans
+    where both are finite (``rho`` NaN below three such scans or with a constant side)."""
+
+    prediction: str
+    real_error: str
+    rho: float
+    scans: int
+
+
+@dataclass(frozen=True)
+class OffScan:
+    """A scan where the predicted error is furthest from the real one: ``log_ratio`` is
+    ln(predicted / real error against the reference)."""
+
+    index: int
+    name: str
+    stamp: float
+    x: float
+    y: float
+    z: float
+    yaw: float
+    predicted_error_m: float
+    error_m: float
+    log_ratio: float
+
+
+@dataclass(frozen=True)
+class AuditSummary:
+    """The summary of an audit's scans (see the module docstring). ``inside_interval``:
+    per real error, the share of scans (with a prediction and that error) whose error lies
+    within the predicted [10 %, 90 %] interval, with ``inside_scans`` such scans;
+    ``ratio_*``: sim_q_n / real_q_n over the scans where both are finite (median, 10 %
+    and 90 % quantiles)."""
+
+    scans: int
+    correlations: tuple
+    inside_interval: dict
+    inside_scans: dict
+    ratio_scans: int
+    ratio_median: float
+    ratio_p10: float
+    ratio_p90: float
+    furthest_off: tuple
+
+    def to_dict(self) -> dict:
+        return _json_tree(asdict(self))
+
+    def rho(self, prediction: str, real_error: str) -> float:
+        """The rank correlation of ``prediction`` with ``real_error`` (ScanAudit field names)."""
+        return next(c.rho for c in self.correlations if (c.prediction, c.real_error) == (prediction, real_error))
+
+
+def _json_tree(value):
+    if isinstance(value, dict):
+        return {k: _json_tree(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_tree(v) for v in value]
+    return _json(value)
+
+
+def spearman(a, b) -> tuple[float, int]:
+    """Spearman's rho of ``a`` and ``b`` over the pairs where both are finite, and their
+    number; rho is NaN below three pairs or when a side is constant."""
+    from scipy.stats import spearmanr
+
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    keep = np.isfinite(a) & np.isfinite(b)
+    n = int(keep.sum())
+    if n < 3 or np.ptp(a[keep]) == 0 or np.ptp(b[keep]) == 0:
+        return math.nan, n
+    return float(spearmanr(a[keep], b[keep]).statistic), n
+
+
+def summarize(records: Sequence[ScanAudit]) -> AuditSummary:
+    """The summary of ``records`` (one per audited scan)."""
+    column = {
+        name: np.array([getattr(r, name) for r in records], dtype=np.float64)
+        for name in (*PREDICTIONS, *REAL_ERRORS, "predicted_error_lo_m", "predicted_error_hi_m", "q_n_ratio")
+    }
+    correlations = []
+    for real in REAL_ERRORS:
+        for prediction in PREDICTIONS:
+            rho, n = spearman(column[prediction], column[real])
+            correlations.append(Correlation(prediction, real, rho, n))
+    lo, hi = column["predicted_error_lo_m"], column["predicted_error_hi_m"]
+    inside, inside_scans = {}, {}
+    for real in REAL_ERRORS:
+        error = column[real]
+        keep = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(error)
+        inside_scans[real] = int(keep.sum())
+        within = (error[keep] >= lo[keep]) & (error[keep] <= hi[keep])
+        inside[real] = float(within.mean()) if keep.any() else math.nan
+    ratio = column["q_n_ratio"][np.isfinite(column["q_n_ratio"])]
+    quantiles = np.quantile(ratio, [0.5, 0.1, 0.9]) if len(ratio) else [math.nan] * 3
+    return AuditSummary(
+        scans=len(records),
+        correlations=tuple(correlations),
+        inside_interval=inside,
+        inside_scans=inside_scans,
+        ratio_scans=int(len(ratio)),
+        ratio_median=float(quantiles[0]),
+        ratio_p10=float(quantiles[1]),
+        ratio_p90=float(quantiles[2]),
+        furthest_off=tuple(furthest_off(records)),
+    )
+
+
+def furthest_off(records: Sequence[ScanAudit], count: int = FURTHEST_OFF) -> list[OffScan]:
+    """The ``count`` scans with the largest |ln(predicted / real error against the
+    reference)|, largest first (scans without both left out)."""
+    off = []
+    for r in records:
+        if r.predicted_error_m > 0 and r.error_m > 0 and math.isfinite(r.predicted_error_m * r.error_m):
+            ratio = math.log(r.predicted_error_m / r.error_m)
+            off.append(OffScan(r.index, r.name, r.stamp, r.x, r.y, r.z, r.yaw, r.predicted_error_m, r.error_m, ratio))
+    off.sort(key=lambda o: (-abs(o.log_ratio), o.index))
+    return off[:count]

@@ -1,0 +1,135 @@
+"""`lf3pm audit`: a recorded run against its map, scan by scan (lf3pm.audit, docs/real.md)."""
+
+from __future__ import annotations
+
+import json
+import shlex
+from pathlib import Path
+
+import typer
+
+from lf3pm.cli._common import (
+    CONFIG_OPTION,
+    MAP_PATHS,
+    SCAN_PATHS,
+    app,
+    check_output,
+    configure,
+    console,
+    map_loading,
+    option,
+    progress_bar,
+    section_paths,
+    user_errors,
+)
+
+
+@app.command()
+def audit(
+    ctx: typer.Context,
+    run: Path = typer.Argument(
+        ..., metavar="RUN", help="A recorded run with reference poses: a folder of scans with a poses file, or a bag."
+    ),
+    map_path: Path = typer.Option(..., "--map", metavar="MAP", help="The map, in the frame of the run's poses."),
+    config: Path | None = CONFIG_OPTION,
+    sensor: str | None = option("sensor", help="The sensor of the simulated scans and predictions (preset or YAML)."),
+    every: int | None = typer.Option(
+        None, min=1, metavar="N", help="Audit every N-th scan (by its index in the run; default: 1)."
+    ),
+    starts: int | None = option("mde.trials", "--starts", help="Disturbed registration starts per scan."),
+    seed: int | None = option("scan.seed", help="Seed of the simulated scans' noise and the starts."),
+    noise: float | None = option("scan.noise", help="Range noise of the simulated scans (m; default: the sensor's)."),
+    scan_voxel: float | None = option("scan.scan_voxel"),
+    map_voxel: float | None = option("map.voxel"),
+    knn: int | None = option("map.knn"),
+    plane_threshold: float | None = option("map.plane_threshold"),
+    max_neighbor_distance: float | None = option("map.max_neighbor_distance"),
+    threads: int | None = option("scan.threads"),
+    scans_topic: str | None = option("run.scans_topic"),
+    poses_topic: str | None = option("run.poses_topic"),
+    max_pose_gap: float | None = option("run.max_pose_gap"),
+    lidar_time_offset: float | None = option("run.lidar_time_offset"),
+    registration: bool = typer.Option(True, help="Register each scan (--no-registration: the metric part only)."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object: per-scan records and the summary."),
+    out: Path | None = typer.Option(
+        None, "-o", "--out", metavar="DIR", help="Write audit.csv, report.md and figures here."
+    ),
+):
+    """Audit a recorded run against a map: per scan at its reference pose, the metric of the
+    real scan and of the simulated one, the predicted localization error, and real
+    registration from disturbed starts (lf3pm mde's), with their rank correlations."""
+    with user_errors():
+        paths = {
+            **SCAN_PATHS,
+            **MAP_PATHS,
+            "starts": "mde.trials",
+            **section_paths("run", "scans_topic", "poses_topic", "max_pose_gap", "lidar_time_offset"),
+        }
+        cfg = configure(config, locals(), paths)
+        from lf3pm.audit import audit_run, check_run, write_audit
+        from lf3pm.map import load_map
+        from lf3pm.sensors import as_sensor
+
+        check_output(out, folder=True, parents=True)
+        chosen = as_sensor(cfg.sensor)
+        check_run(run, cfg)
+        with map_loading() as loading:
+            world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
+        with progress_bar() as step:
+            result = audit_run(
+                run,
+                world,
+                chosen,
+                cfg,
+                register=registration,
+                progress=lambda done, total: step("auditing scans", total, advance=1),
+                **({} if every is None else {"every": every}),
+            )
+        if out is not None:
+            write_audit(result, out, world.points, command_line(ctx))
+        if as_json:
+            print(json.dumps(result.to_dict()))
+            return
+        print_summary(result, out)
+
+
+def print_summary(result, out: Path | None) -> None:
+    """A few lines: scans, timing, the rank correlations with the real error, the ratio."""
+    s = result.summary
+    timing = result.to_dict()["timing"]
+    say = lambda text: console.print(text, highlight=False, soft_wrap=True)  # noqa: E731
+    say(f"audited {len(result.records)} scans of {result.run} (every {result.every}), {len(result.bad_scans)} bad")
+    say(
+        f"metric {result.metric_seconds:.1f} s ({_n(timing['metric_scans_per_second'])} scans/s), "
+        f"registration {result.registration_seconds:.1f} s ({_n(timing['registration_scans_per_second'])} scans/s)"
+    )
+    for c in s.correlations:
+        say(f"spearman {c.prediction} ~ {c.real_error}: {_n(c.rho)} ({c.scans} scans)")
+    for real, share in s.inside_interval.items():
+        say(f"{real} inside the predicted interval: {_n(share)} of {s.inside_scans[real]} scans")
+    say(f"q_n simulated/recorded: median {_n(s.ratio_median)} [10 % {_n(s.ratio_p10)}, 90 % {_n(s.ratio_p90)}]")
+    for bad in result.bad_scans:
+        say(f"bad scan: {bad.reason}")
+    if out is not None:
+        say(f"wrote {out}/ (audit.csv, report.md, along_run.png, path.png)")
+
+
+def command_line(ctx: typer.Context) -> str:
+    """The command as given, rebuilt from its parsed parameters (those left at their
+    default left out), for the report."""
+    parts = ["lf3pm", "audit"]
+    for param in ctx.command.params:
+        value = ctx.params.get(param.name)
+        if param.param_type_name == "argument":
+            parts.append(str(value))
+        elif value is None or value == param.default:
+            continue
+        elif isinstance(value, bool):
+            parts.append(param.opts[0] if value else param.secondary_opts[0])
+        else:
+            parts += [param.opts[-1] if param.opts[-1].startswith("--") else param.opts[0], str(value)]
+    return " ".join(shlex.quote(p) for p in parts)
+
+
+def _n(value) -> str:
+    return "-" if value is None or value != value else f"{value:.3g}"
