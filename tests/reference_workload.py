@@ -38,7 +38,8 @@ def evaluations(out: dict) -> None:
         for i, pose in enumerate(POSES):
             res = lf3pm.evaluate(world, pose, sensor, seed=7 + i, observations=True)
             key = f"evaluate/{sensor}/{i}"
-            out[f"{key}/metric"] = np.array([getattr(res, f) for f in lf3pm.metric.METRIC_FIELDS] + [res.m, res.hits])
+            values = [getattr(res, f) for f in lf3pm.metric.METRIC_FIELDS] + [res.m, res.hits]
+            out[f"{key}/metric"] = np.array(values + list(res.least_observable))
             for name, value in res.observations.items():
                 out[f"{key}/{name}"] = np.asarray(value)
 
