@@ -277,3 +277,21 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, case, message):
     assert got.exit_code == 2, got.output
     lines = got.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("lf3pm: error:") and message in lines[0], got.stderr
+
+
+@pytest.mark.slow
+def test_the_real_hall_run_audits_against_its_own_map():
+    """The real hall run (GPL data read in place from the shared folder), two scans, metric
+    part only: its os1-64 simulation sees the hall's geometry as the real scan does (sigma1
+    within 20 %), but the prediction is withheld (its fit is for the VLP-16 and the Mid-70)."""
+    from shared_data import shared_file
+
+    root = shared_file("real_hall_run/poses_tum.txt").parent
+    world = lf3pm.load_map(root)
+    result = audit_run(root, world, "os1-64", every=44, register=False)
+    assert [r.index for r in result.records] == [0, 44] and not result.bad_scans
+    for record in result.records:
+        assert not record.real_degenerate and not record.sim_degenerate
+        assert 0.8 < record.sim_sigma1 / record.real_sigma1 < 1.25
+        assert math.isnan(record.predicted_error_m) and "os1-64" in record.predicted_error_withheld
+    assert result.summary.ratio_scans == 2

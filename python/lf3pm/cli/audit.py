@@ -76,13 +76,19 @@ def audit(
         with map_loading() as loading:
             world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
         with progress_bar() as step:
+            read = [0]
+
+            def progress(done: int, total: int | None) -> None:
+                step("auditing scans", total, advance=done - read[0])  # bad scans skipped count as read
+                read[0] = done
+
             result = audit_run(
                 run,
                 world,
                 chosen,
                 cfg,
                 register=registration,
-                progress=lambda done, total: step("auditing scans", total, advance=1),
+                progress=progress,
                 **({} if every is None else {"every": every}),
             )
         if out is not None:
