@@ -32,6 +32,8 @@ from lf3pm.experiments.benefit.records import LIO, LOCALIZATION, StudyFolder
 def reusable(theirs: Protocol, ours: Protocol) -> dict[str, set[str]]:
     """Per case of ``ours``: what it may take from a folder run under ``theirs``: any of
     "solm", "plans", LOCALIZATION, LIO, "predictors" (the module's docstring)."""
+    if theirs.defaults != ours.defaults:  # the SOLMs and plans of every case are made otherwise
+        return {}
     theirs_cases = {c["name"]: (i, c) for i, c in enumerate(theirs.model_dump(mode="json")["cases"])}
     ours_dump = ours.model_dump(mode="json")
     same_plans = (theirs.pair_seed, theirs.guidance) == (ours.pair_seed, ours.guidance)
@@ -39,8 +41,7 @@ def reusable(theirs: Protocol, ours: Protocol) -> dict[str, set[str]]:
     out = {}
     for index, case in enumerate(ours_dump["cases"]):
         name = case["name"]
-        found = theirs_cases.get(name)
-        if found is None or found != (index, case) or theirs.defaults != ours.defaults:
+        if theirs_cases.get(name) != (index, case):
             continue
         parts = {"solm"}
         if same_plans:
