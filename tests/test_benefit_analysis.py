@@ -36,6 +36,7 @@ from lf3pm.experiments.benefit.report import redrawn_line
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURE = ROOT / "tests" / "data" / "benefit_records"
 ISSUE39 = ROOT / "results" / "benefit_issue39"
+RESULT = ROOT / "results" / "benefit"  # protocol 2's frozen run: the study's result
 FAST = AnalysisSettings(bootstrap_draws=400)
 
 
@@ -201,7 +202,7 @@ PUBLISHED = sorted(path.parent for path in (ROOT / "results").glob("*/pairs.json
 def test_a_published_report_and_summary_come_out_of_its_records(tmp_path, published):
     """Each results/ folder's report, summary and figures are what its records (and its
     protocol, where it has one) give, byte for byte: every figure traced to the records."""
-    assert ISSUE39 in PUBLISHED
+    assert ISSUE39 in PUBLISHED and RESULT in PUBLISHED
     for name in ("summary.json", "pairs.jsonl", "replays.jsonl", "protocol.yaml"):
         if (published / name).exists():
             shutil.copyfile(published / name, tmp_path / name)
@@ -262,3 +263,50 @@ def test_regenerate_judges_by_the_folders_protocol(tmp_path):
     before = read_records(FIXTURE).compared(Measure(LOCALIZATION)).by_guidance["default"]
     after = summary.compared(Measure(LOCALIZATION)).by_guidance["default"]
     assert after.failure_rate_unguided > before.failure_rate_unguided
+
+
+def _figure(value: float) -> str:
+    """A ratio as the README writes it: two decimals, two significant digits below 0.1."""
+    return f"{value:.2f}" if value >= 0.1 else f"{value:#.2g}"
+
+
+def _interval(entry: dict, digits=_figure) -> str:
+    return f"{digits(entry['ratio'])} [{digits(entry['ci'][0])}, {digits(entry['ci'][1])}]"
+
+
+def test_the_readme_states_the_published_result_as_its_records_give_it():
+    """Every figure of the README's study paragraph is results/benefit/summary.json's
+    (protocol 2's frozen run), formatted as written: a rerun or a new result that changes
+    a figure fails here until the README says it."""
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    summary = json.loads((RESULT / "summary.json").read_text())
+    protocol = (RESULT / "protocol.yaml").read_text()
+    assert summary["protocol_sha256"] in protocol and summary["pair_seed"] == 20261205
+    maps = summary["map_analysis"]
+    loc, lio = maps["localization"], maps["lio"]
+
+    def group(rows, name):
+        return next(row for row in rows if row["name"] == name)
+
+    at_risk = group(loc["over_maps"], "at risk")
+    per_map = ", ".join(_figure(row["ratio"]) for row in loc["at_risk_by_map"][:-1])
+    last = _figure(loc["at_risk_by_map"][-1]["ratio"])
+    lio_risk, lio_none = group(lio["over_maps"], "at risk"), group(lio["over_maps"], "no risk")
+    failures = group(lio["failures"], "at risk")
+    both = group(lio["both_succeed"], "at risk")
+    stated = [
+        f"44 pairs on {at_risk['maps']} maps came out at risk",
+        f"is {per_map} and {last} (in that order)",
+        f"over the 8 maps **{_interval(at_risk)}**",
+        f"{at_risk['maps_below_1']} of 8 maps below 1, Wilcoxon p over maps {at_risk['wilcoxon_p']:.2g}",
+        f"Under the LIO, {_interval(lio_risk)} over maps (p {lio_risk['wilcoxon_p']:.2g})",
+        f"failed (APE > 1 m) on {failures['both'] + failures['unguided_only']} of 44 pairs, the guided "
+        f"one's on {failures['both'] + failures['guided_only']} (McNemar p {failures['mcnemar_p']:.0e}",
+        f"where both held ({both['pairs']} pairs) {_interval(both)}",
+        f"localization ({_interval(group(loc['over_maps'], 'no risk'))})",
+        f"hurt the LIO: {_interval(lio_none)}**, worse beyond seed noise on {lio['no_harm']['tail_worse']} "
+        f"of {lio['no_harm']['tail_pairs']} pairs",
+    ]
+    assert at_risk["pairs"] == 44 and at_risk["maps"] == 8
+    for text in stated:
+        assert text.replace("e-0", "e-") in readme, text

@@ -234,6 +234,23 @@ def test_the_variants_are_protocols_this_lf3pm_runs():
         assert (variant.pair_seed, variant.seeds, variant.lio.plans) == (20261205, 3, "default"), name
 
 
+def test_the_variants_inputs_give_the_variants():
+    """config/benefit_protocol_variants/inputs: the cases files and configurations the
+    variants are run with (docs/benefit.md's table) give each variant's protocol."""
+    from lf3pm.config import load_config
+    from lf3pm.experiments.benefit.case_file import load_cases
+
+    folder = FROZEN.parent / "benefit_protocol_variants"
+    for name in ("corridor_vlp16", "corridor_first_zones"):
+        cases = load_cases(folder / "inputs" / f"cases_{name}.yaml", check_files=False)
+        made = study_protocol(StudySettings(FROZEN_RUN.benefit, cases=cases))
+        assert made.digest() == read_protocol(folder / f"{name}.yaml").digest(), name
+    for name in ("genz_voxels_0_5", "genz_own_covariance"):
+        config = load_config(folder / "inputs" / f"{name}.config.yaml")
+        made = study_protocol(StudySettings(FROZEN_RUN.benefit, config.replay))
+        assert made.digest() == read_protocol(folder / f"{name}.yaml").digest(), name
+
+
 def test_frozen_alone_runs_the_frozen_protocol(tmp_path):
     """`--frozen FILE` takes FILE's seeds, pair seed and LIO plans where no flag says
     otherwise; a flag that does is refused, naming the field."""
