@@ -520,6 +520,15 @@ class RunConfig(Section):
         description="Longest time between two reference poses across which a scan's pose is interpolated (s); "
         "a scan in a longer gap has no pose.",
     )
+    # At a walking pace several metres of the run either side: a scan's own surfaces are
+    # then in its map only as other scans saw them from elsewhere.
+    exclude_window: float = Field(
+        5.0,
+        ge=0,
+        le=1e6,
+        description="A map from the run itself (lf3pm audit --map self): the scans within this time of an "
+        "audited scan stay out of its map (s; 0: the scan itself alone).",
+    )
 
     @model_validator(mode="after")
     def _one_rotation(self):

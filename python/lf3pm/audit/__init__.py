@@ -7,6 +7,8 @@ localization error, and real registration from disturbed starts; their summary.
 - :func:`summarize` -- :class:`AuditSummary`: rank correlations of each prediction with
   each real error, the share inside the predicted interval, the simulated/real ratio,
   the scans furthest off;
+- :class:`SelfMap` -- the map from the run's own scans (``--map self``), each audited
+  scan's without the scans near it in time;
 - :func:`write_audit` -- the CSV, the Markdown report and the figures (``lf3pm audit -o``).
 """
 
@@ -14,14 +16,17 @@ from lf3pm.audit.record import ScanAudit
 from lf3pm.audit.report import write_audit
 from lf3pm.audit.run_audit import RunAudit, audit_run, check_run
 from lf3pm.audit.scan_audit import audit_scan, spread
+from lf3pm.audit.self_map import SELF, SelfMap
 from lf3pm.audit.summary import AuditSummary, Correlation, OffScan, spearman, summarize
 
 __all__ = [
+    "SELF",
     "AuditSummary",
     "Correlation",
     "OffScan",
     "RunAudit",
     "ScanAudit",
+    "SelfMap",
     "audit_run",
     "audit_scan",
     "check_run",

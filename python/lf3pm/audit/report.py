@@ -15,6 +15,7 @@ from lf3pm.atomic import atomic_write
 from lf3pm.audit.figures import along_run_figure, path_figure
 from lf3pm.audit.record import csv_columns
 from lf3pm.audit.run_audit import RunAudit
+from lf3pm.audit.self_map import SELF
 from lf3pm.audit.summary import PREDICTIONS, REAL_ERRORS
 
 #: The files of an audit folder.
@@ -52,6 +53,15 @@ def _num(value, fmt: str = ".3g") -> str:
     return "-" if value is None or (isinstance(value, float) and not math.isfinite(value)) else format(value, fmt)
 
 
+def _map_line(described: dict) -> str:
+    if described["source"] == SELF:
+        return (
+            f"- map: the run's own {described['scans']} scans at their reference poses ({described['voxel']:g} m "
+            f"voxels), each audited scan's without the scans within {described['exclude_window_s']:g} s of it"
+        )
+    return f"- map: {described['source']} ({described['points']} points, sha256 {described['sha256'][:12]})"
+
+
 def report_text(audit: RunAudit, command: str = "") -> str:
     """The Markdown report of ``audit``."""
     s, records = audit.summary, audit.records
@@ -61,12 +71,13 @@ def report_text(audit: RunAudit, command: str = "") -> str:
         "",
         f"Command: `{command}`" if command else "",
         "",
-        f"- map: {audit.map['source']} ({audit.map['points']} points, sha256 {audit.map['sha256'][:12]})",
+        _map_line(audit.map),
         f"- sensor (simulated scans, predictions): {audit.sensor}",
         f"- scans audited: {len(records)} (every {audit.every}), bad scans skipped: {len(audit.bad_scans)}",
         f"- settings: {', '.join(f'{k} {v}' for k, v in audit.params.items())}",
         f"- time: metric part {audit.metric_seconds:.1f} s ({_num(timing['metric_scans_per_second'])} scans/s), "
-        f"registration {audit.registration_seconds:.1f} s ({_num(timing['registration_scans_per_second'])} scans/s)",
+        f"registration {audit.registration_seconds:.1f} s ({_num(timing['registration_scans_per_second'])} scans/s)"
+        + (f", each scan's map {audit.map_seconds:.1f} s" if audit.map_seconds else ""),
     ]
     if _same_path(audit.map["source"], audit.run):
         lines.append(

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from lf3pm.audit.record import ScanAudit
 from lf3pm.audit.scan_audit import audit_scan
+from lf3pm.audit.self_map import SelfMap
 from lf3pm.audit.summary import AuditSummary, summarize
 from lf3pm.config import DEFAULTS, Config
 from lf3pm.errors import Lf3pmError, RunError
@@ -22,7 +24,8 @@ class RunAudit:
     """An audit of a run: one :class:`ScanAudit` per audited scan, the run's bad scans
     (skipped, with the line saying why), the :class:`AuditSummary`, the time spent
     (``metric_seconds``: the real and simulated metric with the prediction, over every
-    audited scan; ``registration_seconds``: the registrations) and what produced it."""
+    audited scan; ``registration_seconds``: the registrations; ``map_seconds``: building
+    each scan's map, for a map from the run itself) and what produced it."""
 
     run: str
     map: dict
@@ -34,6 +37,7 @@ class RunAudit:
     metric_seconds: float
     registration_seconds: float
     params: dict = field(default_factory=dict)
+    map_seconds: float = 0.0
 
     def to_dict(self) -> dict:
         """JSON-ready: the per-scan records, the bad scans and the summary."""
@@ -49,6 +53,7 @@ class RunAudit:
                 "registration_seconds": self.registration_seconds,
                 "metric_scans_per_second": _rate(scans, self.metric_seconds),
                 "registration_scans_per_second": _rate(scans, self.registration_seconds),
+                "map_seconds": self.map_seconds,
             },
             "summary": self.summary.to_dict(),
             "bad_scans": [{"index": b.index, "name": b.name, "reason": b.reason} for b in self.bad_scans],
@@ -62,7 +67,7 @@ def _rate(count: int, seconds: float) -> float | None:
 
 def audit_run(
     run,
-    map: Map | str,
+    map: Map | SelfMap | str,
     sensor: Sensor | str = DEFAULTS.sensor,
     config: Config | None = None,
     *,
@@ -72,29 +77,38 @@ def audit_run(
 ) -> RunAudit:
     """Audits every ``every``-th scan (by its index in the run, bad scans counted) of the
     recorded ``run`` (a path, read with ``config``'s run section, bad scans skipped and
-    kept) against ``map`` (in the frame of the run's reference poses) at its reference
-    pose: :func:`lf3pm.audit.audit_scan` with ``sensor`` (a preset, a YAML file or a
-    Sensor) and ``config``'s scan, metric and mde sections. ``progress(done, total)`` is
-    called after each scan read (total: the run's scans, None where unknown).
-    ``register=False`` leaves the registrations out. A run without reference poses, or
-    whose scans are all bad, raises RunError."""
+    kept) against ``map`` (in the frame of the run's reference poses; a :class:`SelfMap`:
+    each scan against the run's own scans outside its window) at its reference pose:
+    :func:`lf3pm.audit.audit_scan` with ``sensor`` (a preset, a YAML file or a Sensor) and
+    ``config``'s scan, metric and mde sections. ``progress(done, total)`` is called after
+    each scan read (total: the run's scans, None where unknown). ``register=False`` leaves
+    the registrations out. A run without reference poses, or whose scans are all bad,
+    raises RunError."""
     config = DEFAULTS if config is None else config
     if not (isinstance(every, int) and every >= 1):
         raise Lf3pmError(f"every must be a whole number >= 1, got {every!r}")
     sensor = as_sensor(sensor)
-    map = as_map(map)
+    own = isinstance(map, SelfMap)
+    map = map if own else as_map(map)
     records: list[ScanAudit] = []
+    map_seconds = 0.0
     with Run(run, config.run, skip_bad=True) as opened:
         _check_poses(opened)
-        total = _scan_count(opened)
-        target = RegistrationTarget(map, threads=config.scan.threads) if register else None
+        total = opened.scan_count()
+        target = RegistrationTarget(map, threads=config.scan.threads) if register and not own else None
         first = None
         seen = 0
         for scan in opened.scans():
             if scan.index % every == 0:
                 first = scan.stamp if first is None else first
+                world = map
+                if own:  # this scan's map, and its registration target, without the scans near it
+                    began = time.perf_counter()
+                    world = map.around(scan.stamp)
+                    target = RegistrationTarget(world, threads=config.scan.threads) if register else None
+                    map_seconds += time.perf_counter() - began
                 records.append(
-                    audit_scan(map, scan, sensor, config, target=target, first_stamp=first, register=register)
+                    audit_scan(world, scan, sensor, config, target=target, first_stamp=first, register=register)
                 )
             seen = scan.index + 1
             if progress is not None:
@@ -125,8 +139,9 @@ def audit_run(
             "max_correspondence_distance": config.mde.max_correspondence_distance,
             "max_iterations": config.mde.max_iterations,
             "registration": "small_gicp PLANE_ICP" if register else None,
-            **map.association_params,
+            **(map.config.map.association_params() if own else map.association_params),
         },
+        map_seconds=map_seconds,
     )
 
 
@@ -140,13 +155,3 @@ def check_run(run, config: Config | None = None) -> None:
 def _check_poses(run: Run) -> None:
     if run.reference is None:
         raise RunError(f"{run.path}: the run has no reference poses: an audit measures each scan at its pose")
-
-
-def _scan_count(run: Run) -> int | None:
-    """The run's scan count without reading them: a bag's message count on its scans
-    topic, a folder's scan files."""
-    described = run.describe()
-    if "topics" in described:
-        return described["topics"].get(described.get("scans_topic"), {}).get("messages")
-    folder = getattr(run.source, "folder", None)
-    return len(folder.scans) if folder is not None else None

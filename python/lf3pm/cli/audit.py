@@ -30,7 +30,14 @@ def audit(
     run: Path = typer.Argument(
         ..., metavar="RUN", help="A recorded run with reference poses: a folder of scans with a poses file, or a bag."
     ),
-    map_path: Path = typer.Option(..., "--map", metavar="MAP", help="The map, in the frame of the run's poses."),
+    map_path: Path = typer.Option(
+        ...,
+        "--map",
+        metavar="MAP",
+        help="The map, in the frame of the run's poses; 'self': the run's own scans at their poses, "
+        "each scan's map without the scans within --exclude-window of it (a file named self: ./self).",
+    ),
+    exclude_window: float | None = option("run.exclude_window", metavar="SECONDS"),
     config: Path | None = CONFIG_OPTION,
     sensor: str | None = option("sensor", help="The sensor of the simulated scans and predictions (preset or YAML)."),
     every: int | None = typer.Option(
@@ -63,18 +70,28 @@ def audit(
             **SCAN_PATHS,
             **MAP_PATHS,
             "starts": "mde.trials",
-            **section_paths("run", "scans_topic", "poses_topic", "max_pose_gap", "lidar_time_offset"),
+            **section_paths("run", "scans_topic", "poses_topic", "max_pose_gap", "lidar_time_offset", "exclude_window"),
         }
         cfg = configure(config, locals(), paths)
-        from lf3pm.audit import audit_run, check_run, write_audit
+        from lf3pm.audit import SELF, SelfMap, audit_run, check_run, write_audit
         from lf3pm.map import load_map
         from lf3pm.sensors import as_sensor
 
         check_output(out, folder=True, parents=True)
         chosen = as_sensor(cfg.sensor)
         check_run(run, cfg)
-        with map_loading() as loading:
-            world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
+        if str(map_path) == SELF:
+            with map_loading() as loading:
+                world = SelfMap.of_run(
+                    run,
+                    cfg,
+                    progress=lambda done, total: loading(f"reading the run for its map: scan {done} of {total or '?'}"),
+                )
+            map_points = world.whole()
+        else:
+            with map_loading() as loading:
+                world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
+            map_points = world.points
         with progress_bar() as step:
             read = [0]
 
@@ -92,7 +109,7 @@ def audit(
                 **({} if every is None else {"every": every}),
             )
         if out is not None:
-            write_audit(result, out, world.points, command_line(ctx))
+            write_audit(result, out, map_points, command_line(ctx))
         if as_json:
             print(json.dumps(result.to_dict()))
             return

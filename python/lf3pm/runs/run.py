@@ -85,6 +85,15 @@ class Run:
         """What the source is: its kind and, for a bag, its topics and those read."""
         return {"path": str(self.path), **self.source.describe()}
 
+    def scan_count(self) -> int | None:
+        """The run's scans without reading them (bad ones counted): a bag's message count
+        on its scans topic, a folder's scan files; None where the source cannot say."""
+        described = self.describe()
+        if "topics" in described:
+            return described["topics"].get(described.get("scans_topic"), {}).get("messages")
+        folder = getattr(self.source, "folder", None)
+        return len(folder.scans) if folder is not None else None
+
     @property
     def reference(self) -> PoseTrack | None:
         """The reference poses (world-from-body), read on first use; None when the run has none."""
