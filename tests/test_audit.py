@@ -13,6 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from analytic_scenes import box_room
+from recorded_runs import pillar_room
 from typer.testing import CliRunner
 
 import lf3pm
@@ -34,9 +35,7 @@ HALF = (6.0, 4.0, 1.5)
 @pytest.fixture(scope="module")
 def room():
     """A 12 x 8 x 3 m box room with a pillar (so no symmetry), its map indexed."""
-    pillar = box_room((0.3, 0.3, 1.5), spacing=0.1) + [2.5, 1.5, 0.0]
-    points = np.unique(np.round(np.vstack([box_room(HALF, spacing=0.1), pillar]), 9), axis=0)
-    return lf3pm.load_map(np.ascontiguousarray(points))
+    return pillar_room()
 
 
 def stream_bag(world, folder, *, moving: bool, noise: float | None, sensor="vlp16"):

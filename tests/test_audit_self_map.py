@@ -8,31 +8,17 @@ import json
 
 import numpy as np
 import pytest
-from analytic_scenes import box_room, grid_plane
+from analytic_scenes import grid_plane
+from recorded_runs import pillar_room, simulated_run, write_run
 from typer.testing import CliRunner
 
-import lf3pm
 from lf3pm.audit import SelfMap, audit_run
 from lf3pm.cli import app
 from lf3pm.config import DEFAULTS, ConfigError, configured
 from lf3pm.errors import RunError
 from lf3pm.io.voxel import voxel_downsample
 from lf3pm.metric import evaluate_points
-from lf3pm.pose import pose_matrix
 from lf3pm.runs import Run
-from lf3pm.scan.scan_simulator import simulate_scan
-from lf3pm.sensors import get_sensor
-
-
-def write_run(folder, scans, xs, stamps):
-    """A run folder: scan i (points in the LiDAR frame) at stamp i, its pose at (xs[i], 0, 0)
-    facing +x, in TUM form."""
-    (folder / "scans").mkdir(parents=True)
-    for points, t in zip(scans, stamps, strict=True):
-        np.save(folder / "scans" / f"{t:.1f}.npy", np.asarray(points, dtype=np.float64))
-    lines = [f"{t:.1f} {x} 0 0 0 0 0 1" for x, t in zip(xs, stamps, strict=True)]
-    (folder / "poses_tum.txt").write_text("\n".join(lines) + "\n")
-    return folder
 
 
 @pytest.fixture
@@ -40,7 +26,8 @@ def patches(tmp_path):
     """Six scans 1 s apart, each a flat 2 x 2 m patch 10 m further along x than the last:
     whose patches a map holds says which scans it holds."""
     patch = grid_plane((0.0, -1.0, -1.0), np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0]), 2.0, 2.0, 0.1)
-    return write_run(tmp_path / "run", [patch] * 6, [10.0 * i for i in range(6)], [float(i) for i in range(6)])
+    poses = [(10.0 * i, 0.0, 0.0) for i in range(6)]
+    return write_run(tmp_path / "run", [patch] * 6, poses, [float(i) for i in range(6)])
 
 
 def within(window: float):
@@ -73,15 +60,8 @@ def test_a_window_that_leaves_no_scan_or_is_negative_is_one_line(patches):
 @pytest.fixture(scope="module")
 def room_run(tmp_path_factory):
     """Five noise-free VLP-16 scans of a box room with a pillar, 1 s apart along x."""
-    pillar = box_room((0.3, 0.3, 1.5), spacing=0.1) + [2.5, 1.5, 0.0]
-    room = lf3pm.load_map(np.unique(np.round(np.vstack([box_room((6.0, 4.0, 1.5), 0.1), pillar]), 9), axis=0))
-    sensor = get_sensor("vlp16")
-    xs = [-3.0, -2.0, -1.0, 0.0, 1.0]
-    scans = [
-        simulate_scan(room, pose_matrix((x, 0.0, 0.0, 0.0)), sensor.directions, sensor.min_range, sensor.max_range)
-        for x in xs
-    ]
-    return write_run(tmp_path_factory.mktemp("room"), [s.sensor_points for s in scans], xs, [0.0, 1.0, 2.0, 3.0, 4.0])
+    poses = [(x, 0.0, 0.0) for x in (-3.0, -2.0, -1.0, 0.0, 1.0)]
+    return simulated_run(tmp_path_factory.mktemp("room"), pillar_room(), poses, [0.0, 1.0, 2.0, 3.0, 4.0])[0]
 
 
 def test_the_audit_measures_each_scan_against_its_own_map(room_run):

@@ -40,7 +40,8 @@ def _column(records, name: str) -> np.ndarray:
 
 
 def along_run_figure(records, path: Path) -> None:
-    """Top: the real errors (against the reference, the converged poses' spread) and the
+    """Top: the real errors (against the reference, the converged poses' spread, map
+    localization and KISS-ICP along the run where they ran) and the
     predicted localization error with its [10 %, 90 %] band, in m against time; middle: q_n
     of the recorded and of the simulated scan, and the recorded scan's q_min and q_max;
     bottom: the simulated/real q_n ratio. Log scales; a missing value leaves a gap."""
@@ -49,6 +50,12 @@ def along_run_figure(records, path: Path) -> None:
     fig, (top, middle, bottom) = plt.subplots(3, 1, figsize=(9, 8.5), sharex=True)
     top.plot(t, _column(records, "error_m"), "o-", ms=3, label="real error against the reference (mean over starts)")
     top.plot(t, _column(records, "spread_m"), "s-", ms=3, label="spread of the converged registrations (RMS)")
+    for name, style, label in (
+        ("tracking_error_m", "d-", "map localization along the run"),
+        ("odometry_error_m", "x:", "KISS-ICP along the run"),
+    ):
+        if np.isfinite(_column(records, name)).any():
+            top.plot(t, _column(records, name), style, ms=3, label=label)
     predicted = _column(records, "predicted_error_m")
     if np.isfinite(predicted).any():
         top.plot(t, predicted, "k--", label="predicted localization error")

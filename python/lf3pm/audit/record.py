@@ -30,7 +30,10 @@ class ScanAudit:
     and ``spread_m`` / ``spread_deg``: the RMS distance of the converged poses from their
     mean (translation; rotation from their chordal mean), which does not depend on the
     reference pose's own error. ``mde``: the mean squared twist error over every start, as
-    ``lf3pm mde`` reports it. ``*_error`` fields (text) say why a part could not be computed.
+    ``lf3pm mde`` reports it. ``tracking_error_m`` and ``odometry_error_m``: at this scan,
+    the error against the reference of map localization tracking along the whole run and of
+    KISS-ICP along it (lf3pm.audit.tracks). ``*_error`` fields (text) say why a part could
+    not be computed.
     A quantity that could not be computed (a degenerate pose's q, no converged start) is NaN.
     """
 
@@ -81,6 +84,8 @@ class ScanAudit:
     spread_m: float = NAN
     spread_deg: float = NAN
     registration_error: str | None = None
+    tracking_error_m: float = NAN
+    odometry_error_m: float = NAN
     metric_seconds: float = NAN
     registration_seconds: float = NAN
     pose: tuple = field(default=(), repr=False)  # 4 x 4 rows

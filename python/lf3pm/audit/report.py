@@ -100,6 +100,16 @@ def report_text(audit: RunAudit, command: str = "") -> str:
     withheld = Counter(r.predicted_error_withheld for r in records if r.predicted_error_withheld)
     for reason, count in withheld.most_common():
         lines.append(f"- prediction withheld on {count} scans: {reason}")
+    lines += ["", "## Along the run (every scan)", ""]
+    for t in audit.tracks:
+        ape = t.ape
+        lines.append(
+            f"- {t.method}: APE against the reference rmse {_num(ape['rmse'])} m, median {_num(ape['median'])} m, "
+            f"max {_num(ape['max'])} m over {ape['count']} scans ({t.skipped} kept at the prediction; "
+            f"{t.seconds:.1f} s)"
+        )
+    if audit.tracks_withheld:
+        lines.append(f"- not run: {audit.tracks_withheld}")
     lines += [
         "",
         "## Simulated / recorded q_n",

@@ -5,12 +5,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from lf3pm.audit.record import ScanAudit
 from lf3pm.audit.scan_audit import audit_scan
 from lf3pm.audit.self_map import SelfMap
 from lf3pm.audit.summary import AuditSummary, summarize
+from lf3pm.audit.tracks import track_localization, track_odometry
 from lf3pm.config import DEFAULTS, Config
 from lf3pm.errors import Lf3pmError, RunError
 from lf3pm.map import Map, as_map
@@ -25,7 +26,9 @@ class RunAudit:
     (skipped, with the line saying why), the :class:`AuditSummary`, the time spent
     (``metric_seconds``: the real and simulated metric with the prediction, over every
     audited scan; ``registration_seconds``: the registrations; ``map_seconds``: building
-    each scan's map, for a map from the run itself) and what produced it."""
+    each scan's map, for a map from the run itself) and what produced it; ``tracks``: map
+    localization and KISS-ICP along the whole run (lf3pm.audit.tracks), or none, with
+    ``tracks_withheld`` saying why."""
 
     run: str
     map: dict
@@ -38,6 +41,8 @@ class RunAudit:
     registration_seconds: float
     params: dict = field(default_factory=dict)
     map_seconds: float = 0.0
+    tracks: tuple = ()
+    tracks_withheld: str | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready: the per-scan records, the bad scans and the summary."""
@@ -54,11 +59,32 @@ class RunAudit:
                 "metric_scans_per_second": _rate(scans, self.metric_seconds),
                 "registration_scans_per_second": _rate(scans, self.registration_seconds),
                 "map_seconds": self.map_seconds,
+                "tracks_seconds": math.fsum(t.seconds for t in self.tracks),
             },
+            "tracks": [t.to_dict() for t in self.tracks],
+            "tracks_withheld": self.tracks_withheld,
             "summary": self.summary.to_dict(),
             "bad_scans": [{"index": b.index, "name": b.name, "reason": b.reason} for b in self.bad_scans],
             "scans": [r.to_dict() for r in self.records],
         }
+
+
+#: The phases an audit's progress names.
+AUDITING, TRACKING_PHASE, ODOMETRY_PHASE = "auditing scans", "localization along the run", "KISS-ICP along the run"
+
+
+def _tracks_withheld(register: bool, track: bool, own: bool) -> str | None:
+    if not track:
+        return "not asked for"
+    if not register:
+        return "registrations left out"
+    if own:
+        return "a map from the run itself is built per audited scan; tracking needs one map"
+    return None
+
+
+def _phase(progress, phase: str):
+    return None if progress is None else (lambda done, total: progress(done, total, phase))
 
 
 def _rate(count: int, seconds: float) -> float | None:
@@ -73,16 +99,20 @@ def audit_run(
     *,
     every: int = 1,
     register: bool = True,
-    progress: Callable[[int, int | None], None] | None = None,
+    track: bool = True,
+    progress: Callable[[int, int | None, str], None] | None = None,
 ) -> RunAudit:
     """Audits every ``every``-th scan (by its index in the run, bad scans counted) of the
     recorded ``run`` (a path, read with ``config``'s run section, bad scans skipped and
     kept) against ``map`` (in the frame of the run's reference poses; a :class:`SelfMap`:
     each scan against the run's own scans outside its window) at its reference pose:
     :func:`lf3pm.audit.audit_scan` with ``sensor`` (a preset, a YAML file or a Sensor) and
-    ``config``'s scan, metric and mde sections. ``progress(done, total)`` is called after
-    each scan read (total: the run's scans, None where unknown). ``register=False`` leaves
-    the registrations out. A run without reference poses, or whose scans are all bad,
+    ``config``'s scan, metric and mde sections. ``register=False`` leaves
+    the registrations out. ``track``: map localization and KISS-ICP along the whole run
+    as well (:mod:`lf3pm.audit.tracks`; each scan's errors into its record), not with
+    registrations left out or a map from the run itself. ``progress(read, total, phase)``
+    is called after each scan read in each phase (total: the run's scans, None where
+    unknown). A run without reference poses, or whose scans are all bad,
     raises RunError."""
     config = DEFAULTS if config is None else config
     if not (isinstance(every, int) and every >= 1):
@@ -112,10 +142,20 @@ def audit_run(
                 )
             seen = scan.index + 1
             if progress is not None:
-                progress(seen, total)
+                progress(seen, total, AUDITING)
         bad: tuple[BadScan, ...] = tuple(opened.bad_scans)
     if not records:
         raise RunError(f"{run}: no scan to audit ({len(bad)} bad, every {every})")
+    tracks, withheld = (), _tracks_withheld(register, track, own)
+    if withheld is None:
+        tracks = (
+            track_localization(run, map, sensor, config, target=target, progress=_phase(progress, TRACKING_PHASE)),
+            track_odometry(run, sensor, config, progress=_phase(progress, ODOMETRY_PHASE)),
+        )
+        records = [
+            replace(r, tracking_error_m=tracks[0].error_at(r.stamp), odometry_error_m=tracks[1].error_at(r.stamp))
+            for r in records
+        ]
     return RunAudit(
         run=str(run),
         map=map.describe(),
@@ -142,6 +182,8 @@ def audit_run(
             **(map.config.map.association_params() if own else map.association_params),
         },
         map_seconds=map_seconds,
+        tracks=tracks,
+        tracks_withheld=withheld,
     )
 
 

@@ -24,6 +24,7 @@ PREDICTIONS = {
 REAL_ERRORS = {
     "error_m": "registration error against the reference (mean over converged starts, m)",
     "spread_m": "spread of the converged registrations (RMS, m)",
+    "tracking_error_m": "map localization tracking along the run from the previous estimate, its error here (m)",
 }
 #: How many scans the summary lists where the prediction is furthest off.
 FURTHEST_OFF = 5

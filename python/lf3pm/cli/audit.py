@@ -57,6 +57,9 @@ def audit(
     max_pose_gap: float | None = option("run.max_pose_gap"),
     lidar_time_offset: float | None = option("run.lidar_time_offset"),
     registration: bool = typer.Option(True, help="Register each scan (--no-registration: the metric part only)."),
+    track: bool = typer.Option(
+        True, help="Map localization and KISS-ICP along the whole run too (with registration and a map file)."
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object: per-scan records and the summary."),
     out: Path | None = typer.Option(
         None, "-o", "--out", metavar="DIR", help="Write audit.csv, report.md and figures here."
@@ -93,11 +96,14 @@ def audit(
                 world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
             map_points = world.points
         with progress_bar() as step:
-            read = [0]
+            read, phases = [0], []
 
-            def progress(done: int, total: int | None) -> None:
-                step("auditing scans", total, advance=done - read[0])  # bad scans skipped count as read
-                read[0] = done
+            def progress(done: int, total: int | None, phase: str) -> None:
+                if phase not in phases:  # a new pass over the run
+                    phases.append(phase)
+                    read[0] = 0
+                step(phase, total, advance=done - read[0], restart=len(phases) > 1 and read[0] == 0)
+                read[0] = done  # bad scans skipped count as read
 
             result = audit_run(
                 run,
@@ -105,6 +111,7 @@ def audit(
                 chosen,
                 cfg,
                 register=registration,
+                track=track,
                 progress=progress,
                 **({} if every is None else {"every": every}),
             )
@@ -131,6 +138,9 @@ def print_summary(result, out: Path | None) -> None:
     for real, share in s.inside_interval.items():
         say(f"{real} inside the predicted interval: {_n(share)} of {s.inside_scans[real]} scans")
     say(f"q_n simulated/recorded: median {_n(s.ratio_median)} [10 % {_n(s.ratio_p10)}, 90 % {_n(s.ratio_p90)}]")
+    for t in result.tracks:
+        ape = t.ape
+        say(f"{t.method} along the run: APE rmse {_n(ape['rmse'])} m, median {_n(ape['median'])}, max {_n(ape['max'])}")
     for bad in result.bad_scans:
         say(f"bad scan: {bad.reason}")
     if out is not None:

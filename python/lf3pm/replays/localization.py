@@ -173,6 +173,58 @@ def degeneracy(H: np.ndarray, points: np.ndarray, sigma: float, bound: float) ->
     return Degeneracy(std=std, vectors=vectors, scale=scale, degenerate=std > bound)
 
 
+@dataclass(frozen=True)
+class Registered:
+    """One scan registered to the map (:func:`register_to_map`): its estimated ``pose``
+    (the prior where ``skipped``), whether small_gicp ``converged``, how many
+    ``directions`` were degenerate and the ``largest_std`` range noise leaves (m; NaN
+    where skipped)."""
+
+    pose: np.ndarray
+    skipped: bool
+    converged: bool = False
+    directions: int = 0
+    largest_std: float = math.nan
+
+
+def register_to_map(
+    points: np.ndarray, prior: np.ndarray, target: RegistrationTarget, sigma: float, settings: LocalizationConfig
+) -> Registered:
+    """Steps 2 (the downsampling) to 4 of the module docstring for one scan's ``points``
+    (n, 3, sensor frame, deskewed) from ``prior`` (4 x 4 world-from-sensor) on ``target``,
+    under range noise ``sigma``: what :func:`localize` does per scan, and the audit of a
+    recorded run along it (lf3pm.audit.tracks). Skipped (the prior kept) below
+    ``settings.min_points`` points or inliers."""
+    import small_gicp
+
+    min_points = settings.min_points
+    if settings.scan_voxel > 0 and len(points):
+        source = small_gicp.voxelgrid_sampling(np.ascontiguousarray(points), settings.scan_voxel, num_threads=1)
+    else:
+        source = small_gicp.PointCloud(np.ascontiguousarray(points))
+    if source.size() < min_points:
+        return Registered(prior, skipped=True)
+    result = small_gicp.align(
+        target.cloud,
+        source,
+        target.tree,
+        init_T_target_source=prior,
+        registration_type="PLANE_ICP",
+        max_correspondence_distance=settings.max_correspondence_distance,
+        max_iterations=settings.max_iterations,
+        num_threads=int(settings.registration_threads),
+    )
+    if result.num_inliers < min_points:
+        return Registered(prior, skipped=True)
+    found = degeneracy(np.asarray(result.H), source.points()[:, :3], sigma, settings.degenerate_std)
+    T = np.asarray(result.T_target_source)
+    if settings.remap and found.count:
+        twist = se3_log(np.linalg.inv(prior) @ T)  # (translation, rotation)
+        kept = found.remap(np.r_[twist[3:], twist[:3]])  # small_gicp's order
+        T = prior @ se3_exp(np.r_[kept[3:], kept[:3]])
+    return Registered(T, False, bool(result.converged), found.count, float(found.std[0]))
+
+
 def localize(
     scans,
     target: RegistrationTarget,
@@ -187,10 +239,7 @@ def localize(
     (module docstring) with ``settings``. ``progress``, if given, is called as
     progress(done, total). Returns the Estimate with per-scan degenerate directions and
     a report of the registrations (converged count, the largest deviation per scan)."""
-    import small_gicp
-
     odometry = WheelOdometry(settings.scale_error, settings.yaw_noise)
-    scan_voxel, min_points, degenerate_std = settings.scan_voxel, settings.min_points, settings.degenerate_std
     count = len(scans)
     truth = scans.truth
     steps = odometry.increments(truth, scans.period, seed)
@@ -206,36 +255,13 @@ def localize(
         step = (0.0, 0.0, 0.0) if k == 0 else tuple(steps[k - 1])
         prior = truth[0] if k == 0 else estimate[k - 1] @ planar_matrix(*step)
         points = deskew(scan.points, scan.timestamps, planar_log(*step))
-        if scan_voxel > 0 and len(points):
-            source = small_gicp.voxelgrid_sampling(np.ascontiguousarray(points), scan_voxel, num_threads=1)
-        else:
-            source = small_gicp.PointCloud(np.ascontiguousarray(points))
-        estimate[k] = prior
-        if source.size() < min_points:
+        found = register_to_map(points, prior, target, sigma, settings)
+        estimate[k] = found.pose
+        if found.skipped:
             skipped.append(k)
         else:
-            result = small_gicp.align(
-                target.cloud,
-                source,
-                target.tree,
-                init_T_target_source=prior,
-                registration_type="PLANE_ICP",
-                max_correspondence_distance=settings.max_correspondence_distance,
-                max_iterations=settings.max_iterations,
-                num_threads=int(settings.registration_threads),
-            )
-            if result.num_inliers < min_points:
-                skipped.append(k)
-            else:
-                converged += bool(result.converged)
-                found = degeneracy(np.asarray(result.H), source.points()[:, :3], sigma, degenerate_std)
-                directions[k], worst[k] = found.count, float(found.std[0])
-                T = np.asarray(result.T_target_source)
-                if settings.remap and found.count:
-                    twist = se3_log(np.linalg.inv(prior) @ T)  # (translation, rotation)
-                    kept = found.remap(np.r_[twist[3:], twist[:3]])  # small_gicp's order
-                    T = prior @ se3_exp(np.r_[kept[3:], kept[:3]])
-                estimate[k] = T
+            converged += found.converged
+            directions[k], worst[k] = found.directions, found.largest_std
         seconds += time.perf_counter() - start
         if progress is not None:
             progress(k + 1, count)

@@ -58,21 +58,22 @@ def run_kiss_icp(
     threads: int = DEFAULTS.scan.threads,
     progress=None,
 ) -> Estimate:
-    """KISS-ICP with ``settings`` over ``scans`` (MovingScan objects, e.g. a ScanStream),
+    """KISS-ICP with ``settings`` over ``scans`` (MovingScan objects, e.g. a ScanStream,
+    or any iterable of objects with ``points`` and ``timestamps``, read one at a time),
     anchored at ``initial_pose`` (4 x 4, the true pose of the first scan). A scan with
     fewer than ``settings.min_points`` hits is not given to KISS-ICP (its estimate stays
-    where it was). ``progress``, if given, is called as progress(done, total).
-    The Estimate's seconds are those spent in KISS-ICP."""
+    where it was). ``progress``, if given, is called as progress(done, total) (total
+    None for an iterable without a length). The Estimate's seconds are those spent in
+    KISS-ICP."""
     from kiss_icp.kiss_icp import KissICP
 
     odometry = KissICP(kiss_icp_config(sensor, settings, threads))
     min_points, deskew = settings.min_points, settings.deskew
     anchor = np.asarray(initial_pose, dtype=np.float64)
-    estimate = np.empty((len(scans), 4, 4))
-    hits = np.zeros(len(scans), dtype=np.int64)
-    skipped, seconds = [], 0.0
+    total = len(scans) if hasattr(scans, "__len__") else None
+    estimate, hits, skipped, seconds = [], [], [], 0.0
     for k, scan in enumerate(scans):
-        hits[k] = len(scan.points)
+        hits.append(len(scan.points))
         start = time.perf_counter()
         if len(scan.points) < min_points:
             skipped.append(k)
@@ -81,10 +82,11 @@ def run_kiss_icp(
             stamps = scan.timestamps if deskew and len(scan.points) > 1 else np.empty(0)
             odometry.register_frame(np.ascontiguousarray(scan.points, dtype=np.float64), stamps)
         seconds += time.perf_counter() - start
-        estimate[k] = anchor @ odometry.last_pose
+        estimate.append(anchor @ odometry.last_pose)
         if progress is not None:
-            progress(k + 1, len(scans))
-    return Estimate(poses=estimate, hits=hits, skipped=skipped, seconds=seconds)
+            progress(k + 1, total)
+    poses = np.asarray(estimate, dtype=np.float64).reshape(-1, 4, 4)
+    return Estimate(poses=poses, hits=np.asarray(hits, dtype=np.int64), skipped=skipped, seconds=seconds)
 
 
 class KissIcpOdometry(SectionMethod):
