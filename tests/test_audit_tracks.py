@@ -21,8 +21,8 @@ from lf3pm.config import DEFAULTS, configured
 from lf3pm.replays.odometry import run_kiss_icp
 from lf3pm.runs import Run
 
-#: A drive through the room that turns: 0.4 m and 0.05 rad a scan (the prior's constant
-#: velocity is then exact but for the turn's curvature).
+#: A drive through the room that turns: 0.4 m and 0.05 rad a scan, so each scan's prior
+#: (the last estimate) lies that far off.
 POSES = [(-3.0 + 0.4 * i, 0.025 * i, 0.05 * i) for i in range(8)]
 STAMPS = [round(0.1 * i, 1) for i in range(8)]  # as the scans are named
 
