@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 
 import lf3pm
 from lf3pm.audit import ScanAudit, audit_run, spread, summarize, write_audit
+from lf3pm.audit.summary import block_interval
 from lf3pm.cli import app
 from lf3pm.config import DEFAULTS, configured
 from lf3pm.metric import evaluate, evaluate_points
@@ -204,6 +205,23 @@ def test_too_few_or_constant_values_give_no_correlation():
     assert math.isnan(summarize(records([1.0, 2.0, 3.0], [0.1, 0.2, 0.3], [0.1] * 3)).rho("real_q_n", "spread_m"))
     assert summary.furthest_off == () and math.isnan(summary.inside_interval["error_m"])
     assert summary.to_dict()["inside_interval"]["error_m"] is None
+
+
+def test_the_block_bootstrap_interval_of_a_rank_correlation():
+    """A monotone relation gives rho 1 in every draw; independent values an interval about
+    0; blocks of round(n^(1/3)) scans; the same seed the same interval; too few: NaN."""
+    up = np.arange(27.0)
+    assert block_interval(up, up**2) == (1.0, 1.0, 3) and block_interval(up, -up)[:2] == (-1.0, -1.0)
+    rng = np.random.default_rng(5)
+    a, b = rng.normal(size=200), rng.normal(size=200)
+    low, high, block = block_interval(a, b)
+    assert low < 0 < high and block == 6 and block_interval(a, b) == (low, high, block)
+    assert all(math.isnan(v) for v in block_interval([1.0, 2.0], [1.0, 2.0])[:2])
+    with_gaps = block_interval([1.0, np.nan, 2.0, 3.0, 4.0], [1.0, 5.0, 2.0, 3.0, np.inf])
+    assert with_gaps == (1.0, 1.0, 1)  # the three finite pairs, all in order
+    summary = summarize(records([1.0, 2.0, 3.0, 4.0], [0.1, 0.2, 0.3, 0.4], [0.4, 0.3, 0.2, 0.1]))
+    c = next(c for c in summary.correlations if (c.prediction, c.real_error) == ("real_q_n", "error_m"))
+    assert (c.rho, c.ci_low, c.ci_high, c.block) == (1.0, 1.0, 1.0, 2)
 
 
 def test_the_spread_of_poses_about_their_mean():

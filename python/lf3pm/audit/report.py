@@ -16,7 +16,7 @@ from lf3pm.audit.figures import along_run_figure, path_figure
 from lf3pm.audit.record import csv_columns
 from lf3pm.audit.run_audit import RunAudit
 from lf3pm.audit.self_map import SELF
-from lf3pm.audit.summary import PREDICTIONS, REAL_ERRORS
+from lf3pm.audit.summary import BLOCK_DRAWS, BLOCK_SEED, PREDICTIONS, REAL_ERRORS
 
 #: The files of an audit folder.
 CSV, REPORT, ALONG_RUN, PATH = "audit.csv", "report.md", "along_run.png", "path.png"
@@ -91,9 +91,17 @@ def report_text(audit: RunAudit, command: str = "") -> str:
         cells = []
         for real in REAL_ERRORS:
             c = next(c for c in s.correlations if (c.prediction, c.real_error) == (prediction, real))
-            cells.append(f"{_num(c.rho, '+.2f')} ({c.scans} scans)")
+            interval = f"[{_num(c.ci_low, '+.2f')}, {_num(c.ci_high, '+.2f')}]"
+            cells.append(f"{_num(c.rho, '+.2f')} {interval} ({c.scans} scans)")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    lines += ["", "Real errors: " + "; ".join(f"`{k}`: {v}" for k, v in REAL_ERRORS.items()) + ".", ""]
+    lines += ["", "Real errors: " + "; ".join(f"`{k}`: {v}" for k, v in REAL_ERRORS.items()) + "."]
+    blocks = sorted({c.block for c in s.correlations if c.block})
+    lines += [
+        "",
+        f"Intervals: 95 %, a moving-block bootstrap over the scans in time order ({BLOCK_DRAWS} draws, seed "
+        f"{BLOCK_SEED}, blocks of {', '.join(map(str, blocks)) or '-'} scans): neighbouring scans are not independent.",
+        "",
+    ]
     lines += ["## Real error inside the predicted [10 %, 90 %] interval", ""]
     for real in REAL_ERRORS:
         lines.append(f"- `{real}`: {_num(s.inside_interval[real], '.0%')} of {s.inside_scans[real]} scans")

@@ -134,7 +134,8 @@ def print_summary(result, out: Path | None) -> None:
         f"registration {result.registration_seconds:.1f} s ({_n(timing['registration_scans_per_second'])} scans/s)"
     )
     for c in s.correlations:
-        say(f"spearman {c.prediction} ~ {c.real_error}: {_n(c.rho)} ({c.scans} scans)")
+        interval = f"[{_n(c.ci_low)}, {_n(c.ci_high)}]"
+        say(f"spearman {c.prediction} ~ {c.real_error}: {_n(c.rho)} {interval} ({c.scans} scans)")
     for real, share in s.inside_interval.items():
         say(f"{real} inside the predicted interval: {_n(share)} of {s.inside_scans[real]} scans")
     say(f"q_n simulated/recorded: median {_n(s.ratio_median)} [10 % {_n(s.ratio_p10)}, 90 % {_n(s.ratio_p90)}]")
