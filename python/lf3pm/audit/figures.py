@@ -39,6 +39,12 @@ def _column(records, name: str) -> np.ndarray:
     return np.array([getattr(r, name) for r in records], dtype=np.float64)
 
 
+def _logged(records, name: str) -> np.ndarray:
+    """A column for a log axis: zeros (an odometry's anchored first scan) left as gaps."""
+    values = _column(records, name)
+    return np.where(values > 0, values, np.nan)
+
+
 def along_run_figure(records, path: Path) -> None:
     """Top: the real errors (against the reference, the converged poses' spread, map
     localization and KISS-ICP along the run where they ran) and the
@@ -48,14 +54,14 @@ def along_run_figure(records, path: Path) -> None:
     plt = _pyplot()
     t = _column(records, "time_s")
     fig, (top, middle, bottom) = plt.subplots(3, 1, figsize=(9, 8.5), sharex=True)
-    top.plot(t, _column(records, "error_m"), "o-", ms=3, label="real error against the reference (mean over starts)")
-    top.plot(t, _column(records, "spread_m"), "s-", ms=3, label="spread of the converged registrations (RMS)")
+    top.plot(t, _logged(records, "error_m"), "o-", ms=3, label="real error against the reference (mean over starts)")
+    top.plot(t, _logged(records, "spread_m"), "s-", ms=3, label="spread of the converged registrations (RMS)")
     for name, style, label in (
         ("tracking_error_m", "d-", "map localization along the run"),
         ("odometry_error_m", "x:", "KISS-ICP along the run"),
     ):
         if np.isfinite(_column(records, name)).any():
-            top.plot(t, _column(records, name), style, ms=3, label=label)
+            top.plot(t, _logged(records, name), style, ms=3, label=label)
     predicted = _column(records, "predicted_error_m")
     if np.isfinite(predicted).any():
         top.plot(t, predicted, "k--", label="predicted localization error")
@@ -70,7 +76,7 @@ def along_run_figure(records, path: Path) -> None:
         top.text(0.01, 0.04, "predicted localization error withheld on every scan", transform=top.transAxes)
     top.set_yscale("log")
     top.set_ylabel("error (m)")
-    top.legend(fontsize=8, loc="upper right")
+    top.legend(fontsize=8, loc="best")
     top.set_title("Registration errors and predictions along the run")
     middle.plot(t, _column(records, "real_q_n"), "o-", ms=3, label="q_n, recorded scan")
     middle.plot(t, _column(records, "sim_q_n"), "^-", ms=3, label="q_n, simulated scan")
