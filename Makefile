@@ -49,6 +49,7 @@ bench: build
 	  || { echo "open3d cannot load: install Debian's libusb-1.0-0 (as root) for bench/bench_solm.py"; exit 1; }
 	$(PY) bench/bench_builds.py
 	$(PY) bench/bench_evaluate.py
+	$(PY) bench/bench_audit.py
 	$(PY) bench/bench_solm.py
 	$(PY) bench/bench_solm_yaw_reuse.py
 	$(PY) bench/bench_solm_approximations.py
