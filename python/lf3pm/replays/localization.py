@@ -204,15 +204,8 @@ def register_to_map(
         source = small_gicp.PointCloud(np.ascontiguousarray(points))
     if source.size() < min_points:
         return Registered(prior, skipped=True)
-    result = small_gicp.align(
-        target.cloud,
-        source,
-        target.tree,
-        init_T_target_source=prior,
-        registration_type="PLANE_ICP",
-        max_correspondence_distance=settings.max_correspondence_distance,
-        max_iterations=settings.max_iterations,
-        num_threads=int(settings.registration_threads),
+    result = target.align(
+        source, prior, settings.max_correspondence_distance, settings.max_iterations, int(settings.registration_threads)
     )
     if result.num_inliers < min_points:
         return Registered(prior, skipped=True)

@@ -48,6 +48,22 @@ class RegistrationTarget:
             raise Lf3pmError("the registration target was prepared from another map")
         return target
 
+    def align(self, source, start: np.ndarray, max_correspondence_distance: float, max_iterations: int, threads: int):
+        """small_gicp point-to-plane ICP of ``source`` (a small_gicp PointCloud, sensor
+        frame) to this map from ``start`` (4 x 4): small_gicp's RegistrationResult."""
+        import small_gicp
+
+        return small_gicp.align(
+            self.cloud,
+            source,
+            self.tree,
+            init_T_target_source=start,
+            registration_type="PLANE_ICP",
+            max_correspondence_distance=max_correspondence_distance,
+            max_iterations=max_iterations,
+            num_threads=threads,
+        )
+
 
 def _default_threads() -> int:
     import os
@@ -182,16 +198,7 @@ def _registered(
     truth_inv = np.linalg.inv(truth)
     for _ in range(trials):
         start = truth @ se3_exp(rng.normal(size=6) * sigmas)
-        result = small_gicp.align(
-            target.cloud,
-            source,
-            target.tree,
-            init_T_target_source=start,
-            registration_type="PLANE_ICP",
-            max_correspondence_distance=max_correspondence_distance,
-            max_iterations=max_iterations,
-            num_threads=threads or _default_threads(),
-        )
+        result = target.align(source, start, max_correspondence_distance, max_iterations, threads or _default_threads())
         twist = se3_log(truth_inv @ result.T_target_source)
         errors.append(float(twist @ twist))
         t_err.append(float(np.linalg.norm((truth_inv @ result.T_target_source)[:3, 3])))
