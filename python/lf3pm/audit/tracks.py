@@ -123,7 +123,8 @@ def track_localization(
             if progress is not None:
                 progress(scan.index + 1, total)
     poses_array = np.asarray(poses).reshape(-1, 4, 4)
-    params = {k: v for k, v in localization_params(settings).items() if k != "odometry"}
+    params = localization_params(settings)
+    del params["odometry"]  # the simulated wheel odometry's settings: a recorded run has none
     params["prior"] = "the last estimate (no wheel odometry), registered coarsely first"
     params["coarse"] = {"max_correspondence_distance": COARSE_CORRESPONDENCE_M, "max_iterations": COARSE_ITERATIONS}
     return Track(
