@@ -16,7 +16,6 @@ The run is read once per track, a scan at a time; a track keeps one pose per sca
 
 from __future__ import annotations
 
-import itertools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -155,20 +154,20 @@ def track_odometry(
     with Run(run, config.run, skip_bad=True) as opened:
         total = opened.scan_count()
 
-        def scans():
+        def scans():  # the run's scans as KISS-ICP takes them, keeping their stamps and poses
             for scan in opened.scans():
                 stamps.append(scan.stamp)
                 reference.append(scan.pose)
                 times = np.empty(0) if scan.times is None else np.asarray(scan.times, dtype=np.float64)
-                yield SimpleNamespace(points=scan.points, timestamps=times, index=scan.index)
+                yield SimpleNamespace(points=scan.points, timestamps=times)
+                if progress is not None:
+                    progress(scan.index + 1, total)
 
-        stream = scans()
-        first = next(stream, None)
-        if first is None:
-            raise RunError(f"{opened.path}: no scan to run the odometry on")
-        counted = _counting(itertools.chain([first], stream), progress, total)
-        estimate = run_kiss_icp(counted, sensor, reference[0], config.kiss_icp, threads=config.scan.threads)
-    poses = np.asarray(estimate.poses).reshape(-1, 4, 4)
+        # Anchored at the identity, then at the first reference pose: I @ X is X exactly.
+        estimate = run_kiss_icp(scans(), sensor, np.eye(4), config.kiss_icp, threads=config.scan.threads)
+    if not reference:
+        raise RunError(f"{run}: no scan to run the odometry on")
+    poses = reference[0] @ np.asarray(estimate.poses).reshape(-1, 4, 4)
     params = {"min_points": config.kiss_icp.min_points, "kiss_icp": kiss_icp_params(sensor, config.kiss_icp)}
     return Track(
         ODOMETRY,
@@ -179,10 +178,3 @@ def track_odometry(
         estimate.seconds,
         params,
     )
-
-
-def _counting(scans, progress, total):
-    for scan in scans:
-        yield scan
-        if progress is not None:
-            progress(scan.index + 1, total)

@@ -90,19 +90,18 @@ def audit(
                     cfg,
                     progress=lambda done, total: loading(f"reading the run for its map: scan {done} of {total or '?'}"),
                 )
-            map_points = world.whole()
         else:
             with map_loading() as loading:
                 world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
-            map_points = world.points
         with progress_bar() as step:
             read, phases = [0], []
 
             def progress(done: int, total: int | None, phase: str) -> None:
-                if phase not in phases:  # a new pass over the run
+                new = phase not in phases  # a new pass over the run
+                if new:
                     phases.append(phase)
                     read[0] = 0
-                step(phase, total, advance=done - read[0], restart=len(phases) > 1 and read[0] == 0)
+                step(phase, total, advance=done - read[0], restart=new and len(phases) > 1)
                 read[0] = done  # bad scans skipped count as read
 
             result = audit_run(
@@ -116,7 +115,8 @@ def audit(
                 **({} if every is None else {"every": every}),
             )
         if out is not None:
-            write_audit(result, out, map_points, command_line(ctx))
+            drawn = world.whole() if isinstance(world, SelfMap) else world.points  # the map under the path
+            write_audit(result, out, drawn, command_line(ctx))
         if as_json:
             print(json.dumps(result.to_dict()))
             return
