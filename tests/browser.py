@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 import shutil
+import signal
 import subprocess
 import tempfile
 import time
@@ -35,7 +37,9 @@ def screenshot(url: str, path: Path, *, seconds: float = 20.0, size=(1280, 800),
     browser = chromium()
     if browser is None:
         raise RuntimeError("no Chromium found (Debian: apt-get install chromium)")
-    with tempfile.TemporaryDirectory() as profile:
+    # Chromium's helpers (renderer, GPU, crash handler) may still write into the profile for
+    # a moment after the browser exits: its cleanup must not fail the test.
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as profile:
         debug_port = free_port()
         proc = subprocess.Popen(
             [
@@ -53,6 +57,7 @@ def screenshot(url: str, path: Path, *, seconds: float = 20.0, size=(1280, 800),
             ],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
+            start_new_session=True,  # its own process group: stopped with its helpers
         )
         try:
             page = _page(debug_port)
@@ -76,7 +81,7 @@ def screenshot(url: str, path: Path, *, seconds: float = 20.0, size=(1280, 800),
                     if (ready is not None and ready(image)) or time.monotonic() > deadline:
                         break
         finally:
-            proc.terminate()
+            os.killpg(proc.pid, signal.SIGTERM)
             proc.wait(timeout=10)
     Path(path).write_bytes(data)
     return image
