@@ -247,7 +247,7 @@ def test_the_cli_writes_json_csv_report_and_figures(room, tmp_path):
     assert [s["index"] for s in data["scans"]] == [2, 4]  # scan 0 is bad (no pose), every 2nd
     assert data["bad_scans"][0]["index"] == 0 and data["summary"]["scans"] == 2
     assert data["scans"][0]["starts"] == 2 and len(data["scans"][0]["translation_errors_m"]) == 2
-    assert sorted(p.name for p in out.iterdir()) == ["along_run.png", "audit.csv", "path.png", "report.md"]
+    assert sorted(p.name for p in out.iterdir()) == ["along_run.png", "audit.csv", "audit.json", "path.png", "report.md"]
     rows = (out / "audit.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[0].startswith("index,name,stamp")
     report = (out / "report.md").read_text()
@@ -261,7 +261,7 @@ def test_write_audit_without_registrations(room, tmp_path):
     path, _ = stream_bag(room, tmp_path, moving=False, noise=None)
     result = audit_run(path, room, "vlp16", every=3, register=False)
     written = write_audit(result, tmp_path / "out", room.points, "lf3pm audit x")
-    assert [p.name for p in written] == ["audit.csv", "report.md", "along_run.png", "path.png"]
+    assert [p.name for p in written] == ["audit.csv", "audit.json", "report.md", "along_run.png", "path.png"]
     assert all(p.stat().st_size > 0 for p in written)
     assert math.isnan(result.records[0].error_m) and result.records[0].registration_error is None
 

@@ -1,10 +1,12 @@
-"""An audit's files (``lf3pm audit -o DIR``): the per-scan CSV, the Markdown report with the
-summary and the command, and the figures; each written atomically."""
+"""An audit's files (``lf3pm audit -o DIR``): the per-scan CSV, the whole audit as JSON (what
+``--json`` prints; `lf3pm view --audit` reads it), the Markdown report with the summary and
+the command, and the figures; each written atomically."""
 
 from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 from collections import Counter
 from pathlib import Path
@@ -19,12 +21,12 @@ from lf3pm.audit.self_map import SELF
 from lf3pm.audit.summary import BLOCK_DRAWS, BLOCK_SEED, PREDICTIONS, REAL_ERRORS
 
 #: The files of an audit folder.
-CSV, REPORT, ALONG_RUN, PATH = "audit.csv", "report.md", "along_run.png", "path.png"
+CSV, JSON, REPORT, ALONG_RUN, PATH = "audit.csv", "audit.json", "report.md", "along_run.png", "path.png"
 
 
 def write_audit(audit: RunAudit, folder, map_points, command: str = "") -> list[Path]:
     """Writes ``audit`` into ``folder`` (created if missing): audit.csv (one row per audited
-    scan), report.md (the summary, the bad scans and ``command``), along_run.png and
+    scan), audit.json (``audit.to_dict()``), report.md (the summary, the bad scans and ``command``), along_run.png and
     path.png (over ``map_points``, N x 3). Returns the paths written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -33,13 +35,15 @@ def write_audit(audit: RunAudit, folder, map_points, command: str = "") -> list[
     writer.writeheader()
     for record in audit.records:
         writer.writerow({k: _cell(v) for k, v in record.row().items()})
-    written = [folder / CSV, folder / REPORT, folder / ALONG_RUN, folder / PATH]
+    written = [folder / CSV, folder / JSON, folder / REPORT, folder / ALONG_RUN, folder / PATH]
     with atomic_write(written[0]) as fp:
         fp.write(text.getvalue().encode())
     with atomic_write(written[1]) as fp:
+        fp.write(json.dumps(audit.to_dict()).encode())
+    with atomic_write(written[2]) as fp:
         fp.write(report_text(audit, command).encode())
-    along_run_figure(audit.records, written[2])
-    path_figure(audit.records, map_points, written[3])
+    along_run_figure(audit.records, written[3])
+    path_figure(audit.records, map_points, written[4])
     return written
 
 

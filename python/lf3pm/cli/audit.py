@@ -62,7 +62,7 @@ def audit(
     ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object: per-scan records and the summary."),
     out: Path | None = typer.Option(
-        None, "-o", "--out", metavar="DIR", help="Write audit.csv, report.md and figures here."
+        None, "-o", "--out", metavar="DIR", help="Write audit.csv, audit.json, report.md and figures here."
     ),
 ):
     """Audit a recorded run against a map: per scan at its reference pose, the metric of the
@@ -145,7 +145,7 @@ def print_summary(result, out: Path | None) -> None:
     for bad in result.bad_scans:
         say(f"bad scan: {bad.reason}")
     if out is not None:
-        say(f"wrote {out}/ (audit.csv, report.md, along_run.png, path.png)")
+        say(f"wrote {out}/ (audit.csv, audit.json, report.md, along_run.png, path.png)")
 
 
 def command_line(ctx: typer.Context) -> str:
