@@ -71,12 +71,13 @@ def test_the_audit_carries_each_scans_track_errors_or_says_why_it_has_none(drive
         assert record.odometry_error_m == odometry.error_at(record.stamp)
     described = audit.to_dict()
     assert [t["method"] for t in described["tracks"]] == [TRACKING, ODOMETRY] and described["tracks_withheld"] is None
+    assert audit.lio_withheld == "the run has no IMU" and all(r.lio_errors_m == () for r in audit.records)
     assert any(c.real_error == "tracking_error_m" and c.scans == 3 for c in audit.summary.correlations)
     alone = audit_run(folder, room, "vlp16", config, every=3, register=False)
-    assert alone.tracks == () and alone.tracks_withheld == "registrations left out"
+    assert alone.tracks == () and alone.tracks_withheld == alone.lio_withheld == "registrations left out"
     assert math.isnan(alone.records[0].tracking_error_m)
     own = audit_run(folder, SelfMap.of_run(folder, configured(config, ("run",), "t", exclude_window=0.0)), every=3)
-    assert own.tracks == () and "tracking needs one map" in own.tracks_withheld
+    assert own.tracks == () and "tracking needs one map" in own.tracks_withheld == own.lio_withheld
 
 
 @pytest.mark.slow  # the CLI's first import: over 2 s on 2 cores

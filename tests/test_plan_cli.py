@@ -134,3 +134,26 @@ def test_bad_requests_get_one_line_and_exit_2(boxes_solm, tmp_path, args, needle
 def test_a_missing_solm_is_refused(tmp_path):
     done = run_plan("--solm", tmp_path / "none.zarr", "--start", 0, 0, 0, "--goal", 1, 1, 0, "-o", tmp_path / "t.csv")
     assert done.returncode == 2 and "no such SOLM" in done.stderr
+
+
+@pytest.mark.slow
+def test_plan_predicts_its_localization_error_with_the_fit_given(boxes_solm, tmp_path):
+    """The packaged fit and a file whose offset is ln 3 higher: the predicted error along
+    the same plan triples (it is the SOLM's time-mean q_n through the fit); a missing file is
+    one line, exit 2."""
+    import json
+
+    from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration
+
+    base = packaged_calibration(LOCALIZATION_PACKAGED)
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({**base, "a": base["a"] + np.log(3.0)}))
+    args = ["--solm", boxes_solm, "--start", -2.5, -2.7, 0, "--goal", 6.2, 2.2, 1.57, "--r-safe", 0.05, "--json"]
+    packaged = run_plan(*args, "-o", tmp_path / "a.csv")
+    mine = run_plan(*args, "-o", tmp_path / "b.csv", "--calibration", fit)
+    assert packaged.returncode == 0 and mine.returncode == 0, packaged.stderr + mine.stderr
+    error = json.loads(packaged.stdout)["predicted_localization_error_m"]
+    assert error > 0 and json.loads(mine.stdout)["predicted_localization_error_m"] == pytest.approx(3 * error)
+    missing = run_plan(*args, "-o", tmp_path / "c.csv", "--calibration", tmp_path / "none.json")
+    assert missing.returncode == 2 and "none.json: No such file" in missing.stderr
+    assert len(missing.stderr.strip().splitlines()) == 1

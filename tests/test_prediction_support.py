@@ -14,11 +14,9 @@ import lf3pm
 from lf3pm.calibration import (
     LOCALIZATION_PACKAGED,
     PACKAGED,
-    fit_calibration,
-    fit_localization_error,
+    fit_on_q_n,
     packaged_calibration,
-    predict_localization_error,
-    predict_mde,
+    predict,
     support,
     withheld_reason,
 )
@@ -39,25 +37,23 @@ def test_the_localization_fit_stores_its_support_and_predicts_only_inside_it():
     rng = np.random.default_rng(2)
     q = np.exp(rng.uniform(-5, 0, 120))
     ape = 0.1 * q * np.exp(rng.normal(scale=0.3, size=120))
-    fit = fit_localization_error(np.repeat(["a", "b", "c"], 40), q, ape, provenance={"sensors": ["mid70"], "w1": 0.5})
+    fit = fit_on_q_n(np.repeat(["a", "b", "c"], 40), q, ape, provenance={"sensors": ["mid70"], "w1": 0.5})
     assert support(fit) == (q.min(), q.max())  # the samples' own values, not a log round trip
-    assert predict_localization_error(fit, q.min()) is not None
-    assert predict_localization_error(fit, q.max()) is not None
+    assert predict(fit, q.min()) is not None
+    assert predict(fit, q.max()) is not None
     for outside in (q.min() * 0.99, q.max() * 1.01, 0.0, np.inf, np.nan):
-        assert predict_localization_error(fit, outside) is None
+        assert predict(fit, outside) is None
     assert withheld_reason(fit, float(q.max()), **FIT_CONDITIONS) is None
     reason = withheld_reason(fit, 816.0, **FIT_CONDITIONS)
     assert reason.startswith("q_n 816 is outside") and f"{q.min():.3g} to {q.max():.3g}" in reason
 
 
-def test_the_mde_calibration_no_longer_repeats_its_end_values_beyond_them():
-    rng = np.random.default_rng(3)
-    x = np.exp(rng.uniform(-8, -1, 200))
-    cal = fit_calibration(x, x**2, name="step_norm", provenance={})
+def test_the_mde_fit_predicts_only_inside_the_q_n_it_saw():
+    cal = packaged_calibration(PACKAGED)
     lo, hi = support(cal)
-    assert lo == pytest.approx(x.min(), rel=1e-12) and hi == pytest.approx(x.max(), rel=1e-12)
-    assert predict_mde(cal, lo) is not None and predict_mde(cal, hi) is not None
-    assert predict_mde(cal, lo / 2) is None and predict_mde(cal, hi * 2) is None
+    assert (lo, hi) == tuple(cal["q_n_range"])
+    assert predict(cal, lo) is not None and predict(cal, hi) is not None
+    assert predict(cal, lo / 2) is None and predict(cal, hi * 2) is None
 
 
 def test_the_shipped_fits_say_why_they_predict_nothing():

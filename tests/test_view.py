@@ -69,12 +69,12 @@ def test_the_solm_layer_is_the_channel_min_over_yaw_or_one_bin(site):
     layer = layers.solm_layer(solm, "q_n")
     assert len(layer["centres"]) == np.count_nonzero(np.isfinite(expected) & (expected > 0)) > 0
     assert layer["lo"] <= np.median(layer["values"]) <= layer["hi"]
-    from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, predict_localization_error
+    from lf3pm.calibration import LOCALIZATION_PACKAGED, packaged_calibration, predict
 
     fit = packaged_calibration(LOCALIZATION_PACKAGED)
     error = layers.solm_values(solm, "predicted_error")
     iy, ix = np.argwhere(np.isfinite(expected))[0]
-    assert error[iy, ix] == pytest.approx(predict_localization_error(fit, expected[iy, ix])[0])
+    assert error[iy, ix] == pytest.approx(predict(fit, expected[iy, ix])[0])
     with pytest.raises(Lf3pmError, match="unknown channel"):
         layers.solm_values(solm, "sigma")
 

@@ -1,22 +1,25 @@
 """Calibrations from the metric to errors in metres, so that a metric answers in
 units a user understands, not against an arbitrary threshold:
 
-- expected MDE (registration error from disturbed starts at one pose, the
-  correlation study's ground truth): below;
-- expected localization error (APE of map localization along a trajectory, the
-  benefit study's replays) from q_n: :func:`fit_localization_error`.
+- expected MDE (registration error from disturbed starts at one pose, the correlation
+  study's ground truth), fitted by `lf3pm experiment correlation`;
+- expected localization error (APE of map localization along a trajectory, the benefit
+  study's replays), fitted by `lf3pm experiment benefit`, or on a user's own recorded run
+  by `lf3pm audit --calibrate` (:func:`calibrate_factor`).
 
-A calibration is a monotone (isotonic) regression of log MDE on log predictor,
-fitted on the correlation study's poses, with an interval from the spread of
-the residuals in bins of the predictor. It is stored as JSON in the package
-(``lf3pm/calibration_data/``) with its provenance, and applied by
-:func:`predict_mde`. It holds for the conditions it was fitted under (sensor,
-range noise, disturbance size, map density): see docs/validation.md.
+Each is a least-squares line log error = a + b log q_n (:func:`fit_on_q_n`) with an
+interval from the 10-90 % quantiles of its residuals, stored as JSON with its provenance
+(the packaged ones in ``lf3pm/calibration_data/``) and applied by :func:`predict`. A fit
+increasing in q_n ranks poses exactly as q_n does, on any map. The MDE fit used to be a
+monotone step fit on step_norm, the correlation study's best within-map predictor (0.57
+against q_n's 0.26, and 0.56 with step_norm from a scan independent of the MDE's, so no
+shared noise draw explains it); on 32 held-out poses of 4 real maps the project never saw
+it ranked worse than q_n (within maps 0.36 against 0.57, issue 42), so it is on q_n now
+(docs/validation.md). Each holds for the conditions it was fitted under (sensor, range
+noise, disturbance size, map density): :func:`calibration_applies`.
 
-Both predict only inside their :func:`support`, the range of the predictor the
-fit saw: beyond it the MDE fit would repeat its end value and the localization
-fit extrapolate its line, neither measured. :func:`withheld_reason` says why a
-query gets no prediction.
+Both predict only inside their :func:`support`, the range of q_n the fit saw: beyond it
+the line is not measured. :func:`withheld_reason` says why a query gets no prediction.
 """
 
 from __future__ import annotations
@@ -25,68 +28,29 @@ import json
 import math
 from functools import lru_cache
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
-from scipy.optimize import isotonic_regression
+
+from lf3pm.errors import Lf3pmError
 
 #: Quantiles of the residuals that bound the reported interval.
 INTERVAL_QUANTILES = (0.1, 0.9)
-#: Bins of the predictor over which the residual spread is measured.
-INTERVAL_BINS = 5
+#: The packaged expected-MDE fit (from `lf3pm experiment correlation`).
 PACKAGED = "vlp16.json"
 #: The packaged localization-error fit (from `lf3pm experiment benefit`).
 LOCALIZATION_PACKAGED = "localization_error.json"
 
 
-def fit_calibration(predictor: np.ndarray, mde: np.ndarray, *, name: str, provenance: dict) -> dict:
-    """Isotonic fit of log MDE on log ``predictor`` (both positive and finite)."""
-    keep = np.isfinite(predictor) & np.isfinite(mde) & (predictor > 0) & (mde > 0)
-    x, y = np.log(predictor[keep]), np.log(mde[keep])
-    order = np.argsort(x)
-    x, y = x[order], y[order]
-    fitted = isotonic_regression(y, increasing=True).x
-    residual = y - fitted
-    edges = np.quantile(x, np.linspace(0, 1, INTERVAL_BINS + 1))
-    bins = []
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        sel = (x >= lo) & (x <= hi)
-        q_lo, q_hi = np.quantile(residual[sel], INTERVAL_QUANTILES)
-        bins.append({"log_x_max": float(hi), "log_lo": float(q_lo), "log_hi": float(q_hi)})
-    return {
-        "predictor": name,
-        "log_x": x.tolist(),
-        "log_mde": fitted.tolist(),
-        "interval_bins": bins,
-        "interval_quantiles": list(INTERVAL_QUANTILES),
-        "samples": int(keep.sum()),
-        "provenance": provenance,
-    }
-
-
 def support(calibration: dict) -> tuple[float, float]:
-    """The lowest and highest predictor value among the samples ``calibration`` was
-    fitted on (an MDE calibration or a localization-error fit)."""
-    if "q_n_range" in calibration:
-        lo, hi = calibration["q_n_range"]
-        return float(lo), float(hi)
-    return math.exp(calibration["log_x"][0]), math.exp(calibration["log_x"][-1])
+    """The lowest and highest q_n among the samples ``calibration`` was fitted on."""
+    lo, hi = calibration["q_n_range"]
+    return float(lo), float(hi)
 
 
 def _supported(calibration: dict, value: float) -> bool:
     lo, hi = support(calibration)
     return math.isfinite(value) and lo <= value <= hi
-
-
-def predict_mde(calibration: dict, value: float) -> tuple[float, float, float] | None:
-    """(expected MDE, low, high) at predictor ``value``; None outside the fit's
-    :func:`support` (a monotone fit cannot extrapolate honestly) or where ``value``
-    is not finite."""
-    if not _supported(calibration, value):
-        return None
-    lx = math.log(value)
-    centre = float(np.interp(lx, calibration["log_x"], calibration["log_mde"]))
-    band = next((b for b in calibration["interval_bins"] if lx <= b["log_x_max"]), calibration["interval_bins"][-1])
-    return math.exp(centre), math.exp(centre + band["log_lo"]), math.exp(centre + band["log_hi"])
 
 
 @lru_cache(maxsize=2)
@@ -99,12 +63,31 @@ def packaged_calibration(name: str = PACKAGED) -> dict | None:
     return json.loads(path.read_text()) if path.is_file() else None
 
 
+def localization_fit(path: str | None = None) -> dict | None:
+    """The localization-error fit at ``path`` (:func:`load_calibration`; the prediction
+    section's ``calibration``), or the packaged one when None."""
+    if path is None:
+        return packaged_calibration(LOCALIZATION_PACKAGED)
+    path = Path(path)
+    try:
+        stamp = path.stat().st_mtime_ns
+    except OSError:
+        stamp = None  # load_calibration says why in one line
+    return _loaded(str(path.resolve()), stamp)
+
+
+@lru_cache(maxsize=8)
+def _loaded(path: str, stamp: int | None) -> dict:
+    return load_calibration(path)
+
+
 def calibration_applies(
     calibration: dict, *, sensor: str, dof: int, association: str, scan_voxel: float, noise_is_default: bool, w1: float
 ) -> bool:
     """Whether a query was evaluated under the conditions the calibration was fitted
-    in (its sensor or sensors, default noise, dof 6, k-NN association, no scan
-    downsampling, its w1)."""
+    in (its sensor or sensors, its w1, and :data:`FIT_CONDITIONS` unless its provenance's
+    ``conditions`` say otherwise: dof 6, k-NN association, no scan downsampling, default
+    noise)."""
     return (
         _mismatch(
             calibration,
@@ -119,20 +102,31 @@ def calibration_applies(
     )
 
 
+#: The conditions of a fit's queries that its provenance may record (as ``conditions``), and
+#: their values where it does not (the packaged fits were made under these).
+FIT_CONDITIONS = {"dof": 6, "association": "knn", "scan_voxel": 0.0, "noise_is_default": True}
+
+
 def _mismatch(calibration: dict, *, sensor, dof, association, scan_voxel, noise_is_default, w1) -> str | None:
     """The first condition of a query that differs from the fit's, in words; None if none."""
     p = calibration["provenance"]
+    fitted = {**FIT_CONDITIONS, **p.get("conditions", {})}
     sensors = p["sensors"] if "sensors" in p else [p["sensor"]]
     if sensor not in sensors:
         return f"sensor {sensor}, fitted for {', '.join(sensors)} only"
-    if dof != 6:
-        return f"dof {dof}, fitted at dof 6"
-    if association != "knn":
-        return f"association {association}, fitted with knn"
-    if scan_voxel != 0:
-        return f"scan_voxel {scan_voxel:g}, fitted without scan downsampling"
-    if not noise_is_default:
-        return "range noise set, fitted at the sensor's default"
+    if dof != fitted["dof"]:
+        return f"dof {dof}, fitted at dof {fitted['dof']}"
+    if association != fitted["association"]:
+        return f"association {association}, fitted with {fitted['association']}"
+    if abs(scan_voxel - fitted["scan_voxel"]) >= 1e-12:
+        at = f"scan_voxel {fitted['scan_voxel']:g}" if fitted["scan_voxel"] else "without scan downsampling"
+        return f"scan_voxel {scan_voxel:g}, fitted {at}"
+    if noise_is_default != fitted["noise_is_default"]:
+        return (
+            "range noise set, fitted at the sensor's default"
+            if fitted["noise_is_default"]
+            else ("the sensor's default range noise, fitted with noise set")
+        )
     if abs(w1 - p["w1"]) >= 1e-12:
         return f"w1 {w1:g}, fitted at w1 {p['w1']:g}"
     return None
@@ -166,20 +160,17 @@ def unsupported_reason(calibration: dict, value: float) -> str | None:
     return None
 
 
-def fit_localization_error(maps, q_n, ape, *, provenance: dict) -> dict:
-    """The localization error predicted from q_n: a least-squares fit of log APE =
-    a + b log q_n over trajectories (``maps`` (n,) their map names, ``q_n`` (n,)
-    the time mean of q_n along each, ``ape`` (n,) its localization APE, m), with
-    the 10-90 % quantiles of the residuals as the interval. ``validation``: the
-    same fit with each map left out, judged on that map's trajectories (share
-    inside the interval, Spearman rho within the map, median factor between
-    predicted and measured)."""
-    from scipy.stats import spearmanr
-
-    maps = np.asarray(maps)
-    q_n, ape = np.asarray(q_n, float), np.asarray(ape, float)
-    keep = np.isfinite(q_n) & np.isfinite(ape) & (q_n > 0) & (ape > 0)
-    maps, x, y = maps[keep], np.log(q_n[keep]), np.log(ape[keep])
+def fit_on_q_n(groups, q_n, error, *, provenance: dict, counted: str = "plans") -> dict:
+    """The error predicted from q_n: a least-squares fit of log error = a + b log q_n over
+    samples (``groups`` (n,) the map each was taken on, ``q_n`` (n,), ``error`` (n,) in its
+    unit), with the 10-90 % quantiles of the residuals as the interval. ``validation``:
+    the same fit with each group left out, judged on that group's samples (``counted``:
+    their number, named after what a sample is; share inside the interval, Spearman rho
+    within the group, median factor between predicted and measured)."""
+    groups = np.asarray(groups)
+    q_n, error = np.asarray(q_n, float), np.asarray(error, float)
+    keep = np.isfinite(q_n) & np.isfinite(error) & (q_n > 0) & (error > 0)
+    groups, x, y = groups[keep], np.log(q_n[keep]), np.log(error[keep])
 
     def fit(sel):
         b, a = np.polyfit(x[sel], y[sel], 1)
@@ -187,20 +178,11 @@ def fit_localization_error(maps, q_n, ape, *, provenance: dict) -> dict:
         return {"a": float(a), "b": float(b), "log_lo": float(lo), "log_hi": float(hi)}
 
     validation = {}
-    for name in sorted(set(maps.tolist())):
-        held = maps == name
+    for name in sorted(set(groups.tolist())):
+        held = groups == name
         if held.all() or held.sum() < 2:
             continue
-        f = fit(~held)
-        centre = f["a"] + f["b"] * x[held]
-        inside = (y[held] >= centre + f["log_lo"]) & (y[held] <= centre + f["log_hi"])
-        rho = spearmanr(x[held], y[held]).statistic if np.ptp(x[held]) > 0 else math.nan
-        validation[name] = {
-            "plans": int(held.sum()),
-            "share_inside_interval": float(np.mean(inside)),
-            "spearman_within_map": None if not math.isfinite(rho) else float(rho),
-            "median_factor": float(math.exp(np.median(np.abs(y[held] - centre)))),
-        }
+        validation[name] = {counted: int(held.sum()), **_judged(fit(~held), x[held], y[held])}
     return {
         "predictor": "q_n",
         **fit(np.ones(len(x), bool)),
@@ -212,11 +194,94 @@ def fit_localization_error(maps, q_n, ape, *, provenance: dict) -> dict:
     }
 
 
-def predict_localization_error(calibration: dict, q_n: float) -> tuple[float, float, float] | None:
-    """(expected localization error, low, high) in m at ``q_n``; None when q_n is not
-    finite (a degenerate pose: localization there follows odometry) or lies outside
-    the fit's :func:`support` (``q_n_range``)."""
+def _judged(line: dict, x: np.ndarray, y: np.ndarray) -> dict:
+    """How the fit ``line`` (a, b, log_lo, log_hi) predicts samples it was not fitted on
+    (``x`` log q_n, ``y`` log error): the share inside its interval, Spearman rho of q_n
+    with the error (None where a side is constant), the median factor between predicted and
+    measured."""
+    from scipy.stats import spearmanr
+
+    centre = line["a"] + line["b"] * x
+    inside = (y >= centre + line["log_lo"]) & (y <= centre + line["log_hi"])
+    rho = spearmanr(x, y).statistic if np.ptp(x) > 0 and np.ptp(y) > 0 else math.nan
+    return {
+        "share_inside_interval": float(np.mean(inside)),
+        "spearman_within_map": None if not math.isfinite(rho) else float(rho),
+        "median_factor": float(math.exp(np.median(np.abs(y - centre)))),
+    }
+
+
+def predict(calibration: dict, q_n: float) -> tuple[float, float, float] | None:
+    """(expected error, low, high) at ``q_n``, in the unit of the error ``calibration`` was
+    fitted on (:func:`fit_on_q_n`); None when q_n is not finite (a degenerate pose:
+    localization there follows odometry) or lies outside the fit's :func:`support`."""
     if not _supported(calibration, q_n):
         return None
     centre = calibration["a"] + calibration["b"] * math.log(q_n)
     return (math.exp(centre), math.exp(centre + calibration["log_lo"]), math.exp(centre + calibration["log_hi"]))
+
+
+#: Contiguous segments of a run that :func:`calibrate_factor` leaves out one at a time.
+CALIBRATION_SEGMENTS = 5
+
+
+def calibrate_factor(base: dict, q_n, error, *, provenance: dict, segments: int = CALIBRATION_SEGMENTS) -> dict:
+    """``base`` (a localization-error fit) recalibrated on one recorded run: its slope b
+    kept (a run spans too narrow a range of q_n to fit one), its offset a and 10-90 %
+    interval refitted on the run's samples (``q_n`` and ``error`` in time order; non-finite
+    or non-positive pairs left out), with ``q_n_range`` the run's. ``factor``: how much the
+    run's errors exceed ``base``'s prediction (exp of the offsets' difference). Validated
+    by leaving out each of ``segments`` contiguous segments in turn (neighbouring scans see
+    the same place): ``validation`` per segment, the recalibrated fit and ``base`` judged on
+    it (:func:`_judged`). Raises Lf3pmError below 2 samples per segment."""
+    q_n, error = np.asarray(q_n, float), np.asarray(error, float)
+    keep = np.isfinite(q_n) & np.isfinite(error) & (q_n > 0) & (error > 0)
+    x, y = np.log(q_n[keep]), np.log(error[keep])
+    if len(x) < 2 * segments:
+        raise Lf3pmError(f"calibrating needs at least {2 * segments} scans with a finite q_n and error, got {len(x)}")
+    b = base["b"]
+
+    def fit(sel):
+        a = float(np.median(y[sel] - b * x[sel]))
+        lo, hi = np.quantile(y[sel] - (a + b * x[sel]), INTERVAL_QUANTILES)
+        return {"a": a, "b": b, "log_lo": float(lo), "log_hi": float(hi)}
+
+    validation = {}
+    for k, held in enumerate(np.array_split(np.arange(len(x)), segments)):
+        sel = np.ones(len(x), bool)
+        sel[held] = False
+        validation[f"segment {k + 1}"] = {
+            "scans": int(len(held)),
+            **_judged(fit(sel), x[held], y[held]),
+            "shipped": _judged(base, x[held], y[held]),
+        }
+    line = fit(np.ones(len(x), bool))
+    return {
+        "predictor": "q_n",
+        **line,
+        "interval_quantiles": list(INTERVAL_QUANTILES),
+        "samples": int(len(x)),
+        "q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
+        "factor": math.exp(line["a"] - base["a"]),
+        "shipped": _judged(base, x, y),
+        "validation": validation,
+        "provenance": provenance,
+    }
+
+
+def load_calibration(path) -> dict:
+    """A localization-error fit written by `lf3pm audit --calibrate` (or the benefit study's
+    localization_error.json); Lf3pmError in one line if it is missing or not such a fit."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except OSError as err:
+        raise Lf3pmError(f"calibration {path}: {err.strerror or err}") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise Lf3pmError(f"calibration {path}: not JSON ({err})") from None
+    needed = ("a", "b", "log_lo", "log_hi", "q_n_range", "samples", "provenance")
+    missing = [k for k in needed if not isinstance(data, dict) or k not in data]
+    if missing or data.get("predictor") != "q_n":
+        what = f"no {', '.join(missing)}" if missing else f"predictor {data.get('predictor')!r}, not q_n"
+        raise Lf3pmError(f"calibration {path}: not a localization-error fit on q_n ({what})")
+    return data

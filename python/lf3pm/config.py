@@ -187,6 +187,17 @@ class MetricConfig(Section):
         return params
 
 
+class PredictionConfig(Section):
+    """Where the predicted localization error comes from (lf3pm.calibration)."""
+
+    calibration: str | None = Field(
+        None,
+        min_length=1,
+        description="A localization-error fit (JSON) from `lf3pm audit --calibrate` on your own run, used "
+        "instead of the packaged one (none: the packaged one).",
+    )
+
+
 class MdeConfig(Section):
     """MDE: registration from disturbed starts."""
 
@@ -631,6 +642,7 @@ class Config(Section):
     map: MapConfig = MapConfig()
     scan: ScanConfig = ScanConfig()
     metric: MetricConfig = MetricConfig()
+    prediction: PredictionConfig = PredictionConfig()
     mde: MdeConfig = MdeConfig()
     solm: SolmConfig = SolmConfig()
     robot: RobotConfig = RobotConfig()

@@ -9,14 +9,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from lf3pm import _core
-from lf3pm.calibration import (
-    LOCALIZATION_PACKAGED,
-    calibration_applies,
-    packaged_calibration,
-    predict_localization_error,
-    predict_mde,
-    withheld_reason,
-)
+from lf3pm.calibration import calibration_applies, localization_fit, packaged_calibration, predict, withheld_reason
 from lf3pm.config import DEFAULTS, Config, MetricConfig, configured, scan_params
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, as_map
@@ -129,13 +122,14 @@ def evaluate(
     reuses the precomputed plane of the map point the ray hit (faster, but its
     residuals are smaller: see docs/metric.md). With observations=True the result
     carries A (m x dof), b (m) and the hit points.
-    predicted_mde (with a 10-90 % interval) comes from the packaged calibration
+    predicted_mde (with a 10-90 % interval) comes from the packaged fit on q_n
     (see lf3pm.calibration) when the query matches the conditions it was fitted
     under (its sensor, default noise, dof 6, k-NN association, no scan
     downsampling), else None; likewise predicted_localization_error_m (with a
     10-90 % interval, m): the APE of map localization expected along a trajectory
     through poses like this one, fitted on the benefit study's plans (its
-    sensors; None at a degenerate pose). Either is None too outside the range of
+    sensors; None at a degenerate pose), or the prediction section's
+    ``calibration`` (a fit on your own run: `lf3pm audit --calibrate`). Either is None too outside the range of
     the predictor its fit saw; ``predicted_*_withheld`` says why a prediction is
     None, in one line (docs/validation.md), and is None where it is given.
     A pose outside the map's x-y extent or within the scan section's ``clearance`` m of
@@ -214,17 +208,13 @@ def _evaluation(
         "noise_is_default": noise_is_default,
         "w1": metric.w1,
     }
+    q_n = values["q_n"]
     calibration = packaged_calibration()
-    mde_value = values[calibration["predictor"]] if calibration is not None else math.nan
     prediction = None
     if calibration is not None and calibration_applies(calibration, **conditions):
-        prediction = predict_mde(calibration, mde_value)
-    fit = packaged_calibration(LOCALIZATION_PACKAGED)
-    error = (
-        predict_localization_error(fit, values["q_n"])
-        if fit is not None and calibration_applies(fit, **conditions)
-        else None
-    )
+        prediction = predict(calibration, q_n)
+    fit = localization_fit(config.prediction.calibration)
+    error = predict(fit, q_n) if fit is not None and calibration_applies(fit, **conditions) else None
     recorded = {
         "seed": scan.seed,
         "noise": noise,
@@ -247,8 +237,8 @@ def _evaluation(
         predicted_mde_interval=list(prediction[1:]) if prediction else None,
         predicted_localization_error_m=error[0] if error else None,
         predicted_localization_error_interval_m=list(error[1:]) if error else None,
-        predicted_mde_withheld=withheld_reason(calibration, mde_value, **conditions),
-        predicted_localization_error_withheld=withheld_reason(fit, values["q_n"], **conditions),
+        predicted_mde_withheld=withheld_reason(calibration, q_n, **conditions),
+        predicted_localization_error_withheld=withheld_reason(fit, q_n, **conditions),
         pose=matrix.tolist(),
         sensor=sensor_name,
         params=recorded,

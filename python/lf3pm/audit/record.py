@@ -20,7 +20,8 @@ class ScanAudit:
     beside sigma1; ``direction_angle_deg``: the angle between the real and the simulated
     least observable directions (0-90, sign-free); ``predicted_error_m`` and its [10 %, 90 %] interval:
     the predicted localization error ``lf3pm evaluate --json`` ships for that pose (None,
-    with ``predicted_error_withheld`` saying why, where it is withheld).
+    with ``predicted_error_withheld`` saying why, where it is withheld); ``predicted_mde`` and
+    its interval likewise: the expected MDE ``lf3pm evaluate`` ships (in ``mde``'s unit).
 
     Registration (lf3pm.validation.mde_of_points: ``lf3pm mde``'s starts and small_gicp
     point-to-plane ICP, on the recorded points): per start the translation error (m) and
@@ -32,8 +33,9 @@ class ScanAudit:
     reference pose's own error. ``mde``: the mean squared twist error over every start, as
     ``lf3pm mde`` reports it. ``tracking_error_m`` and ``odometry_error_m``: at this scan,
     the error against the reference of map localization tracking along the whole run and of
-    KISS-ICP along it (lf3pm.audit.tracks). ``*_error`` fields (text) say why a part could
-    not be computed.
+    KISS-ICP along it (lf3pm.audit.tracks); ``lio_errors_m``: (odometry, error) for each
+    LiDAR-inertial odometry along it (in the JSON, not the CSV). ``*_error`` fields (text)
+    say why a part could not be computed.
     A quantity that could not be computed (a degenerate pose's q, no converged start) is NaN.
     """
 
@@ -71,6 +73,10 @@ class ScanAudit:
     predicted_error_lo_m: float = NAN
     predicted_error_hi_m: float = NAN
     predicted_error_withheld: str | None = None
+    predicted_mde: float = NAN
+    predicted_mde_lo: float = NAN
+    predicted_mde_hi: float = NAN
+    predicted_mde_withheld: str | None = None
     starts: int = 0
     converged: int = 0
     translation_errors_m: tuple = ()
@@ -86,6 +92,7 @@ class ScanAudit:
     registration_error: str | None = None
     tracking_error_m: float = NAN
     odometry_error_m: float = NAN
+    lio_errors_m: tuple = ()  # (odometry, error) per LiDAR-inertial odometry along the run
     metric_seconds: float = NAN
     registration_seconds: float = NAN
     pose: tuple = field(default=(), repr=False)  # 4 x 4 rows

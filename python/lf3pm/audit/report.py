@@ -18,13 +18,13 @@ from lf3pm.audit.figures import along_run_figure, path_figure
 from lf3pm.audit.record import csv_columns
 from lf3pm.audit.run_audit import RunAudit
 from lf3pm.audit.self_map import SELF
-from lf3pm.audit.summary import BLOCK_DRAWS, BLOCK_SEED, PREDICTIONS, REAL_ERRORS
+from lf3pm.audit.summary import BLOCK_DRAWS, BLOCK_SEED, INTERVALS, PREDICTIONS, REAL_ERRORS
 
 #: The files of an audit folder.
 CSV, JSON, REPORT, ALONG_RUN, PATH = "audit.csv", "audit.json", "report.md", "along_run.png", "path.png"
 
 
-def write_audit(audit: RunAudit, folder, map_points, command: str = "") -> list[Path]:
+def write_audit(audit: RunAudit, folder, map_points, command: str = "", calibration: dict | None = None) -> list[Path]:
     """Writes ``audit`` into ``folder`` (created if missing): audit.csv (one row per audited
     scan), audit.json (``audit.to_dict()``), report.md (the summary, the bad scans and ``command``), along_run.png and
     path.png (over ``map_points``, N x 3). Returns the paths written."""
@@ -41,7 +41,7 @@ def write_audit(audit: RunAudit, folder, map_points, command: str = "") -> list[
     with atomic_write(written[1]) as fp:
         fp.write(json.dumps(audit.to_dict()).encode())
     with atomic_write(written[2]) as fp:
-        fp.write(report_text(audit, command).encode())
+        fp.write(report_text(audit, command, calibration).encode())
     along_run_figure(audit.records, written[3])
     path_figure(audit.records, map_points, written[4])
     return written
@@ -66,7 +66,7 @@ def _map_line(described: dict) -> str:
     return f"- map: {described['source']} ({described['points']} points, sha256 {described['sha256'][:12]})"
 
 
-def report_text(audit: RunAudit, command: str = "") -> str:
+def report_text(audit: RunAudit, command: str = "", calibration: dict | None = None) -> str:
     """The Markdown report of ``audit``."""
     s, records = audit.summary, audit.records
     timing = audit.to_dict()["timing"]
@@ -107,21 +107,26 @@ def report_text(audit: RunAudit, command: str = "") -> str:
         "",
     ]
     lines += ["## Real error inside the predicted [10 %, 90 %] interval", ""]
-    for real in REAL_ERRORS:
-        lines.append(f"- `{real}`: {_num(s.inside_interval[real], '.0%')} of {s.inside_scans[real]} scans")
-    withheld = Counter(r.predicted_error_withheld for r in records if r.predicted_error_withheld)
-    for reason, count in withheld.most_common():
-        lines.append(f"- prediction withheld on {count} scans: {reason}")
+    for (centre, _, _), reals in INTERVALS.items():
+        for real in reals:
+            share = _num(s.inside_interval[real], ".0%")
+            lines.append(f"- `{real}` inside `{centre}`'s: {share} of {s.inside_scans[real]} scans")
+        withheld = Counter(getattr(r, f"{centre.removesuffix('_m')}_withheld") for r in records)
+        for reason, count in withheld.most_common():
+            if reason:
+                lines.append(f"- `{centre}` withheld on {count} scans: {reason}")
     lines += ["", "## Along the run (every scan)", ""]
     for t in audit.tracks:
         ape = t.ape
         lines.append(
             f"- {t.method}: APE against the reference rmse {_num(ape['rmse'])} m, median {_num(ape['median'])} m, "
             f"max {_num(ape['max'])} m over {ape['count']} scans ({t.skipped} kept at the prediction; "
-            f"{t.seconds:.1f} s)"
+            f"{t.seconds:.1f} s)" + (f"; {t.message}" if t.message else "")
         )
     if audit.tracks_withheld:
         lines.append(f"- not run: {audit.tracks_withheld}")
+    if audit.lio_withheld and audit.lio_withheld != audit.tracks_withheld:
+        lines.append(f"- LiDAR-inertial odometry not run: {audit.lio_withheld}")
     lines += [
         "",
         "## Simulated / recorded q_n",
@@ -144,6 +149,8 @@ def report_text(audit: RunAudit, command: str = "") -> str:
             )
     else:
         lines.append("None: no scan has both a prediction and a real error.")
+    if calibration is not None:
+        lines += ["", *_calibration_lines(calibration)]
     problems = [(r.index, r.name, r.sim_error) for r in records if r.sim_error]
     problems += [(r.index, r.name, r.registration_error) for r in records if r.registration_error]
     lines += ["", "## Bad scans and failed parts", ""]
@@ -169,6 +176,34 @@ def _median(records, name: str) -> float:
     values = np.array([getattr(r, name) for r in records], dtype=np.float64)
     values = values[np.isfinite(values)]
     return float(np.median(values)) if len(values) else math.nan
+
+
+def _calibration_lines(fit: dict) -> list[str]:
+    """The run's calibration (lf3pm.audit.calibrate): the factor on the shipped fit, and the
+    shipped and recalibrated fits judged on each segment left out."""
+    shipped = fit["shipped"]
+    lines = [
+        "## The predicted localization error calibrated on this run (`--calibrate`)",
+        "",
+        f"Fitted on {fit['samples']} scans ({fit['provenance']['error']}; predictor: "
+        f"{fit['provenance']['predictor']}): the run's errors are **{_num(fit['factor'])} times** what the "
+        f"shipped fit predicts (its slope {fit['b']:.3g} kept; interval factors "
+        f"{_num(math.exp(fit['log_lo']))} to {_num(math.exp(fit['log_hi']))}). Over the whole run the shipped fit "
+        f"holds {_num(shipped['share_inside_interval'], '.0%')} of the scans inside its interval, median factor "
+        f"{_num(shipped['median_factor'])} between predicted and real.",
+        "",
+        "Each segment of the run left out in turn, fitted on the others:",
+        "",
+        "| segment | scans | inside, recalibrated | median factor, recalibrated | inside, shipped | "
+        "median factor, shipped |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, v in fit["validation"].items():
+        lines.append(
+            f"| {name} | {v['scans']} | {_num(v['share_inside_interval'], '.0%')} | {_num(v['median_factor'])} | "
+            f"{_num(v['shipped']['share_inside_interval'], '.0%')} | {_num(v['shipped']['median_factor'])} |"
+        )
+    return lines
 
 
 def _simulated_against_recorded(records) -> list[str]:

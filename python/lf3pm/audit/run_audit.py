@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from lf3pm.audit.record import ScanAudit
 from lf3pm.audit.scan_audit import audit_scan
 from lf3pm.audit.self_map import SelfMap
 from lf3pm.audit.summary import AuditSummary, summarize
-from lf3pm.audit.tracks import track_localization, track_odometry
+from lf3pm.audit.tracks import has_imu, lio_odometries, track_lio, track_localization, track_odometry
 from lf3pm.config import DEFAULTS, Config
 from lf3pm.errors import Lf3pmError, RunError
 from lf3pm.map import Map, as_map
@@ -28,7 +28,8 @@ class RunAudit:
     audited scan; ``registration_seconds``: the registrations; ``map_seconds``: building
     each scan's map, for a map from the run itself) and what produced it; ``tracks``: map
     localization and KISS-ICP along the whole run (lf3pm.audit.tracks), or none, with
-    ``tracks_withheld`` saying why."""
+    ``tracks_withheld`` saying why, then the LiDAR-inertial odometries along it, or none,
+    with ``lio_withheld`` saying why."""
 
     run: str
     map: dict
@@ -43,6 +44,7 @@ class RunAudit:
     map_seconds: float = 0.0
     tracks: tuple = ()
     tracks_withheld: str | None = None
+    lio_withheld: str | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready: the per-scan records, the bad scans and the summary."""
@@ -63,14 +65,22 @@ class RunAudit:
             },
             "tracks": [t.to_dict() for t in self.tracks],
             "tracks_withheld": self.tracks_withheld,
+            "lio_withheld": self.lio_withheld,
             "summary": self.summary.to_dict(),
             "bad_scans": [{"index": b.index, "name": b.name, "reason": b.reason} for b in self.bad_scans],
             "scans": [r.to_dict() for r in self.records],
         }
 
 
-#: The phases an audit's progress names.
+#: The phases an audit's progress names (and a LiDAR-inertial odometry's: :func:`lio_phase`).
 AUDITING, TRACKING_PHASE, ODOMETRY_PHASE = "auditing scans", "localization along the run", "KISS-ICP along the run"
+
+
+def lio_phase(odometry: str) -> str:
+    """The progress phase of the LiDAR-inertial ``odometry`` (its key) along the run."""
+    from lf3pm.replays import registry
+
+    return f"{registry.odometry(odometry).name} along the run"
 
 
 def _tracks_withheld(register: bool, track: bool, own: bool) -> str | None:
@@ -80,6 +90,16 @@ def _tracks_withheld(register: bool, track: bool, own: bool) -> str | None:
         return "registrations left out"
     if own:
         return "a map from the run itself is built per audited scan; tracking needs one map"
+    return None
+
+
+def _lio_withheld(tracks_withheld: str | None, odometries: tuple, run, config: Config) -> str | None:
+    if tracks_withheld is not None:
+        return tracks_withheld
+    if not odometries:
+        return "none asked for"
+    if not has_imu(run, config):
+        return "the run has no IMU"
     return None
 
 
@@ -100,6 +120,7 @@ def audit_run(
     every: int = 1,
     register: bool = True,
     track: bool = True,
+    lio: Sequence[str] | None = None,
     progress: Callable[[int, int | None, str], None] | None = None,
 ) -> RunAudit:
     """Audits every ``every``-th scan (by its index in the run, bad scans counted) of the
@@ -110,14 +131,19 @@ def audit_run(
     ``config``'s scan, metric and mde sections. ``register=False`` leaves
     the registrations out. ``track``: map localization and KISS-ICP along the whole run
     as well (:mod:`lf3pm.audit.tracks`; each scan's errors into its record), not with
-    registrations left out or a map from the run itself. ``progress(read, total, phase)``
+    registrations left out or a map from the run itself; with them, where the run has an
+    IMU, the LiDAR-inertial odometries ``lio`` names (registered names; None: every one
+    that takes ``sensor``'s scans; empty: none) along it (:func:`lf3pm.audit.tracks.track_lio`;
+    each scan's errors into its record's ``lio_errors_m``; a failed odometry's track says
+    why, and the audit goes on). ``progress(read, total, phase)``
     is called after each scan read in each phase (total: the run's scans, None where
     unknown). A run without reference poses, or whose scans are all bad,
-    raises RunError."""
+    raises RunError; an unknown odometry in ``lio``, Lf3pmError, before any scan is read."""
     config = DEFAULTS if config is None else config
     if not (isinstance(every, int) and every >= 1):
         raise Lf3pmError(f"every must be a whole number >= 1, got {every!r}")
     sensor = as_sensor(sensor)
+    odometries = lio_odometries(sensor, lio)
     own = isinstance(map, SelfMap)
     map = map if own else as_map(map)
     records: list[ScanAudit] = []
@@ -147,13 +173,23 @@ def audit_run(
     if not records:
         raise RunError(f"{run}: no scan to audit ({len(bad)} bad, every {every})")
     tracks, withheld = (), _tracks_withheld(register, track, own)
+    lio_withheld = _lio_withheld(withheld, odometries, run, config)
     if withheld is None:
         tracks = (
             track_localization(run, map, sensor, config, target=target, progress=_phase(progress, TRACKING_PHASE)),
             track_odometry(run, sensor, config, progress=_phase(progress, ODOMETRY_PHASE)),
         )
+        if lio_withheld is None:
+            tracks += tuple(
+                track_lio(run, name, sensor, config, progress=_phase(progress, lio_phase(name))) for name in odometries
+            )
         records = [
-            replace(r, tracking_error_m=tracks[0].error_at(r.stamp), odometry_error_m=tracks[1].error_at(r.stamp))
+            replace(
+                r,
+                tracking_error_m=tracks[0].error_at(r.stamp),
+                odometry_error_m=tracks[1].error_at(r.stamp),
+                lio_errors_m=tuple((t.method, t.error_at(r.stamp)) for t in tracks[2:]),
+            )
             for r in records
         ]
     return RunAudit(
@@ -184,6 +220,7 @@ def audit_run(
         map_seconds=map_seconds,
         tracks=tracks,
         tracks_withheld=withheld,
+        lio_withheld=lio_withheld,
     )
 
 

@@ -66,6 +66,10 @@ def audit_scan(
             out.update(predicted_error_m=simulated.predicted_localization_error_m)
             out.update(predicted_error_lo_m=lo, predicted_error_hi_m=hi)
         out["predicted_error_withheld"] = simulated.predicted_localization_error_withheld
+        if simulated.predicted_mde is not None:
+            lo, hi = simulated.predicted_mde_interval
+            out.update(predicted_mde=simulated.predicted_mde, predicted_mde_lo=lo, predicted_mde_hi=hi)
+        out["predicted_mde_withheld"] = simulated.predicted_mde_withheld
     out["metric_seconds"] = time.perf_counter() - began
     if register:
         began = time.perf_counter()

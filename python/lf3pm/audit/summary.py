@@ -18,6 +18,7 @@ PREDICTIONS = {
     "real_q_min": "q_min of the recorded scan",
     "real_q_max": "q_max of the recorded scan",
     "predicted_error_m": "predicted localization error (m)",
+    "predicted_mde": "predicted MDE (the mde's unit)",
     "sim_q_n": "q_n of the simulated scan",
 }
 #: The real errors: ScanAudit field -> what it is.
@@ -25,6 +26,18 @@ REAL_ERRORS = {
     "error_m": "registration error against the reference (mean over converged starts, m)",
     "spread_m": "spread of the converged registrations (RMS, m)",
     "tracking_error_m": "map localization tracking along the run from the previous estimate, its error here (m)",
+    "mde": "MDE over the disturbed starts (lf3pm mde's: mean squared twist error)",
+}
+#: Each predicted interval and the real error it predicts: (centre, low, high) fields -> the
+#: real errors it is judged against (the localization error against each real error in
+#: metres, the MDE against the MDE).
+INTERVALS = {
+    ("predicted_error_m", "predicted_error_lo_m", "predicted_error_hi_m"): (
+        "error_m",
+        "spread_m",
+        "tracking_error_m",
+    ),
+    ("predicted_mde", "predicted_mde_lo", "predicted_mde_hi"): ("mde",),
 }
 #: How many scans the summary lists where the prediction is furthest off.
 FURTHEST_OFF = 5
@@ -70,8 +83,9 @@ class OffScan:
 @dataclass(frozen=True)
 class AuditSummary:
     """The summary of an audit's scans (see the module docstring). ``inside_interval``:
-    per real error, the share of scans (with a prediction and that error) whose error lies
-    within the predicted [10 %, 90 %] interval, with ``inside_scans`` such scans;
+    per real error (:data:`INTERVALS`), the share of scans (with a prediction and that
+    error) whose error lies within its predicted [10 %, 90 %] interval, with
+    ``inside_scans`` such scans;
     ``ratio_*``: sim_q_n / real_q_n over the scans where both are finite (median, 10 %
     and 90 % quantiles)."""
 
@@ -149,7 +163,7 @@ def summarize(records: Sequence[ScanAudit]) -> AuditSummary:
     """The summary of ``records`` (one per audited scan)."""
     column = {
         name: np.array([getattr(r, name) for r in records], dtype=np.float64)
-        for name in (*PREDICTIONS, *REAL_ERRORS, "predicted_error_lo_m", "predicted_error_hi_m", "q_n_ratio")
+        for name in {*PREDICTIONS, *REAL_ERRORS, *(f for fields in INTERVALS for f in fields), "q_n_ratio"}
     }
     correlations = []
     for real in REAL_ERRORS:
@@ -157,14 +171,15 @@ def summarize(records: Sequence[ScanAudit]) -> AuditSummary:
             rho, n = spearman(column[prediction], column[real])
             low, high, block = block_interval(column[prediction], column[real])
             correlations.append(Correlation(prediction, real, rho, n, low, high, block))
-    lo, hi = column["predicted_error_lo_m"], column["predicted_error_hi_m"]
     inside, inside_scans = {}, {}
-    for real in REAL_ERRORS:
-        error = column[real]
-        keep = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(error)
-        inside_scans[real] = int(keep.sum())
-        within = (error[keep] >= lo[keep]) & (error[keep] <= hi[keep])
-        inside[real] = float(within.mean()) if keep.any() else math.nan
+    for (_, low, high), reals in INTERVALS.items():
+        lo, hi = column[low], column[high]
+        for real in reals:
+            error = column[real]
+            keep = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(error)
+            inside_scans[real] = int(keep.sum())
+            within = (error[keep] >= lo[keep]) & (error[keep] <= hi[keep])
+            inside[real] = float(within.mean()) if keep.any() else math.nan
     ratio = column["q_n_ratio"][np.isfinite(column["q_n_ratio"])]
     quantiles = np.quantile(ratio, [0.5, 0.1, 0.9]) if len(ratio) else [math.nan] * 3
     return AuditSummary(

@@ -10,21 +10,27 @@ against its reference pose:
   :data:`COARSE_CORRESPONDENCE_M`, and more iterations, :data:`COARSE_ITERATIONS`), then
   as the localization section says. Scans are registered as recorded (not deskewed);
 - **LiDAR-only odometry**: KISS-ICP (the kiss_icp section's settings, deskewing with the
-  points' times where the run has them) anchored at the first scan's reference pose.
+  points' times where the run has them) anchored at the first scan's reference pose;
+- **LiDAR-inertial odometries**, where the run has an IMU: each odometry ``lf3pm replay
+  --method lio`` runs (GenZ-LIO, DLIO, LIO-SAM, a plugin's: :func:`lio_odometries`)
+  through :func:`lf3pm.replays.lio.run_lio` on the recorded stream (:func:`track_lio`).
 
 The run is read once per track, a scan at a time; a track keeps one pose per scan."""
 
 from __future__ import annotations
 
+import itertools
+import math
 import time
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 
 import numpy as np
 
 from lf3pm.config import DEFAULTS, Config
-from lf3pm.errors import RunError
+from lf3pm.errors import Lf3pmError, RunError, one_line
 from lf3pm.map import Map
 from lf3pm.replays.trajectory_metrics import error_stats
 from lf3pm.runs import Run
@@ -51,7 +57,8 @@ class Track:
     """An estimator along the run: per scan (bad scans left out) its ``stamps``, the
     estimated ``poses`` (world-from-LiDAR, 4 x 4) and ``errors_m``, the distance of each
     from the scan's reference position; ``skipped`` scans the estimator kept at its
-    prediction, ``seconds`` spent estimating, the ``params`` it ran with."""
+    prediction, ``seconds`` spent estimating, the ``params`` it ran with; ``message``: one
+    line where the estimator failed or lost track (its errors there NaN), else None."""
 
     method: str
     stamps: np.ndarray
@@ -60,11 +67,13 @@ class Track:
     skipped: int
     seconds: float
     params: dict = field(default_factory=dict)
+    message: str | None = None
 
     @property
     def ape(self) -> dict:
-        """The translation errors' statistics (rmse, mean, median, max, min, std, count; m)."""
-        return error_stats(self.errors_m)
+        """The translation errors' statistics (rmse, mean, median, max, min, std, count; m)
+        over the scans with an error (NaN where the track lost them)."""
+        return error_stats(self.errors_m[np.isfinite(self.errors_m)])
 
     def error_at(self, stamp: float) -> float:
         """The error at the scan recorded at ``stamp`` (NaN where the track has none)."""
@@ -72,14 +81,16 @@ class Track:
         return float(self.errors_m[at[0]]) if at.size else float("nan")
 
     def to_dict(self) -> dict:
-        """JSON-ready: what ran and its APE (the per-scan errors are in the scans' records)."""
+        """JSON-ready: what ran and its APE (None where it has none; the per-scan errors are in
+        the scans' records)."""
         return {
             "method": self.method,
             "scans": len(self.stamps),
             "skipped": self.skipped,
             "seconds": self.seconds,
-            "ape_m": self.ape,
+            "ape_m": {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in self.ape.items()},
             "params": self.params,
+            "message": self.message,
         }
 
 
@@ -178,3 +189,245 @@ def track_odometry(
         estimate.seconds,
         params,
     )
+
+
+#: IMU samples handed to an odometry at a time (run_lio reads them as it needs them).
+IMU_CHUNK = 512
+#: Seconds of IMU read past the last scan's end (LIO-SAM flushes its last scans on them).
+IMU_AFTER_LAST_SCAN = 1.0
+
+
+def lio_odometries(sensor: Sensor | str = DEFAULTS.sensor, names: Iterable[str] | None = None) -> tuple[str, ...]:
+    """The odometries (registry keys) an audit runs along a run with an IMU: those
+    ``names`` gives (registered names or auto, each once), or with None every registered
+    one that takes ``sensor``'s scans. Lf3pmError in one line for an unknown name or an
+    odometry that cannot take the sensor's scans."""
+    from lf3pm.replays import registry
+
+    sensor = as_sensor(sensor)
+    if names is None:
+        return tuple(key for key, adapter in registry.odometries().items() if adapter.runs_on(sensor))
+    if isinstance(names, str):
+        names = (names,)
+    keys: list[str] = []
+    for name in names:
+        key = registry.choose_odometry(name, sensor).key
+        keys += [] if key in keys else [key]
+    return tuple(keys)
+
+
+def has_imu(run, config: Config | None = None) -> bool:
+    """Whether ``run`` (read with ``config``'s run section) has IMU samples (two at least)."""
+    with Run(run, (DEFAULTS if config is None else config).run) as opened:
+        samples = iter(opened.imu())
+        return next(samples, None) is not None and next(samples, None) is not None
+
+
+def imu_in_lidar_frame(rows: np.ndarray, body_from_lidar: np.ndarray, before=None, after=None) -> np.ndarray:
+    """IMU rows (t, accel, gyro: K x 7, in the body frame, the IMU's) as an IMU at the
+    LiDAR would read them, in the LiDAR's axes: with R, r the LiDAR's rotation and
+    position in the body frame (``body_from_lidar``), gyro R^T w and specific force
+    R^T (a + dw/dt x r + w x (w x r)), dw/dt by central differences of the gyro over the
+    neighbouring samples (``before`` and ``after``: the rows either side of these, where
+    there are any). The identity extrinsic returns ``rows`` as they are."""
+    rotation, lever = body_from_lidar[:3, :3], body_from_lidar[:3, 3]
+    if np.array_equal(rotation, np.eye(3)) and not lever.any():
+        return rows
+    accel, gyro = rows[:, 1:4], rows[:, 4:7]
+    if lever.any():
+        around = [r for r in (before, rows, after) if r is not None]
+        joined = np.vstack([np.atleast_2d(r) for r in around])
+        start = 1 if before is not None else 0
+        if len(joined) > 1:
+            rate = np.gradient(joined[:, 4:7], joined[:, 0], axis=0)[start : start + len(rows)]
+        else:
+            rate = np.zeros_like(gyro)
+        accel = accel + np.cross(rate, lever) + np.cross(gyro, np.cross(gyro, lever))
+    return np.column_stack([rows[:, 0], accel @ rotation, gyro @ rotation])  # R^T v, row by row
+
+
+def _imu_chunks(samples: Iterable, body_from_lidar: np.ndarray, since: float, stop, kept: dict):
+    """The run's IMU ``samples`` (ImuSample) as run_lio's chunks (t, accel, gyro) in the
+    LiDAR frame (:func:`imu_in_lidar_frame`): from the last sample at or before ``since``
+    (the first scan's first point) up to the first at which ``stop(t)``; a sample not
+    after the one before is left out (counted in ``kept["repeated"]``)."""
+    pending: list = []  # read, not handed out yet
+    before, last = None, -math.inf  # the last row handed out, the last time read
+    for sample in samples:
+        t = float(sample.stamp)
+        if not t > last:
+            kept["repeated"] += 1
+            continue
+        last = t
+        row = np.concatenate([[t], sample.linear_acceleration, sample.angular_velocity]).astype(np.float64)
+        if t <= since:
+            pending = [row]
+            continue
+        pending.append(row)
+        if stop(t):
+            break
+        if len(pending) > IMU_CHUNK:  # the newest one kept back: the derivative of the last needs it
+            chunk = np.array(pending[:-1])
+            yield _chunk(imu_in_lidar_frame(chunk, body_from_lidar, before, pending[-1]), kept)
+            before, pending = chunk[-1], pending[-1:]
+    if pending:
+        yield _chunk(imu_in_lidar_frame(np.array(pending), body_from_lidar, before, None), kept)
+
+
+def _chunk(rows: np.ndarray, kept: dict) -> SimpleNamespace:
+    kept["samples"] += len(rows)
+    return SimpleNamespace(t=rows[:, 0], accel=rows[:, 1:4], gyro=rows[:, 4:7])
+
+
+def track_lio(
+    run,
+    odometry: str,
+    sensor: Sensor | str = DEFAULTS.sensor,
+    config: Config | None = None,
+    *,
+    progress: Callable[[int, int | None], None] | None = None,
+) -> Track:
+    """The LiDAR-inertial ``odometry`` (a registered one) along ``run`` with its IMU,
+    through :func:`lf3pm.replays.lio.run_lio` as the lio replay runs it: the replay
+    section's settings for it (``replay.odometries``), one thread (deterministic);
+    ``sensor``'s range limits (and rings, for LIO-SAM).
+
+    Scans as recorded (bad ones left out): points in the LiDAR frame, each at its
+    absolute time (stamp + its time; a run without point times: every point at the
+    scan's stamp), in time order; a scan ends at its last point's time (one not after
+    the previous scan's end is left out). The IMU as recorded, taken to be at the body
+    frame the reference poses track, turned into the LiDAR frame with the run's
+    extrinsic (:func:`imu_in_lidar_frame`): the odometries take the IMU in the LiDAR's
+    frame, as the replay simulates it. Both are streamed, a few scans in memory. The
+    estimate, run from the identity, is anchored at the reference LiDAR pose at its
+    first pose's time; each pose's error is against the reference interpolated at the
+    time the pose refers to (GenZ-LIO: the scan's end; DLIO, LIO-SAM: its median return
+    time); NaN where the odometry lost the scan or the reference has no pose. A failure
+    (a crash, input it refuses) gives a track with every error NaN and ``message``
+    saying why, in one line. ``progress(read, total)`` after each scan."""
+    from lf3pm.replays import registry
+    from lf3pm.replays.lio import run_lio
+
+    config = DEFAULTS if config is None else config
+    sensor = as_sensor(sensor)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # run_lio warns where the odometry is known to lose such a sensor
+        adapter = registry.choose_odometry(odometry, sensor)
+    options = registry.changed_settings(adapter.key, config.replay.odometries.get(adapter.key, {}))
+    stamps, references, ends = [], [], []
+    kept = {"samples": 0, "repeated": 0, "scans_without_point_times": 0, "scans_left_out": 0}
+    state = {"done": False}
+    with Run(run, config.run, skip_bad=True) as opened, Run(run, config.run) as imu_run:
+        total = opened.scan_count()
+        body_from_lidar = opened.body_from_lidar
+
+        def scans() -> Iterator[SimpleNamespace]:
+            for scan in opened.scans():
+                fed = _lio_scan(scan, ends[-1] if ends else -math.inf, kept)
+                if fed is not None:
+                    stamps.append(scan.stamp)
+                    references.append(scan.pose)
+                    ends.append(fed.end)
+                    yield fed
+                if progress is not None:
+                    progress(scan.index + 1, total)
+            state["done"] = True
+
+        def stop(t: float) -> bool:  # the IMU read far enough past the last scan
+            return state["done"] and t > ends[-1] + IMU_AFTER_LAST_SCAN
+
+        began = time.perf_counter()
+        estimate, message, stream, imu = None, None, scans(), None
+        try:
+            first = next(stream, None)
+            if first is None:
+                raise RunError(f"{run}: no scan to run the odometry on")
+            imu = _imu_chunks(imu_run.imu(), body_from_lidar, float(first.stamps[0]), stop, kept)
+            fed = itertools.chain([first], stream)
+            estimate = run_lio(fed, imu, sensor, initial_pose=np.eye(4), odometry=adapter.key, **options)
+        except Exception as err:  # any failure of the odometry or its input: one line, and the audit goes on
+            text = str(err) if isinstance(err, Lf3pmError) else f"{type(err).__name__}: {err}"
+            message = one_line(f"{adapter.name} failed: {text}")
+        finally:  # before the runs close
+            stream.close()
+            if imu is not None:
+                imu.close()
+        seconds = time.perf_counter() - began
+        count = len(stamps)
+        params = {"odometry": adapter.name, "threads": 1, "options": options}
+        params["imu"] = {
+            "frame": "the body frame of the reference poses, turned into the LiDAR's by run.lidar_* (lever arm "
+            "with dw/dt by central differences)",
+            "body_from_lidar": body_from_lidar.tolist(),
+            "samples": kept["samples"],
+            "repeated_stamps_left_out": kept["repeated"],
+        }
+        params["scans"] = {
+            "without_point_times": kept["scans_without_point_times"],
+            "left_out_end_not_after_previous": kept["scans_left_out"],
+        }
+        if estimate is None:
+            poses = np.full((count, 4, 4), np.nan)
+            errors = np.full(count, np.nan)
+            return Track(adapter.key, np.asarray(stamps), poses, errors, count, seconds, params, message)
+        anchor = _reference_at(opened, estimate.times[0])
+        anchor = references[0] if anchor is None else anchor
+        poses = anchor @ estimate.poses
+        errors = np.full(count, np.nan)
+        for k, at in enumerate(estimate.times):
+            reference = _reference_at(opened, at)
+            if reference is not None:
+                errors[k] = float(np.linalg.norm(poses[k, :3, 3] - reference[:3, 3]))
+        errors[estimate.lost] = np.nan
+    if estimate.lost:
+        k = estimate.lost[0]
+        message = one_line(
+            f"{adapter.name} lost {len(estimate.lost)} of {count} scans (first at {stamps[k]:.6f} s: "
+            f"{estimate.status[k]})"
+        )
+    params |= {
+        "package": estimate.package,
+        "version": estimate.version,
+        "seconds_per_scan": estimate.seconds_per_scan,
+        "pose_times": "the odometry's own (GenZ-LIO: each scan's end; DLIO, LIO-SAM: its median return time)",
+        "settings": estimate.params,
+        "notes": [m for m in estimate.messages if m.startswith("lf3pm:")],
+    }
+    return Track(
+        adapter.key,
+        np.asarray(stamps),
+        poses,
+        errors,
+        len(estimate.lost),
+        estimate.seconds_per_scan * count,
+        params,
+        message,
+    )
+
+
+def _lio_scan(scan, previous_end: float, kept: dict) -> SimpleNamespace | None:
+    """The scan as run_lio takes it (points in time order, absolute times, its end: the last
+    point's time), or None where it does not end after ``previous_end``."""
+    if scan.times is None:
+        kept["scans_without_point_times"] += 1
+        stamps = np.full(len(scan.points), scan.stamp)
+        points = scan.points
+    else:
+        stamps = scan.stamp + np.asarray(scan.times, dtype=np.float64)
+        points = scan.points
+        if np.any(np.diff(stamps) < 0):
+            order = np.argsort(stamps, kind="stable")
+            stamps, points = stamps[order], points[order]
+    end = float(stamps[-1])
+    if not end > previous_end:
+        kept["scans_left_out"] += 1
+        return None
+    return SimpleNamespace(end=end, points=points, stamps=stamps)
+
+
+def _reference_at(run: Run, t: float) -> np.ndarray | None:
+    """The reference LiDAR pose at ``t`` (None where the run has none)."""
+    try:
+        return run.lidar_pose_at(float(t))
+    except RunError:
+        return None

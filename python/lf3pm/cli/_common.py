@@ -137,7 +137,12 @@ def configure(config_file: Path | None, given: dict, paths: dict) -> Config:
     parameter name; None: not given), each at its config path ``paths[name]``."""
     overrides = {paths[name]: value for name, value in given.items() if name in paths}
     flags = {paths[name]: "--" + name.replace("_", "-") for name in paths}
-    return load_config(config_file, overrides, flags)
+    config = load_config(config_file, overrides, flags)
+    if config.prediction.calibration is not None:  # a bad fit file fails now, not after the work
+        from lf3pm.calibration import localization_fit
+
+        localization_fit(config.prediction.calibration)
+    return config
 
 
 def section_paths(section: str, *names: str) -> dict:

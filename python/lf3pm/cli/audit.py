@@ -58,7 +58,31 @@ def audit(
     lidar_time_offset: float | None = option("run.lidar_time_offset"),
     registration: bool = typer.Option(True, help="Register each scan (--no-registration: the metric part only)."),
     track: bool = typer.Option(
-        True, help="Map localization and KISS-ICP along the whole run too (with registration and a map file)."
+        True,
+        help="Map localization, KISS-ICP and the LIOs (--lio) along the whole run too (with registration and a "
+        "map file).",
+    ),
+    lio: list[str] | None = typer.Option(
+        None,
+        "--lio",
+        metavar="NAME",
+        help="A LiDAR-inertial odometry along the run, where it has an IMU (repeatable; genz, dlio, liosam, a "
+        "plugin's or auto; default: every one that takes the sensor's scans).",
+    ),
+    no_lio: bool = typer.Option(False, "--no-lio", help="No LiDAR-inertial odometry along the run."),
+    calibration: str | None = option("prediction.calibration", metavar="FIT.json"),
+    calibrate: Path | None = typer.Option(
+        None,
+        "--calibrate",
+        metavar="FIT.json",
+        help="Fit the predicted localization error on this run (the simulated scans' q_n against "
+        "--calibrate-on) and write it here, for --calibration of evaluate, solm build, plan and audit.",
+    ),
+    calibrate_on: str = typer.Option(
+        "tracking_error_m",
+        metavar="ERROR",
+        help="The real error --calibrate fits: tracking_error_m (map localization along the run, what the "
+        "shipped fit predicts), error_m or spread_m (the registrations from disturbed starts).",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object: per-scan records and the summary."),
     out: Path | None = typer.Option(
@@ -73,15 +97,27 @@ def audit(
             **SCAN_PATHS,
             **MAP_PATHS,
             "starts": "mde.trials",
+            "calibration": "prediction.calibration",
             **section_paths("run", "scans_topic", "poses_topic", "max_pose_gap", "lidar_time_offset", "exclude_window"),
         }
         cfg = configure(config, locals(), paths)
+        from lf3pm.atomic import atomic_write
         from lf3pm.audit import SELF, SelfMap, audit_run, check_run, write_audit
+        from lf3pm.audit.calibrate import CALIBRATION_ERRORS, calibrate_run
+        from lf3pm.audit.tracks import lio_odometries
+        from lf3pm.calibration import localization_fit
+        from lf3pm.errors import Lf3pmError
         from lf3pm.map import load_map
         from lf3pm.sensors import as_sensor
 
         check_output(out, folder=True, parents=True)
+        check_output(calibrate)
+        if calibrate is not None and calibrate_on not in CALIBRATION_ERRORS:
+            raise Lf3pmError(f"--calibrate-on must be one of {', '.join(CALIBRATION_ERRORS)}, got {calibrate_on!r}")
         chosen = as_sensor(cfg.sensor)
+        if lio and no_lio:
+            raise Lf3pmError("--lio and --no-lio: give one of them")
+        odometries = lio_odometries(chosen, () if no_lio else (lio or None))
         check_run(run, cfg)
         if str(map_path) == SELF:
             with map_loading() as loading:
@@ -111,16 +147,25 @@ def audit(
                 cfg,
                 register=registration,
                 track=track,
+                lio=odometries,
                 progress=progress,
                 **({} if every is None else {"every": every}),
             )
+        fit = None
+        if calibrate is not None:
+            base = localization_fit()
+            fit = calibrate_run(result, base, cfg, against=calibrate_on, command=command_line(ctx))
+            with atomic_write(calibrate) as fp:
+                fp.write(json.dumps(fit, indent=1).encode())
         if out is not None:
             drawn = world.whole() if isinstance(world, SelfMap) else world.points  # the map under the path
-            write_audit(result, out, drawn, command_line(ctx))
+            write_audit(result, out, drawn, command_line(ctx), calibration=fit)
         if as_json:
-            print(json.dumps(result.to_dict()))
+            print(json.dumps({**result.to_dict(), **({} if fit is None else {"calibration": fit})}))
             return
         print_summary(result, out)
+        if fit is not None:
+            print_calibration(fit, calibrate)
 
 
 def print_summary(result, out: Path | None) -> None:
@@ -134,18 +179,41 @@ def print_summary(result, out: Path | None) -> None:
         f"registration {result.registration_seconds:.1f} s ({_n(timing['registration_scans_per_second'])} scans/s)"
     )
     for c in s.correlations:
+        if not c.scans:  # a prediction withheld, or an error not measured, on every scan
+            continue
         interval = f"[{_n(c.ci_low)}, {_n(c.ci_high)}]"
         say(f"spearman {c.prediction} ~ {c.real_error}: {_n(c.rho)} {interval} ({c.scans} scans)")
     for real, share in s.inside_interval.items():
+        if not s.inside_scans[real]:
+            continue
         say(f"{real} inside the predicted interval: {_n(share)} of {s.inside_scans[real]} scans")
     say(f"q_n simulated/recorded: median {_n(s.ratio_median)} [10 % {_n(s.ratio_p10)}, 90 % {_n(s.ratio_p90)}]")
     for t in result.tracks:
         ape = t.ape
         say(f"{t.method} along the run: APE rmse {_n(ape['rmse'])} m, median {_n(ape['median'])}, max {_n(ape['max'])}")
+        if t.message:
+            say(f"{t.method}: {t.message}")
+    if result.lio_withheld and result.lio_withheld != result.tracks_withheld:
+        say(f"LiDAR-inertial odometry not run: {result.lio_withheld}")
     for bad in result.bad_scans:
         say(f"bad scan: {bad.reason}")
     if out is not None:
         say(f"wrote {out}/ (audit.csv, audit.json, report.md, along_run.png, path.png)")
+
+
+def print_calibration(fit: dict, path: Path) -> None:
+    """A few lines: the factor on the shipped fit and how each predicts the run's segments."""
+    say = lambda text: console.print(text, highlight=False, soft_wrap=True)  # noqa: E731
+    shipped, held = fit["shipped"], fit["validation"].values()
+    inside = sum(v["share_inside_interval"] * v["scans"] for v in held) / sum(v["scans"] for v in held)
+    factor = sorted(v["median_factor"] for v in held)[len(held) // 2]
+    say(
+        f"calibrated on {fit['samples']} scans: errors {_n(fit['factor'])} times the shipped fit's; shipped fit: "
+        f"{_n(shipped['share_inside_interval'] * 100)} % inside its interval, median factor "
+        f"{_n(shipped['median_factor'])}; recalibrated, each of {len(held)} segments left out: "
+        f"{_n(inside * 100)} % inside, median factor {_n(factor)} (median segment)"
+    )
+    say(f"wrote {path} (use it with --calibration)")
 
 
 def command_line(ctx: typer.Context) -> str:
@@ -160,6 +228,9 @@ def command_line(ctx: typer.Context) -> str:
             continue
         elif isinstance(value, bool):
             parts.append(param.opts[0] if value else param.secondary_opts[0])
+        elif isinstance(value, (list, tuple)):  # a repeatable option: once per value
+            for item in value:
+                parts += [param.opts[0], str(item)]
         else:
             parts += [param.opts[-1] if param.opts[-1].startswith("--") else param.opts[0], str(value)]
     return " ".join(shlex.quote(p) for p in parts)

@@ -41,6 +41,7 @@ def evaluate(
     plane_threshold: float | None = option("map.plane_threshold"),
     max_neighbor_distance: float | None = option("map.max_neighbor_distance"),
     threads: int | None = option("scan.threads"),
+    calibration: str | None = option("prediction.calibration", metavar="FIT.json"),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     save_observations: Path | None = typer.Option(None, metavar="OBS.npz", help="Write A, b and the simulated points."),
 ):
@@ -49,7 +50,14 @@ def evaluate(
         cfg = configure(
             config,
             locals(),
-            {**SCAN_PATHS, **MAP_PATHS, "dof": "metric.dof", "w1": "metric.w1", "association": "metric.association"},
+            {
+                **SCAN_PATHS,
+                **MAP_PATHS,
+                "dof": "metric.dof",
+                "w1": "metric.w1",
+                "association": "metric.association",
+                "calibration": "prediction.calibration",
+            },
         )
         from lf3pm.map import load_map
         from lf3pm.metric import evaluate as run_evaluate

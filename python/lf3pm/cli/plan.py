@@ -23,6 +23,7 @@ from lf3pm.errors import Lf3pmError
 #: Where each option of plan lives in the config.
 PLAN_PATHS = {
     "robot": "robot.kind",
+    "calibration": "prediction.calibration",
     "metric": "guidance.metric",
     "weight": "guidance.weight",
     "power": "guidance.power",
@@ -67,6 +68,12 @@ def plan(
     alpha_max: float | None = option("robot.alpha_max"),
     min_turn_radius: float | None = option("robot.min_turn_radius"),
     r_safe: float | None = option("robot.r_safe"),
+    calibration: str | None = option(
+        "prediction.calibration",
+        metavar="FIT.json",
+        help="The localization-error fit for the plan's predicted error (default: the SOLM's, else the packaged "
+        "one); `lf3pm audit --calibrate` writes one from your own run.",
+    ),
     png: Path | None = typer.Option(None, metavar="P.png", help="Path and trajectory over the SOLM."),
     map_path: Path | None = typer.Option(None, "--map", help="Map drawn under unknown cells in the PNG."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan's summary as JSON."),
@@ -77,6 +84,7 @@ def plan(
         check_output(out)
         check_output(png)
         from lf3pm.planner.plan import Planner
+        from lf3pm.prediction import predicted_error_along, solm_fit
         from lf3pm.solm import Solm
         from lf3pm.trajectory.robots import Robot
 
@@ -108,6 +116,10 @@ def plan(
                 png.unlink(missing_ok=True)
             raise
         summary = result.summary()
+        error, withheld = predicted_error_along(
+            solm, result.trajectory.sample(), solm_fit(solm, cfg.prediction.calibration)
+        )
+        summary |= {"predicted_localization_error_m": error, "predicted_localization_error_withheld": withheld}
         for line in summary["warnings"]:
             print_warning(f"{out}: {line}")
         if as_json:
@@ -117,5 +129,6 @@ def plan(
                 f"{out}: {summary['duration_s']:.1f} s, {summary['trajectory_length_m']:.1f} m "
                 f"(front-end path {summary['path_length_m']:.1f} m); search "
                 f"{summary['search_s'] * 1e3:.0f} ms, optimisation "
-                f"{summary['optimize_s'] * 1e3:.0f} ms"
+                f"{summary['optimize_s'] * 1e3:.0f} ms; predicted localization error "
+                + (f"{error * 100:.1f} cm" if error is not None else f"withheld: {withheld}")
             )

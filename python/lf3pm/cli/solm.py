@@ -54,11 +54,18 @@ def solm_build(
         False, help="local: build each tile on its own crop of the map (exact; the ray engine always does)."
     ),
     crop_above: int | None = option("solm.crop_above"),
+    calibration: str | None = option(
+        "prediction.calibration",
+        metavar="FIT.json",
+        help="A localization-error fit from `lf3pm audit --calibrate`, stored with the SOLM for the error "
+        "that plans and the viewer predict on it (default: the packaged fit).",
+    ),
 ):
     """Evaluate the metric over a grid and store it (chunked Zarr, resumable)."""
     with user_errors():
         paths = {
             "sensor": "sensor",
+            "calibration": "prediction.calibration",
             **section_paths("scan", "seed", "noise", "threads"),
             **section_paths(
                 "solm",

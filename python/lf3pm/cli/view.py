@@ -1,4 +1,4 @@
-"""`lf3pm view`: the map, its SOLM, plans and replays in 3D in the browser."""
+"""`lf3pm view`: the map, its SOLM, plans, replays and a recorded run in 3D in the browser."""
 
 from __future__ import annotations
 
@@ -17,13 +17,21 @@ def view(
     solm: Path | None = typer.Option(None, metavar="S.zarr", help="A SOLM of this map."),
     plan: list[Path] = typer.Option([], metavar="T.csv", help="A trajectory CSV (`lf3pm plan`; repeat)."),
     replay: list[Path] = typer.Option([], metavar="R.json", help="A replay (`lf3pm replay --json`; repeat)."),
+    run: Path | None = typer.Option(
+        None, metavar="RUN", help="A recorded run (as `lf3pm audit` reads it): its path and its scans over the map."
+    ),
+    audit: Path | None = typer.Option(
+        None,
+        metavar="A.json",
+        help="Its audit (`lf3pm audit -o DIR`: DIR/audit.json): the scans coloured by error; alone, the run it names.",
+    ),
     port: int = typer.Option(DEFAULT_PORT, help="Port to serve the page on."),
     host: str = typer.Option(DEFAULT_HOST, help="Address to serve on (0.0.0.0: every interface)."),
     config: Path | None = CONFIG_OPTION,
     robot: str | None = option("robot.kind", help="Robot that plans between clicked poses: omni, diff or car."),
     threads: int | None = option("scan.threads"),
 ):
-    """Serve an interactive 3D view (viser) of the map, the SOLM, plans and replays; Ctrl-C stops it."""
+    """Serve an interactive 3D view (viser) of the map, the SOLM, plans, replays and a recorded run; Ctrl-C stops it."""
     with user_errors():
         cfg = configure(config, locals(), {"robot": "robot.kind", "threads": "scan.threads"})
         from lf3pm.trajectory.robots import Robot
@@ -31,8 +39,17 @@ def view(
 
         check_host(host)
         check_port(host, port)
-        with console.status("reading and indexing the map, reading the SOLM, plans and replays"):
-            inputs = load_view_inputs(map_path, solm, plan, replay, threads=cfg.scan.threads)
+        with console.status("reading and indexing the map, reading the SOLM, plans, replays and the run"):
+            inputs = load_view_inputs(
+                map_path,
+                solm,
+                plan,
+                replay,
+                threads=cfg.scan.threads,
+                run_path=run,
+                audit_path=audit,
+                run_config=cfg.run,
+            )
         with console.status("preparing the page"):
             viewer = serve(
                 inputs,

@@ -12,6 +12,7 @@ scan k.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import pickle
@@ -110,7 +111,10 @@ def run_lio(
     registry.choose_odometry) on ``scans`` (each with ``end`` s, ``points`` (H, 3) in the
     sensor frame at their firing times and ``stamps`` (H,) absolute firing times,
     non-decreasing, <= end; ends increasing) and ``imu`` (ImuSamples: t, accel, gyro on
-    the same clock, covering the first scan's end). ``sensor`` gives the range limits.
+    the same clock, covering the first scan's end; or an iterable of such chunks in time
+    order). Both are streamed: a scan is taken when the odometry is ready for it and the
+    IMU samples up to its end with it, so memory stays at a few scans (ends checked as
+    they come). ``sensor`` gives the range limits.
     ``initial_pose`` (a pose lf3pm.pose accepts): the true pose at the first scan; the
     sensor must be still while the odometry initialises (Odometry.still_for).
     ``threads``: the odometry's OpenMP threads (1: deterministic). ``params``: the
@@ -124,19 +128,16 @@ def run_lio(
     origin = pose_matrix(initial_pose)
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise Lf3pmError(f"threads must be an integer >= 1, got {threads!r}")
-    t, rows = _imu_rows(imu)
-    scans = list(scans)
-    if not scans:
+    samples = _ImuRows(imu)
+    scans = iter(scans)
+    first = next(scans, None)
+    if first is None:
         raise Lf3pmError("run_lio needs at least one scan")
-    ends = np.array([_scan_end(scan, k) for k, scan in enumerate(scans)])
-    if np.any(np.diff(ends) <= 0):
-        k = int(np.argmax(np.diff(ends) <= 0)) + 1
-        raise Lf3pmError(f"scan ends must increase: scan {k} ends at {ends[k]} s, scan {k - 1} at {ends[k - 1]} s")
-    if t[0] > ends[0]:
-        raise Lf3pmError(f"the IMU starts at {t[0]} s, after the first scan's end {ends[0]} s")
+    first_end = _scan_end(first, 0)
+    if samples.first > first_end:
+        raise Lf3pmError(f"the IMU starts at {samples.first} s, after the first scan's end {first_end} s")
     settings = adapter.worker_settings(adapter.settings(params), sensor, imu)
-    messages = _rest_warning(t, rows, max(ends[0], t[0] + adapter.still_for(settings)))
-    bounds = np.searchsorted(t, ends, side="right")
+    messages = _rest_warning(*samples.window(max(first_end, samples.first + adapter.still_for(settings))))
 
     with tempfile.TemporaryFile() as log:
         reply_read, reply_write = os.pipe()
@@ -153,7 +154,7 @@ def run_lio(
             os.close(reply_write)
         with os.fdopen(reply_read, "rb") as replies:
             times, poses, status, seconds, version = _drive(
-                child, replies, log, scans, ends, t, rows, bounds, sensor, threads, adapter, settings
+                child, replies, log, itertools.chain([first], scans), samples, sensor, threads, adapter, settings
             )
         log.seek(0)
         messages += [line for line in log.read().decode(errors="replace").splitlines() if line.strip()]
@@ -176,8 +177,9 @@ def run_lio(
     )
 
 
-def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, spec: type[Odometry], settings):
-    """Streams the scans to the worker and collects its poses and their times."""
+def _drive(child, replies, log, scans, samples, sensor, threads, spec: type[Odometry], settings):
+    """Streams the scans, each with the IMU samples (``samples``: _ImuRows) after the
+    previous scan's end up to its own, to the worker and collects its poses and their times."""
 
     def request(message):
         try:
@@ -220,32 +222,26 @@ def _drive(child, replies, log, scans, ends, t, rows, bounds, sensor, threads, s
             raise Lf3pmError(
                 f"{spec.package} {version} is installed; lf3pm's conventions are checked for {spec.version}"
             )
-        results, seconds = [], []
+        results, seconds, previous = [], [], None
         for k, scan in enumerate(scans):
-            points, stamps = _scan_arrays(scan, k, ends[k])
-            begin = float(stamps[0]) if len(stamps) else float(ends[k])
-            lo = bounds[k - 1] if k else 0
-            request(
-                (
-                    "scan",
-                    points,
-                    begin,
-                    float(ends[k]),
-                    stamps - begin,
-                    np.column_stack([t[lo : bounds[k]], rows[lo : bounds[k]]]),
-                )
-            )
-            _, done, spent = reply(f"at scan {k} (ending at {ends[k]:g} s)")
+            end = _scan_end(scan, k)
+            if previous is not None and not end > previous:
+                raise Lf3pmError(f"scan ends must increase: scan {k} ends at {end} s, scan {k - 1} at {previous} s")
+            points, stamps = _scan_arrays(scan, k, end)
+            begin = float(stamps[0]) if len(stamps) else end
+            request(("scan", points, begin, end, stamps - begin, samples.until(end)))
+            _, done, spent = reply(f"at scan {k} (ending at {end:g} s)")
             results += done
             seconds.append(spent)
-        request(("done", np.column_stack([t[bounds[-1] :], rows[bounds[-1] :]])))
+            previous = end
+        request(("done", samples.rest()))
         _, done, spent = reply("after the last scan")
         results += done
         seconds[-1] += spent
         child.stdin.close()
         child.wait()
-        if len(results) != len(scans):
-            raise Lf3pmError(f"{spec.name} returned {len(results)} poses for {len(scans)} scans")
+        if len(results) != len(seconds):
+            raise Lf3pmError(f"{spec.name} returned {len(results)} poses for {len(seconds)} scans")
         poses, times, status = zip(*results)
         return np.array(times), np.array(poses), list(status), seconds, version
     finally:
@@ -266,17 +262,70 @@ def lidar_geometry(sensor: Sensor) -> dict:
     return {"beams": np.sort(elevation[:beams]).tolist(), "columns": sensor.num_rays // beams}
 
 
-def _imu_rows(imu) -> tuple[np.ndarray, np.ndarray]:
-    """(t (K,), accel and gyro (K, 6)) of ``imu``, checked."""
+class _ImuRows:
+    """run_lio's IMU samples, handed out in time order: t and the rows (accel, gyro) of
+    ``imu`` (ImuSamples, or an iterable of such chunks, read as they are needed and
+    checked as they come: times strictly increasing across chunks). Holds the samples
+    read and not yet handed out; ``first``: the first sample's time."""
+
+    def __init__(self, imu):
+        if hasattr(imu, "t") or not hasattr(imu, "__iter__") or isinstance(imu, (str, bytes)):
+            self._chunks = iter([_imu_rows(imu)])
+        else:
+            self._chunks = (_imu_rows(chunk, minimum=0) for chunk in imu)
+        self.t, self.rows, self._last, self._done = np.empty(0), np.empty((0, 6)), -np.inf, False
+        self._read(lambda: len(self.t) < 2)
+        if len(self.t) < 2:
+            raise Lf3pmError(f"imu needs at least 2 samples, got {len(self.t)}")
+        self.first = float(self.t[0])
+
+    def _read(self, wanted) -> None:
+        """Reads chunks while ``wanted()`` and the IMU has more."""
+        while not self._done and wanted():
+            chunk = next(self._chunks, None)
+            if chunk is None:
+                self._done = True
+                break
+            t, rows = chunk
+            if not len(t):
+                continue
+            if t[0] <= self._last:
+                raise Lf3pmError("imu times must increase strictly")
+            self._last = t[-1]
+            if len(self.t):
+                t, rows = np.concatenate([self.t, t]), np.vstack([self.rows, rows])
+            self.t, self.rows = t, rows
+
+    def window(self, end: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """(t, rows, end) of the samples up to ``end`` and at least the first 21 (none handed out yet)."""
+        self._read(lambda: len(self.t) < 21 or self.t[-1] <= end)
+        return self.t, self.rows, end
+
+    def until(self, end: float) -> np.ndarray:
+        """The rows (t, accel, gyro) up to ``end`` not handed out yet, handed out."""
+        self._read(lambda: not len(self.t) or self.t[-1] <= end)
+        k = int(np.searchsorted(self.t, end, side="right"))
+        out = np.column_stack([self.t[:k], self.rows[:k]])
+        self.t, self.rows = self.t[k:], self.rows[k:]
+        return out
+
+    def rest(self) -> np.ndarray:
+        """Every row not handed out yet."""
+        self._read(lambda: True)
+        return self.until(np.inf)
+
+
+def _imu_rows(imu, minimum: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """(t (K,), accel and gyro (K, 6)) of ``imu``, checked (K >= ``minimum``)."""
     try:
         t = np.asarray(imu.t, dtype=np.float64)
         accel = np.asarray(imu.accel, dtype=np.float64)
         gyro = np.asarray(imu.gyro, dtype=np.float64)
     except (AttributeError, TypeError, ValueError):
         raise Lf3pmError("imu must have t (K,), accel (K, 3) and gyro (K, 3) (lf3pm ImuSamples)") from None
-    if t.ndim != 1 or len(t) < 2 or accel.shape != (len(t), 3) or gyro.shape != (len(t), 3):
+    if t.ndim != 1 or len(t) < minimum or accel.shape != (len(t), 3) or gyro.shape != (len(t), 3):
         raise Lf3pmError(
-            f"imu needs t (K,), accel (K, 3), gyro (K, 3) with K >= 2, got shapes "
+            f"imu needs t (K,), accel (K, 3), gyro (K, 3) with K >= {minimum}, got shapes "
             f"{t.shape}, {accel.shape}, {gyro.shape}"
         )
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(accel)) and np.all(np.isfinite(gyro))):

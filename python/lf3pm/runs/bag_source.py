@@ -117,6 +117,10 @@ class BagSource:
             "poses_topic": self.poses_topic,
         }
 
+    def scan_names(self) -> list[str]:
+        """The name each scan message has (:meth:`_messages`), without reading them."""
+        return [message_name(self.scans_topic, i) for i in range(self.topics[self.scans_topic][1])]
+
     def _messages(self, topic: str) -> Iterator[tuple[int, str, object]]:
         """(index, "topic message i", message) of ``topic`` in the bag's order; a message that
         does not deserialize is a RunError in its place."""
@@ -124,7 +128,7 @@ class BagSource:
 
         connections = [c for c in self._reader.connections if c.topic == topic]
         for index, (connection, _, raw) in enumerate(self._reader.messages(connections=connections)):
-            name = f"{topic} message {index}"
+            name = message_name(topic, index)
             try:
                 yield index, name, self._reader.deserialize(raw, connection.msgtype)
             except (AnyReaderError, ValueError, IndexError, KeyError) as err:
@@ -193,3 +197,8 @@ class BagSource:
                 f"{stamped[i][2]}: stamp {times[i]:.9f} s is not after the previous pose's {times[i - 1]:.9f} s"
             )
         return times, poses, self.poses_topic
+
+
+def message_name(topic: str, index: int) -> str:
+    """How a run names the ``index``-th message of ``topic`` (in errors, bad scans, audits)."""
+    return f"{topic} message {index}"

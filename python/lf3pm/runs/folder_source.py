@@ -35,6 +35,10 @@ class FolderSource:
             "times_file": str(times) if times.is_file() else None,
         }
 
+    def scan_names(self) -> list[str]:
+        """The name each scan has (its file), without reading them."""
+        return [str(path) for path in self.folder.scans]
+
     def raw_scans(self) -> Iterator[tuple[int, str, tuple | RunError]]:
         """(index, file, (stamp, points, None) or the RunError that scan is) per scan file."""
         from lf3pm.io import load_points

@@ -85,14 +85,14 @@ class Run:
         """What the source is: its kind and, for a bag, its topics and those read."""
         return {"path": str(self.path), **self.source.describe()}
 
-    def scan_count(self) -> int | None:
-        """The run's scans without reading them (bad ones counted): a bag's message count
-        on its scans topic, a folder's scan files; None where the source cannot say."""
-        described = self.describe()
-        if "topics" in described:
-            return described["topics"].get(described.get("scans_topic"), {}).get("messages")
-        folder = getattr(self.source, "folder", None)
-        return len(folder.scans) if folder is not None else None
+    def scan_names(self) -> list[str]:
+        """The name of each of the run's scans in order, bad ones counted, without reading
+        them: a folder's scan files, a bag's "<scans topic> message <i>" (:attr:`Scan.name`)."""
+        return self.source.scan_names()
+
+    def scan_count(self) -> int:
+        """The run's scans without reading them (bad ones counted)."""
+        return len(self.scan_names())
 
     @property
     def reference(self) -> PoseTrack | None:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm import __version__
+from lf3pm.calibration import localization_fit
 from lf3pm.config import Config, configured
 from lf3pm.errors import Lf3pmError, StorageError
 from lf3pm.grid import Space
@@ -155,6 +156,8 @@ def build_solm(
         "tile": tile,
         "yaw_reuse": layout.yaw_reuse,
         "ray_stride": layout.ray_stride,
+        # The localization-error fit that predictions on this SOLM use (lf3pm.prediction).
+        "calibration": localization_fit(config.prediction.calibration) if config.prediction.calibration else None,
     }
     ground_robot = grid.space.ground
     if ground_robot:

@@ -33,8 +33,9 @@ def tiles_shape(ny: int, nx: int, tile: int) -> tuple[int, int]:
 
 
 #: Attributes that record where the inputs came from but not what they are: a map is
-#: identified by its hash (map_sha256), so the same map by another path resumes the build.
-PROVENANCE = {"map_source"}
+#: identified by its hash (map_sha256), so the same map by another path resumes the build;
+#: the localization-error fit stored for predictions changes no cell.
+PROVENANCE = {"map_source", "calibration"}
 
 
 def check_new_store(path: Path) -> None:
@@ -70,6 +71,7 @@ def open_or_create(path: Path, attrs: dict, shape: tuple, ground: bool, tile: in
                 f"{path} was built from another map or with other parameters "
                 f"(differs in: {', '.join(differ)}); remove it or choose another output"
             )
+        group.attrs.update({k: v for k, v in attrs.items() if k in PROVENANCE})  # the latest build's
         return group
     check_new_store(path)
     try:

@@ -1,5 +1,6 @@
-"""The page: a viser scene of the map, its SOLM, plans and replays, with the controls that
-query lf3pm (a cell's evaluation, plans between clicked poses). Every action goes through
+"""The page: a viser scene of the map, its SOLM, plans, replays and a recorded run, with the
+controls that query lf3pm (a cell's evaluation, plans between clicked poses, a recorded
+scan over the map beside its simulation). Every action goes through
 lf3pm's public API and the arrays of lf3pm.view.layers; an error is shown in the page,
 never raised into viser's threads."""
 
@@ -18,13 +19,20 @@ from lf3pm.errors import CorruptStoreError, Lf3pmError, StorageError
 from lf3pm.grid import Space
 from lf3pm.pose import pose_matrix
 from lf3pm.view import layers
-from lf3pm.view.inputs import ViewInputs, check_host, check_port
+from lf3pm.view.inputs import ViewInputs, check_host, check_port, read_scan
 
 #: Colours (RGB) of what the page draws besides colour-mapped layers.
 PLAN_COLORS = [(230, 60, 60), (40, 120, 255), (250, 160, 20), (150, 60, 200), (20, 170, 120)]
 GUIDED, UNGUIDED = (255, 80, 200), (255, 255, 255)
 TRUTH = (200, 200, 200)
 SCAN = (255, 40, 40)
+#: A recorded run: its reference path, a chosen scan's real points and the simulated scan
+#: at the same pose.
+RUN_PATH, REAL_POINTS, SIMULATED_POINTS = (255, 255, 255), (255, 150, 0), (0, 200, 255)
+#: Sizes (m) of an audited scan's marker and of a shown scan's points.
+MARKER_SIZE, SCAN_POINT_SIZE = 0.35, 0.06
+#: The click action that chooses a recorded scan (offered with an audit).
+CHOOSE_SCAN = "choose a scan"
 ARROWS = [(255, 0, 0), (255, 150, 0), (255, 230, 0)]  # weakest first
 #: Seconds between two footprints drawn along a trajectory.
 FOOTPRINT_EVERY_S = 2.0
@@ -92,6 +100,7 @@ class ViewApp:
                 self._add_solm_controls()
             self._add_given_plans()
             self._add_replays()
+            self._add_run()
             self._add_click_controls()
             self._set_camera()
         except BaseException:
@@ -230,10 +239,12 @@ class ViewApp:
         camera.position = (centre[0], centre[1] - 0.6 * span, ground + 0.6 * span)
 
     def focus_bounds(self) -> tuple:
-        """((xmin, ymin), (xmax, ymax)) of what the first view shows: the given plans and
-        replays; without them the SOLM's grid, without it the map."""
+        """((xmin, ymin), (xmax, ymax)) of what the first view shows: the given plans,
+        replays and recorded run; without them the SOLM's grid, without it the map."""
         xy = [np.c_[s["x"], s["y"]] for s in self.inputs.plans.values()]
         xy += [t["truth"].reshape(-1, 3)[:, :2] for t in self.inputs.replays.values()]
+        if self.inputs.run is not None:
+            xy.append(self.inputs.run.path_xyz[:, :2])
         solm = self.inputs.solm
         if not xy and solm is not None:
             g = solm.grid_spec
@@ -244,13 +255,161 @@ class ViewApp:
         xy = np.concatenate(xy)
         return tuple(map(float, xy.min(axis=0))), tuple(map(float, xy.max(axis=0)))
 
+    # -- a recorded run: its path, its audited scans, a scan over the map -----------------
+
+    def _add_run(self) -> None:
+        run = self.inputs.run
+        if run is None:
+            return
+        gui = self.server.gui
+        if len(run.path_xyz) > 1:
+            self.server.scene.add_line_segments(
+                "/run/path", layers.polyline(*run.path_xyz.T), RUN_PATH, thickness=TRUTH_WIDTH, thickness_units="screen"
+            )
+        choices = len(run.records) if run.records else run.scans
+        self.run_quantity = self.run_colorbar = None
+        self._shown_scan = None
+        self._scan_nodes = []
+        with gui.add_folder("Recorded run"):
+            where = f"`{html.escape(str(run.path))}`" if run.path is not None else "(not found)"
+            audit = ", no audit"
+            if run.records:
+                audit = f", {len(run.records)} scans audited (`{html.escape(str(run.audit))}`, sensor "
+                audit += f"{html.escape(run.sensor)})"
+            gui.add_markdown(f"**Run** {where}{audit}: its reference path in white")
+            if run.records:
+                first = layers.first_known_quantity(run.records)
+                self.run_quantity = gui.add_dropdown(
+                    "colour scans by", tuple(layers.RUN_QUANTITIES), initial_value=first
+                )
+                self.run_colorbar = gui.add_image(
+                    np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8), label="scans' colour bar"
+                )
+            self.scan_choice = gui.add_slider(
+                "audited scan" if run.records else "scan", min=0, max=max(choices - 1, 0), step=1, initial_value=0
+            )
+            self.scan_text = gui.add_markdown("")
+        if self.run_quantity is not None:
+            self.run_quantity.on_update(lambda event: self._guarded(self._draw_scan_markers, event.client))
+            self._guarded(self._draw_scan_markers)
+        self.scan_choice.on_update(lambda event: self._guarded(self._scan_chosen, event.client))
+        self._guarded(self._scan_chosen)  # the first scan, or the line saying why none can be shown
+
+    def _draw_scan_markers(self, client=None) -> None:
+        quantity = self.run_quantity.value
+        markers = layers.scan_markers(self.inputs.run.records, quantity)
+        self._markers = self.server.scene.add_point_cloud(
+            "/run/scans",
+            markers["positions"],
+            markers["colors"],
+            point_size=MARKER_SIZE,
+            point_shape="circle",
+            point_shading="flat",
+            precision="float32",
+        )
+        label = layers.RUN_QUANTITIES[quantity][1]
+        if not markers["known"]:
+            label = f"{quantity}: not in this audit (every scan grey)"
+        self.run_colorbar.image = layers.colorbar_image(markers["lo"], markers["hi"], label, name=layers.RUN_COLORMAP)
+
+    def _scan_clicked(self, event) -> None:
+        if not self.inputs.run.records:
+            raise Lf3pmError("no audited scans to choose: give --audit, or choose a scan with the slider")
+        positions = np.array([r["pose"][:3, 3] for r in self.inputs.run.records])
+        chosen = layers.nearest_scan(positions, event.ray_origin, event.ray_direction)
+        if chosen is None:
+            raise Lf3pmError("no audited scan in front of that click")
+        self.show_scan(chosen, event.client)
+
+    def _scan_chosen(self, client=None) -> None:
+        # Slider moves queue up while a scan is read: draw the latest one, once.
+        if self.scan_choice.value != self._shown_scan:
+            self.show_scan(int(self.scan_choice.value), client)
+
+    def show_scan(self, choice: int, client=None) -> dict:
+        """Shows scan ``choice``: the audit's ``choice``-th record (without an audit, the
+        run's scan ``choice``) in the panel, the scan's real points read from the run and put
+        in the world by its reference pose (the audit's), and the simulated scan of the
+        audit's sensor at that pose (its seed, noise and scan voxel; without an audit, the
+        page's sensor). Returns ``record`` (None without an audit), ``real`` (N, 3) float64
+        world points, ``simulated`` (M, 3) float64 hits (None, ``simulated_withheld`` saying
+        why, where the pose cannot be simulated)."""
+        run = self.inputs.run
+        self._shown_scan = None
+        for node in self._scan_nodes:  # another scan's points never stay beside this one's record
+            node.remove()
+        self._scan_nodes = []
+        record = run.records[choice] if run.records else None
+        index = record["index"] if record is not None else choice
+        self.scan_text.content = layers.scan_record_text(record) if record is not None else f"**Scan {index}**"
+        with self._busy(client, "reading the run", f"scan {index}"):
+            scan = read_scan(run, index)
+        pose = record["pose"] if record is not None else scan.pose
+        real = layers.world_points(scan.points, pose)
+        simulated, withheld = self._simulated_scan(pose)
+        self._scan_nodes.append(
+            self.server.scene.add_point_cloud(
+                "/run/scan/real",
+                real,
+                REAL_POINTS,
+                point_size=SCAN_POINT_SIZE,
+                point_shape="circle",
+                precision="float32",
+            )
+        )
+        sensor = html.escape(str(run.sensor or self.sensor))
+        lines = [
+            layers.scan_record_text(record) if record is not None else layers.run_scan_text(scan),
+            f"- <span style='color:rgb{REAL_POINTS}'>■</span> its {len(real):,} points at its reference pose",
+        ]
+        if simulated is None:
+            lines.append(f"- no simulated scan of {sensor} there: {html.escape(withheld)}")
+        else:
+            self._scan_nodes.append(
+                self.server.scene.add_point_cloud(
+                    "/run/scan/simulated",
+                    simulated,
+                    SIMULATED_POINTS,
+                    point_size=SCAN_POINT_SIZE,
+                    point_shape="circle",
+                    precision="float32",
+                )
+            )
+            lines.append(
+                f"- <span style='color:rgb{SIMULATED_POINTS}'>■</span> the simulated scan of {sensor} there, "
+                f"{len(simulated):,} hits"
+            )
+        self.scan_text.content = "\n".join(lines)
+        self.status = self.scan_text.content
+        self._shown_scan = choice
+        self.scan_choice.value = choice  # the slider follows a click (its callback sees the scan shown)
+        return {"record": record, "real": real, "simulated": simulated, "simulated_withheld": withheld}
+
+    def _simulated_scan(self, pose: np.ndarray) -> tuple[np.ndarray | None, str | None]:
+        """(world hits, None) of the audit's sensor at ``pose`` on the map, as the audit
+        simulated it (lf3pm.evaluate, the audit's seed, noise and scan voxel), or (None,
+        why) where that pose cannot be simulated (outside the map, too near a point)."""
+        import lf3pm
+
+        run = self.inputs.run
+        given = {key: run.params[key] for key in ("seed", "noise", "scan_voxel") if run.params.get(key) is not None}
+        try:
+            result = lf3pm.evaluate(self.inputs.world, pose, run.sensor or self.sensor, observations=True, **given)
+        except Lf3pmError as err:
+            return None, str(err)
+        return np.asarray(result.observations["points"], dtype=np.float64), None
+
     # -- clicks: inspect a cell, set a start and a goal, plan ------------------------------
 
     def _add_click_controls(self) -> None:
         gui = self.server.gui
         with gui.add_folder("Click on the ground to"):
+            actions = ("inspect a cell", "set the start", "set the goal")
+            audited = self.inputs.run is not None and bool(self.inputs.run.records)
             self.mode = gui.add_dropdown(
-                "action", ("inspect a cell", "set the start", "set the goal"), initial_value="inspect a cell"
+                "action",
+                (CHOOSE_SCAN, *actions) if audited else actions,
+                initial_value=CHOOSE_SCAN if audited else "inspect a cell",
             )
             self.cell_text = gui.add_markdown(
                 "Click a cell: its metric, its simulated scan and its least observable directions."
@@ -270,6 +429,9 @@ class ViewApp:
         self.server.scene.on_click()(lambda event: self._guarded(self._clicked, event))
 
     def _clicked(self, event) -> None:
+        if self.mode.value == CHOOSE_SCAN:
+            self._scan_clicked(event)
+            return
         xy = self.ground_point(np.asarray(event.ray_origin), np.asarray(event.ray_direction))
         if xy is None:
             raise Lf3pmError("that click does not meet the ground")
@@ -491,29 +653,16 @@ class ViewApp:
         return "" if withheld is None else f", predicted error withheld: {html.escape(withheld)}"
 
     def predicted_error(self, samples: dict) -> tuple[float | None, str | None]:
-        """(error, withheld): the localization error (m) the packaged fit predicts along a
-        trajectory's samples (evenly spaced in time) from its predictor, the time mean of
-        q_n (experiments/benefit/localization_error.py), here the SOLM's q_n over the samples where
-        it is known; or None and why, in one line. (None, None) without a SOLM or a fit."""
-        from lf3pm.calibration import (
-            LOCALIZATION_PACKAGED,
-            packaged_calibration,
-            predict_localization_error,
-            unsupported_reason,
-        )
+        """(error, withheld): the localization error (m) predicted along a trajectory's
+        samples from the SOLM's q_n (lf3pm.prediction.predicted_error_along, with the SOLM's
+        fit); or None and why, in one line. (None, None) without a SOLM or a fit."""
+        from lf3pm.prediction import predicted_error_along, solm_fit
 
-        solm, fit = self.inputs.solm, packaged_calibration(LOCALIZATION_PACKAGED)
-        if solm is None or fit is None:
+        solm = self.inputs.solm
+        fit = None if solm is None else solm_fit(solm)
+        if fit is None:
             return None, None
-        q_n = solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0]
-        if np.isinf(q_n).any():
-            return None, "the plan passes a degenerate pose (q_n infinite): localization follows the odometry there"
-        known = q_n[np.isfinite(q_n)]
-        if not known.size:
-            return None, "the SOLM has no q_n along the plan"
-        mean = float(np.mean(known))
-        predicted = predict_localization_error(fit, mean)
-        return (None, unsupported_reason(fit, mean)) if predicted is None else (predicted[0], None)
+        return predicted_error_along(solm, samples, fit)
 
     # -- progress, errors and shutdown ---------------------------------------------------
 

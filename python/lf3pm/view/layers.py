@@ -1,20 +1,19 @@
 """What the viewer draws, as plain arrays computed from lf3pm's public objects (a Map, a
-Solm, a trajectory's samples, a replay's JSON, an Evaluation): the tests check them
-without a browser, and the page only hands them to viser."""
+Solm, a trajectory's samples, a replay's JSON, an Evaluation, a recorded run's scans and
+their audit): the tests check them without a browser, and the page only hands them to
+viser."""
 
 from __future__ import annotations
 
+import html
 import math
 
 import numpy as np
 
-from lf3pm.calibration import (
-    LOCALIZATION_PACKAGED,
-    packaged_calibration,
-    predict_localization_error,
-)
+from lf3pm.calibration import predict
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid import Space
+from lf3pm.prediction import solm_fit
 from lf3pm.solm import Solm
 
 #: The SOLM channels the page offers, with what the colour bar says of each.
@@ -33,6 +32,16 @@ COLORBAR_PIXELS = (360, 90)
 COLORBAR_TICKS = 4
 #: Length (m) of the arrow of the least observable direction at a clicked cell.
 ARROW_LENGTH = 2.0
+#: What a recorded run's audited scans can be coloured by: {choice: (the audit record's
+#: field, what the colour bar says of it)}.
+RUN_QUANTITIES = {
+    "real error": ("error_m", "real registration error against the reference (m, log scale)"),
+    "predicted localization error": ("predicted_error_m", "predicted localization error (m, log scale)"),
+    "tracking error": ("tracking_error_m", "map localization tracking error along the run (m, log scale)"),
+    "q_n of the real scan": ("real_q_n", "q_n of the real scan (no unit, log scale; larger: worse)"),
+}
+#: The colour map of the audited scans: the replays' errors' (plasma), not the SOLM's.
+RUN_COLORMAP = "plasma"
 
 
 def colormap(values: np.ndarray, lo: float, hi: float, *, log: bool = True, name: str = "viridis") -> np.ndarray:
@@ -65,7 +74,8 @@ def solm_values(solm: Solm, channel: str, layer: int | None = None) -> np.ndarra
     """One (ny, nx) layer of ``channel`` (CHANNELS): an R² SOLM as stored; SE(2) at yaw bin
     ``layer``, or its minimum over yaw when ``layer`` is None (the best heading at each
     cell: what an omni robot that may turn can have); R3 at height level ``layer`` (0 when
-    None). ``predicted_error`` is the packaged fit of localization error on q_n."""
+    None). ``predicted_error`` is the localization error predicted from q_n by the SOLM's
+    fit (lf3pm.prediction.solm_fit: the one it was built with, else the packaged one)."""
     if channel not in CHANNELS:
         raise Lf3pmError(f"unknown channel {channel!r}; the viewer shows {', '.join(CHANNELS)}")
     data = solm.channel("q_n" if channel == "predicted_error" else channel).astype(np.float64)
@@ -77,17 +87,16 @@ def solm_values(solm: Solm, channel: str, layer: int | None = None) -> np.ndarra
                 data[~np.isfinite(data)] = np.nan
         else:
             data = data[int(layer or 0)]
-    return predicted_error(data) if channel == "predicted_error" else data
+    return predicted_error(data, solm_fit(solm)) if channel == "predicted_error" else data
 
 
-def predicted_error(q_n: np.ndarray) -> np.ndarray:
-    """The localization error (m) the packaged fit predicts at each q_n; NaN where q_n is
-    unknown or degenerate. Lf3pmError when lf3pm ships no fit."""
-    fit = packaged_calibration(LOCALIZATION_PACKAGED)
+def predicted_error(q_n: np.ndarray, fit: dict | None) -> np.ndarray:
+    """The localization error (m) ``fit`` predicts at each q_n; NaN where q_n is unknown,
+    degenerate or outside the fit's range. Lf3pmError when there is no fit."""
     if fit is None:
-        raise Lf3pmError("no packaged localization-error fit: the predicted error is not available")
-    predict = np.vectorize(lambda q: (predict_localization_error(fit, q) or (np.nan,))[0], otypes=[float])
-    return predict(np.asarray(q_n, dtype=np.float64))
+        raise Lf3pmError("no localization-error fit: the predicted error is not available")
+    centre = np.vectorize(lambda q: (predict(fit, q) or (np.nan,))[0], otypes=[float])
+    return centre(np.asarray(q_n, dtype=np.float64))
 
 
 def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
@@ -116,10 +125,13 @@ def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
     }
 
 
-def colorbar_image(lo: float, hi: float, label: str, pixels: tuple = COLORBAR_PIXELS) -> np.ndarray:
+def colorbar_image(
+    lo: float, hi: float, label: str, pixels: tuple = COLORBAR_PIXELS, *, name: str = "viridis"
+) -> np.ndarray:
     """An RGB image (rows, columns, 3) of the log colour bar from ``lo`` to ``hi`` with its
-    label and COLORBAR_TICKS values from end to end, ``pixels`` (width, height) large.
-    The end values are aligned inwards, so that every label lies inside the image."""
+    label and COLORBAR_TICKS values from end to end, ``pixels`` (width, height) large, of
+    matplotlib's colour map ``name``. The end values are aligned inwards, so that every
+    label lies inside the image."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -129,7 +141,7 @@ def colorbar_image(lo: float, hi: float, label: str, pixels: tuple = COLORBAR_PI
 
     fig = plt.figure(figsize=(pixels[0] / 100, pixels[1] / 100), dpi=100)
     ax = fig.add_axes((0.04, 0.42, 0.92, 0.25))
-    bar = fig.colorbar(plt.cm.ScalarMappable(norm=LogNorm(lo, hi), cmap="viridis"), cax=ax, orientation="horizontal")
+    bar = fig.colorbar(plt.cm.ScalarMappable(norm=LogNorm(lo, hi), cmap=name), cax=ax, orientation="horizontal")
     ticks = np.geomspace(lo, hi, COLORBAR_TICKS)
     bar.set_ticks(ticks, labels=[f"{t:.3g}" for t in ticks])
     ax.xaxis.set_minor_locator(NullLocator())  # LogNorm's minor labels crowd and overflow the ends
@@ -283,3 +295,118 @@ def weak_directions(observations: dict, position: np.ndarray) -> dict:
         [np.stack([p, p + (length * vectors[:, k]).astype(np.float32)]) for k, length in enumerate(lengths)]
     )
     return {"arrows": arrows, "eigenvalues": values, "directions": vectors.T}
+
+
+# -- a recorded run and its audit ------------------------------------------------------
+
+
+def scan_markers(records: list, quantity: str) -> dict:
+    """The audited scans as markers coloured by ``quantity`` (RUN_QUANTITIES): ``positions``
+    (N, 3) float32 of the LiDAR at each scan's reference pose, ``values`` (N,) the field
+    (NaN: not computed), ``colors`` (N, 3) uint8 on RUN_COLORMAP's log scale from ``lo``
+    to ``hi`` (the smallest and largest positive value; 1 to 2 when none is known), grey
+    where the value is missing (or not positive: the scale is logarithmic), and ``known``:
+    how many are coloured. ``records``: RunInputs'."""
+    if quantity not in RUN_QUANTITIES:
+        raise Lf3pmError(f"unknown quantity {quantity!r}; the scans are coloured by {', '.join(RUN_QUANTITIES)}")
+    key = RUN_QUANTITIES[quantity][0]
+    values = np.array([r[key] for r in records], dtype=np.float64)
+    known = values[np.isfinite(values) & (values > 0)]
+    lo, hi = (float(known.min()), float(known.max())) if known.size else (1.0, 2.0)
+    hi = max(hi, lo * 1.0001)  # one value alone still spans a colour bar
+    return {
+        "positions": np.array([r["pose"][:3, 3] for r in records], dtype=np.float32).reshape(-1, 3),
+        "values": values,
+        "colors": colormap(values, lo, hi, name=RUN_COLORMAP),
+        "lo": lo,
+        "hi": hi,
+        "known": int(known.size),
+    }
+
+
+def first_known_quantity(records: list) -> str:
+    """The first of RUN_QUANTITIES that some record has (an audit without registrations
+    has no real error): the colour the page opens with."""
+    for quantity, (key, _) in RUN_QUANTITIES.items():
+        if any(math.isfinite(r[key]) for r in records):
+            return quantity
+    return next(iter(RUN_QUANTITIES))
+
+
+def nearest_scan(positions: np.ndarray, origin, direction) -> int | None:
+    """The marker (row of ``positions``, N x 3) nearest a click's ray from ``origin`` along
+    ``direction``, among those in front of it; None when none is."""
+    u = np.asarray(direction, dtype=np.float64)
+    u = u / np.linalg.norm(u)
+    d = np.asarray(positions, dtype=np.float64) - np.asarray(origin, dtype=np.float64)
+    along = d @ u
+    off = np.linalg.norm(d - along[:, None] * u, axis=1)
+    off[along <= 0] = np.inf
+    return int(np.argmin(off)) if np.isfinite(off).any() else None
+
+
+def world_points(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """A scan's ``points`` (N x 3, the LiDAR frame) in the world, float64: ``pose``
+    (world-from-LiDAR, 4 x 4) applied to each."""
+    pose = np.asarray(pose, dtype=np.float64)
+    return np.asarray(points, dtype=np.float64) @ pose[:3, :3].T + pose[:3, 3]
+
+
+def scan_record_text(record: dict) -> str:
+    """The panel's Markdown for an audited scan (a record of RunInputs): its index, name
+    and stamp, its pose, the real, tracking and predicted localization errors, q_n of the
+    real and the simulated scan and their ratio; what was not computed says so (and why,
+    where the audit says)."""
+    x, y, z = record["pose"][:3, 3]
+    yaw = math.degrees(math.atan2(record["pose"][1, 0], record["pose"][0, 0]))
+    real = (
+        f"real error {_cm(record['error_m'])} (largest {_cm(record['error_max_m'])}, spread {_cm(record['spread_m'])})"
+        if math.isfinite(record["error_m"])
+        else f"real error not computed{_why(record['registration_error'] or 'no registration in this audit')}"
+    )
+    predicted = (
+        f"predicted localization error {_cm(record['predicted_error_m'])} "
+        f"({_cm(record['predicted_error_lo_m'])} to {_cm(record['predicted_error_hi_m'])})"
+        if math.isfinite(record["predicted_error_m"])
+        else f"predicted localization error withheld{_why(record['predicted_error_withheld'] or record['sim_error'])}"
+    )
+    tracking = (
+        f"tracking error {_cm(record['tracking_error_m'])}"
+        if math.isfinite(record["tracking_error_m"])
+        else "tracking error not computed (no tracking along the run in this audit)"
+    )
+    return "\n".join(
+        [
+            f"**Scan {record['index']}** `{html.escape(record['name'])}`, stamp {record['stamp']:.3f} s",
+            f"- pose ({x:.2f}, {y:.2f}, {z:.2f}) m, yaw {yaw:.0f}°",
+            f"- {real}",
+            f"- {tracking}",
+            f"- {predicted}",
+            f"- q_n real {_g(record['real_q_n'])}, simulated {_g(record['sim_q_n'])}, "
+            f"simulated / real {_g(record['q_n_ratio'])}" + _why(record["sim_error"]),
+        ]
+    )
+
+
+def run_scan_text(scan) -> str:
+    """The panel's Markdown for a scan of a run shown without an audit (a
+    lf3pm.runs.Scan): its index, name, stamp, points and pose."""
+    x, y, z = scan.pose[:3, 3]
+    return "\n".join(
+        [
+            f"**Scan {scan.index}** `{html.escape(scan.name)}`, stamp {scan.stamp:.3f} s, {len(scan.points):,} points",
+            f"- pose ({x:.2f}, {y:.2f}, {z:.2f}) m (no audit given: no errors or predictions)",
+        ]
+    )
+
+
+def _cm(metres: float) -> str:
+    return f"{metres * 100:.1f} cm" if math.isfinite(metres) else "not computed"
+
+
+def _g(value: float) -> str:
+    return f"{value:.4g}" if math.isfinite(value) else "not computed"
+
+
+def _why(reason: str | None) -> str:
+    return f" ({html.escape(reason)})" if reason else ""

@@ -7,7 +7,7 @@ plans were made on thin their rays, which raises q_n (a VLP-16 in the houses str
 x1.2 at stride 2, x1.65 at stride 4), so their values are not used. A plan's
 predictor is the time mean of q_n; plans that pass a degenerate pose (q_n infinite:
 localization follows the odometry there) are left out of the fit. The fit
-(lf3pm.calibration.fit_localization_error) relates it to the plan's localization
+(lf3pm.calibration.fit_on_q_n) relates it to the plan's localization
 APE, the median over the replay seeds, and is validated map by map on maps it did
 not use. Per-plan values are kept in DIR/predictors/ so that a rerun resumes.
 """
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from lf3pm.atomic import atomic_write
-from lf3pm.calibration import fit_localization_error
+from lf3pm.calibration import fit_on_q_n
 from lf3pm.config import DEFAULT_HEIGHT, MetricConfig
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.benefit.protocol import FIT, LocalizationFit
@@ -103,7 +103,7 @@ def localization_error_fit(
     if len(ape) < settings.min_plans:  # a quick run: nothing to fit
         fit = {"predictor": "q_n", "samples": len(ape), "provenance": provenance}
     else:
-        fit = fit_localization_error(maps, q_n, ape, provenance=provenance)
+        fit = fit_on_q_n(maps, q_n, ape, provenance=provenance)
     with atomic_write(Path(out) / "localization_error.json") as fp:
         fp.write(json.dumps(fit, indent=1).encode())
     return fit, predictors

@@ -521,7 +521,7 @@ class MapValidation:
 
 @dataclass(frozen=True)
 class ErrorFit:
-    """The localization error predicted from q_n (calibration.fit_localization_error's
+    """The localization error predicted from q_n (calibration.fit_on_q_n's
     JSON, ``data``, as written to localization_error.json); ``a`` is None where too few
     plans were left to fit (a quick run)."""
 
