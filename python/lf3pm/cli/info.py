@@ -1,9 +1,8 @@
-"""`lf3pm config`, `sensors`, `info` and `scene`: parameters, LiDAR models, maps, scenes."""
+"""`lf3pm config`, `info` and `scene`: parameters, maps, scenes."""
 
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import typer
@@ -29,26 +28,6 @@ def show_config(
         registry.check_name(loaded.replay.odometry)  # a plugin's name too (an entry point)
         # Every registered odometry's settings (a plugin's too), the file's over lf3pm's.
         print(to_yaml(registry.with_settings(loaded, config)), end="")
-
-
-@app.command()
-def sensors():
-    """List the LiDAR presets."""
-    from lf3pm.sensors import list_sensors
-
-    table = Table(title="LiDAR presets (a YAML file also works: see docs/sensors.md)")
-    for col in ("name", "rays", "range (m)", "noise (m)", "h-FoV (deg)", "model"):
-        table.add_column(col)
-    for s in list_sensors():
-        table.add_row(
-            s.name,
-            str(s.num_rays),
-            f"{s.min_range:g}-{s.max_range:g}",
-            f"{s.range_noise_sigma:g}",
-            f"{math.degrees(s.horizontal_fov):.1f}",
-            ("approximation of " if s.approximate else "") + s.description.split(":")[0],
-        )
-    console.print(table)
 
 
 @app.command()
