@@ -52,7 +52,8 @@ def test_the_calibration_is_the_runs_own_offset_under_the_shipped_slope(audited)
     assert fit["factor"] == pytest.approx(math.exp(a - base["a"]), rel=1e-12)
     lo, hi = np.quantile(residual - a, [0.1, 0.9])
     assert (fit["log_lo"], fit["log_hi"]) == pytest.approx((lo, hi), rel=1e-12)
-    assert fit["q_n_range"] == [q.min(), q.max()] and fit["samples"] == 12
+    assert fit["run_q_n_range"] == [q.min(), q.max()] and fit["samples"] == 12
+    assert fit["q_n_range"] == [min(q.min(), base["q_n_range"][0]), max(q.max(), base["q_n_range"][1])]
     assert fit["provenance"]["sensors"] == ["vlp16"] and fit["provenance"]["error"].startswith("error_m: ")
     assert sum(v["scans"] for v in fit["validation"].values()) == 12
     with pytest.raises(Lf3pmError, match="cannot calibrate on tracking_error_m: the audit has none"):

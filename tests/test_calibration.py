@@ -97,7 +97,8 @@ def test_a_run_three_times_worse_than_the_fit_is_recalibrated_by_three():
     error = 0.3 * q * np.exp(rng.normal(scale=0.3, size=100))
     fit = calibrate_factor(_base(), q, error, provenance={"sensors": ["os1-64"], "w1": 0.5})
     assert fit["factor"] == pytest.approx(3.0, rel=0.15) and fit["b"] == 1.0
-    assert fit["q_n_range"] == [q.min(), q.max()] and fit["samples"] == 100
+    assert fit["run_q_n_range"] == [q.min(), q.max()] and fit["samples"] == 100
+    assert fit["q_n_range"] == [1e-3, 10.0]  # the shipped fit's, which holds the run's
     segments = fit["validation"].values()
     assert len(segments) == 5 and all(s["scans"] == 20 for s in segments)
     assert 0.6 <= np.mean([s["share_inside_interval"] for s in segments]) <= 0.95

@@ -229,7 +229,9 @@ def calibrate_factor(base: dict, q_n, error, *, provenance: dict, segments: int 
     """``base`` (a localization-error fit) recalibrated on one recorded run: its slope b
     kept (a run spans too narrow a range of q_n to fit one), its offset a and 10-90 %
     interval refitted on the run's samples (``q_n`` and ``error`` in time order; non-finite
-    or non-positive pairs left out), with ``q_n_range`` the run's. ``factor``: how much the
+    or non-positive pairs left out). ``q_n_range`` spans ``base``'s and the run's
+    (``run_q_n_range``): the slope that carries the run's offset across it was measured
+    over ``base``'s. ``factor``: how much the
     run's errors exceed ``base``'s prediction (exp of the offsets' difference). Validated
     by leaving out each of ``segments`` contiguous segments in turn (neighbouring scans see
     the same place): ``validation`` per segment, the recalibrated fit and ``base`` judged on
@@ -261,7 +263,8 @@ def calibrate_factor(base: dict, q_n, error, *, provenance: dict, segments: int 
         **line,
         "interval_quantiles": list(INTERVAL_QUANTILES),
         "samples": int(len(x)),
-        "q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
+        "q_n_range": [min(float(q_n[keep].min()), support(base)[0]), max(float(q_n[keep].max()), support(base)[1])],
+        "run_q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
         "factor": math.exp(line["a"] - base["a"]),
         "shipped": _judged(base, x, y),
         "validation": validation,
