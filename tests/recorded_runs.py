@@ -1,15 +1,20 @@
-"""Recorded runs made for tests: a folder of scans (NPY, named by time) with TUM poses."""
+"""Recorded runs made for tests: a folder of scans (NPY, named by time) with TUM poses, and a
+replay's bag (`lf3pm replay --bag`'s writer)."""
 
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 from analytic_scenes import box_room
 
 import lf3pm
 from lf3pm.pose import pose_matrix
+from lf3pm.replays.bag import write_bag
+from lf3pm.replays.motion import Motion
 from lf3pm.scan.scan_simulator import simulate_scan
+from lf3pm.scan.scans import ScanStream
 from lf3pm.sensors import get_sensor
 
 
@@ -41,3 +46,26 @@ def simulated_run(folder, world, poses, stamps, sensor="vlp16"):
     ]
     write_run(folder, [s.sensor_points for s in scans], poses, stamps)
     return folder, np.vstack([s.world_points for s in scans])
+
+
+def stream_bag(world, folder, *, moving: bool, noise: float | None, sensor="vlp16"):
+    """A replay's ROS 2 bag of ``sensor`` over 0.4 s at 10 Hz (moving at 1 m/s or standing),
+    as `lf3pm replay --bag` writes it; returns (path, stream)."""
+    t = np.linspace(0.0, 0.4, 41)
+    speed = 1.0 if moving else 0.0
+    motion = Motion.from_arrays(
+        t,
+        -1.0 + speed * t,
+        0 * t,
+        0.1 * speed * t,
+        np.full_like(t, speed),
+        0 * t,
+        np.full_like(t, 0.1 * speed),
+        map=world,
+    )
+    stream = ScanStream(world, motion, get_sensor(sensor), rate=10.0, seed=4, noise=noise)
+    imu_t = np.arange(0.0, 0.4 + 1e-9, 0.01)
+    imu = SimpleNamespace(t=imu_t, accel=np.tile([0.0, 0.0, 9.81], (len(imu_t), 1)), gyro=np.zeros((len(imu_t), 3)))
+    path = folder / "stream.bag"
+    write_bag(path, stream, imu, truth_rate=100.0)
+    return path, stream

@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import json
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from analytic_scenes import box_room
-from recorded_runs import pillar_room
+from recorded_runs import pillar_room, stream_bag
 from typer.testing import CliRunner
 
 import lf3pm
@@ -23,10 +22,7 @@ from lf3pm.cli import app
 from lf3pm.config import DEFAULTS, configured
 from lf3pm.metric import evaluate, evaluate_points
 from lf3pm.pose import pose_matrix, se3_exp
-from lf3pm.replays.bag import write_bag
-from lf3pm.replays.motion import Motion
 from lf3pm.scan.scan_simulator import simulate_scan
-from lf3pm.scan.scans import ScanStream
 from lf3pm.sensors import get_sensor
 from lf3pm.validation import mde, mde_of_points
 
@@ -37,29 +33,6 @@ HALF = (6.0, 4.0, 1.5)
 def room():
     """A 12 x 8 x 3 m box room with a pillar (so no symmetry), its map indexed."""
     return pillar_room()
-
-
-def stream_bag(world, folder, *, moving: bool, noise: float | None, sensor="vlp16"):
-    """A replay's ROS 2 bag of ``sensor`` over 0.4 s at 10 Hz (moving at 1 m/s or standing),
-    as `lf3pm replay --bag` writes it; returns (path, stream)."""
-    t = np.linspace(0.0, 0.4, 41)
-    speed = 1.0 if moving else 0.0
-    motion = Motion.from_arrays(
-        t,
-        -1.0 + speed * t,
-        0 * t,
-        0.1 * speed * t,
-        np.full_like(t, speed),
-        0 * t,
-        np.full_like(t, 0.1 * speed),
-        map=world,
-    )
-    stream = ScanStream(world, motion, get_sensor(sensor), rate=10.0, seed=4, noise=noise)
-    imu_t = np.arange(0.0, 0.4 + 1e-9, 0.01)
-    imu = SimpleNamespace(t=imu_t, accel=np.tile([0.0, 0.0, 9.81], (len(imu_t), 1)), gyro=np.zeros((len(imu_t), 3)))
-    path = folder / "stream.bag"
-    write_bag(path, stream, imu, truth_rate=100.0)
-    return path, stream
 
 
 @pytest.mark.slow
@@ -247,7 +220,13 @@ def test_the_cli_writes_json_csv_report_and_figures(room, tmp_path):
     assert [s["index"] for s in data["scans"]] == [2, 4]  # scan 0 is bad (no pose), every 2nd
     assert data["bad_scans"][0]["index"] == 0 and data["summary"]["scans"] == 2
     assert data["scans"][0]["starts"] == 2 and len(data["scans"][0]["translation_errors_m"]) == 2
-    assert sorted(p.name for p in out.iterdir()) == ["along_run.png", "audit.csv", "audit.json", "path.png", "report.md"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "along_run.png",
+        "audit.csv",
+        "audit.json",
+        "path.png",
+        "report.md",
+    ]
     rows = (out / "audit.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[0].startswith("index,name,stamp")
     report = (out / "report.md").read_text()

@@ -126,3 +126,15 @@ def test_the_cli_writes_a_sensor_that_works_as_a_preset_and_refuses_bad_input(ro
     assert missing.exit_code == 2 and len(missing.output.strip().splitlines()) == 1
     listed = CliRunner().invoke(app, ["sensors"])
     assert listed.exit_code == 0 and "vlp16" in listed.stdout
+
+
+def test_a_sensor_is_fitted_from_a_replay_bag(room, tmp_path):
+    """The bag `lf3pm replay --bag` writes (PointCloud2 with per-point times, a VLP-16
+    standing in the room, noise-free): the VLP-16's beams and columns, and its simulated
+    scans at the bag's true poses return on the same rays."""
+    from recorded_runs import stream_bag
+
+    path, _ = stream_bag(room, tmp_path, moving=False, noise=None)
+    fit = fit_sensor(path, room)
+    assert fit.kind == "spinning" and len(fit.yaml["elevations_deg"]) == 16 and fit.yaml["azimuth_count"] == 1800
+    assert all(c.share_both > 0.99 for c in fit.comparisons)
