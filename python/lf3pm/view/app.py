@@ -28,7 +28,8 @@ TRUTH = (200, 200, 200)
 SCAN = (255, 40, 40)
 #: A recorded run: its reference path, a chosen scan's real points and the simulated scan
 #: at the same pose.
-RUN_PATH, REAL_POINTS, SIMULATED_POINTS = (255, 255, 255), (255, 150, 0), (0, 200, 255)
+# Magenta and black: colours the map's height colouring (turbo) does not use.
+RUN_PATH, REAL_POINTS, SIMULATED_POINTS = (255, 255, 255), (255, 0, 255), (0, 0, 0)
 #: Sizes (m) of an audited scan's marker and of a shown scan's points.
 MARKER_SIZE, SCAN_POINT_SIZE = 0.35, 0.06
 #: The click action that chooses a recorded scan (offered with an audit).
