@@ -348,16 +348,7 @@ class ViewApp:
         pose = record["pose"] if record is not None else scan.pose
         real = layers.world_points(scan.points, pose)
         simulated, withheld = self._simulated_scan(pose)
-        self._scan_nodes.append(
-            self.server.scene.add_point_cloud(
-                "/run/scan/real",
-                real,
-                REAL_POINTS,
-                point_size=SCAN_POINT_SIZE,
-                point_shape="circle",
-                precision="float32",
-            )
-        )
+        self._add_scan_points("real", real, REAL_POINTS)
         sensor = html.escape(str(run.sensor or self.sensor))
         lines = [
             layers.scan_record_text(record) if record is not None else layers.run_scan_text(scan),
@@ -366,16 +357,7 @@ class ViewApp:
         if simulated is None:
             lines.append(f"- no simulated scan of {sensor} there: {html.escape(withheld)}")
         else:
-            self._scan_nodes.append(
-                self.server.scene.add_point_cloud(
-                    "/run/scan/simulated",
-                    simulated,
-                    SIMULATED_POINTS,
-                    point_size=SCAN_POINT_SIZE,
-                    point_shape="circle",
-                    precision="float32",
-                )
-            )
+            self._add_scan_points("simulated", simulated, SIMULATED_POINTS)
             lines.append(
                 f"- <span style='color:rgb{SIMULATED_POINTS}'>■</span> the simulated scan of {sensor} there, "
                 f"{len(simulated):,} hits"
@@ -385,6 +367,13 @@ class ViewApp:
         self._shown_scan = choice
         self.scan_choice.value = choice  # the slider follows a click (its callback sees the scan shown)
         return {"record": record, "real": real, "simulated": simulated, "simulated_withheld": withheld}
+
+    def _add_scan_points(self, name: str, points, color) -> None:
+        """Draws a chosen scan's points (float32: a map's coordinates need more than float16)."""
+        node = self.server.scene.add_point_cloud(
+            f"/run/scan/{name}", points, color, point_size=SCAN_POINT_SIZE, point_shape="circle", precision="float32"
+        )
+        self._scan_nodes.append(node)
 
     def _simulated_scan(self, pose: np.ndarray) -> tuple[np.ndarray | None, str | None]:
         """(world hits, None) of the audit's sensor at ``pose`` on the map, as the audit
