@@ -23,7 +23,9 @@ from lf3pm.cli._common import (
     user_errors,
 )
 
-sensors_app = typer.Typer(help="LiDAR models: the presets, and a sensor fitted from a recorded run.")
+sensors_app = typer.Typer(
+    help="LiDAR models: `lf3pm sensors` lists the presets, `lf3pm sensors fit` fits one from a recorded run."
+)
 app.add_typer(sensors_app, name="sensors")
 
 
