@@ -1,4 +1,4 @@
-"""`lf3pm sensors fit` (lf3pm.sensors.fit; issue 42, item 4): a sensor fitted from a
+"""`lf3pm sensors fit` (lf3pm.audit.sensor_fit; issue 42, item 4): a sensor fitted from a
 recorded run gives back the sensor that recorded it. Scans simulated in a closed room, so
 that every ray returns: the beams' elevations to the histogram's resolution, the columns
 exactly, the range noise drawn, and simulated scans at the reference poses that match the
@@ -14,11 +14,11 @@ from recorded_runs import pillar_room, write_run
 from typer.testing import CliRunner
 
 import lf3pm
+from lf3pm.audit.sensor_fit import ELEVATION_BIN_DEG, fit_sensor, fitted_sensor, write_sensor
 from lf3pm.cli import app
 from lf3pm.pose import pose_matrix
 from lf3pm.scan.scan_simulator import simulate_scan
 from lf3pm.sensors import get_sensor
-from lf3pm.sensors.fit import ELEVATION_BIN_DEG, fit_sensor, fitted_sensor, write_sensor
 
 POSES = [(-3.0 + 0.5 * i, -1.0 + 0.2 * i, 0.3 * i) for i in range(6)]  # clear of the pillar
 STAMPS = [round(0.1 * i, 1) for i in range(6)]

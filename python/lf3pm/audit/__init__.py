@@ -9,7 +9,9 @@ localization error, and real registration from disturbed starts; their summary.
   the scans furthest off;
 - :class:`SelfMap` -- the map from the run's own scans (``--map self``), each audited
   scan's without the scans near it in time;
-- :func:`write_audit` -- the CSV, the Markdown report and the figures (``lf3pm audit -o``).
+- :func:`write_audit` -- the CSV, the JSON, the Markdown report and the figures (``lf3pm audit -o``);
+- :mod:`lf3pm.audit.calibrate` -- the predicted localization error fitted on a run (``--calibrate``);
+- :mod:`lf3pm.audit.sensor_fit` -- a sensor fitted from a run's scans (``lf3pm sensors fit``).
 """
 
 from lf3pm.audit.record import ScanAudit

@@ -83,8 +83,8 @@ def fit(
         }
         cfg = configure(config, locals(), paths)
         from lf3pm.audit import SELF, SelfMap
+        from lf3pm.audit.sensor_fit import fit_sensor, write_sensor
         from lf3pm.map import load_map
-        from lf3pm.sensors.fit import fit_sensor, write_sensor
 
         check_output(out)
         world = None

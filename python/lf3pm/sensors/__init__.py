@@ -73,7 +73,7 @@ from pathlib import Path
 
 from lf3pm.errors import SensorError
 
-from ._model import Sensor, spinning_rings
+from ._model import Sensor, directions_from_angles, spinning_directions, spinning_rings
 from ._presets import DEFAULT_INTEGRATION_TIME, PRESET_NAMES, find_preset, presets
 from ._yaml import load_sensor_yaml
 
@@ -86,6 +86,8 @@ __all__ = [
     "load_sensor_yaml",
     "PRESET_NAMES",
     "spinning_rings",
+    "spinning_directions",
+    "directions_from_angles",
     "DEFAULT_INTEGRATION_TIME",
 ]
 

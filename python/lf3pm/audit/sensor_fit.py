@@ -30,7 +30,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lf3pm.atomic import atomic_write
+from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
+from lf3pm.metric import evaluate, evaluate_points
+from lf3pm.runs import Run
+from lf3pm.scan.scan_simulator import simulate_scan
+from lf3pm.sensors import Sensor, directions_from_angles, spinning_directions
 
 #: Elevation histogram bin (deg) and its Gaussian smoothing (bins).
 ELEVATION_BIN_DEG, ELEVATION_SMOOTHING_BINS = 0.02, 2
@@ -195,8 +201,6 @@ def range_noise(world, pose: np.ndarray, points: np.ndarray, config) -> np.ndarr
     """Each return's range error against the map along its ray (m): the point-to-plane
     distance of its FAST-LIO association over |cos incidence|, for incidences below 60
     degrees."""
-    from lf3pm.metric import evaluate_points
-
     obs = evaluate_points(world, pose, points, config, observations=True).observations
     rays = obs["points"][obs["row_hit"]] - pose[:3, 3]
     rays /= np.linalg.norm(rays, axis=1, keepdims=True)
@@ -240,9 +244,6 @@ def fit_sensor(run, world=None, config=None, *, scans: int = DEFAULT_SCANS, name
     the run's reference poses for the range noise and the comparison (None: neither);
     ``config``: the scan and metric sections for the association (default: the defaults).
     ``progress(done, total)`` after each scan read and compared."""
-    from lf3pm.config import DEFAULTS
-    from lf3pm.runs import Run
-
     config = DEFAULTS if config is None else config
     opened = run if isinstance(run, Run) else Run(run, config.run, skip_bad=True)
     try:
@@ -307,9 +308,6 @@ def _map_for(world, scan):
 
 def fitted_sensor(fit: SensorFit):
     """The lf3pm Sensor of ``fit`` (as its YAML will load)."""
-    from lf3pm.sensors import Sensor
-    from lf3pm.sensors._model import directions_from_angles, spinning_directions
-
     y = fit.yaml
     if fit.kind == "spinning":
         directions = spinning_directions(np.radians(y["elevations_deg"]), y["azimuth_count"])
@@ -334,9 +332,6 @@ def compare(sensor, world, scan, config) -> Comparison:
     """The real returns of ``scan`` against ``sensor``'s noise-free simulated scan at the
     scan's reference pose on ``world`` (see :class:`Comparison`)."""
     from scipy.spatial import cKDTree
-
-    from lf3pm.metric import evaluate, evaluate_points
-    from lf3pm.scan.scan_simulator import simulate_scan
 
     pose = np.asarray(scan.pose, dtype=np.float64)
     simulated = simulate_scan(world, pose, sensor.directions, sensor.min_range, sensor.max_range)
@@ -370,8 +365,6 @@ def write_sensor(fit: SensorFit, path) -> list:
     from pathlib import Path
 
     import yaml
-
-    from lf3pm.atomic import atomic_write
 
     path = Path(path)
     keys = dict(fit.yaml)
