@@ -50,12 +50,17 @@ def test_tracking_on_a_map_of_the_runs_own_hits_finds_every_reference_pose(drive
 
 def test_kiss_icp_along_a_run_is_the_replays_kiss_icp_on_its_scans(drive):
     folder, _, _ = drive
-    config = configured(DEFAULTS, ("kiss_icp", "scan"), "the test", voxel_size=0.25, threads=1)  # 1: repeatable
+    config = configured(DEFAULTS, ("kiss_icp", "scan"), "the test", voxel_size=0.25, threads=1)
     track = track_odometry(folder, "vlp16", config)
     with Run(folder) as run:
         scans = [SimpleNamespace(points=s.points, timestamps=np.empty(0), pose=s.pose) for s in run.scans()]
     direct = run_kiss_icp(scans, lf3pm.sensors.get_sensor("vlp16"), scans[0].pose, config.kiss_icp, threads=1)
-    assert track.method == ODOMETRY and np.array_equal(track.poses, direct.poses)
+    # The same code path: equal but for TBB's reduction order, which a test run after another
+    # test's multi-threaded KISS-ICP in this process cannot fix (run_kiss_icp: KISS-ICP keeps
+    # the first thread limit a process sets); that order moves poses at 1e-16 relative, so
+    # 1e-12 m over a few metres of 8 scans is far above it and far below any real difference.
+    assert track.method == ODOMETRY
+    np.testing.assert_allclose(track.poses, direct.poses, rtol=0, atol=1e-12)
     assert track.errors_m[0] == 0.0  # anchored at the first reference pose
 
 
