@@ -167,15 +167,12 @@ def fit_on_q_n(groups, q_n, error, *, provenance: dict, counted: str = "plans") 
     the same fit with each group left out, judged on that group's samples (``counted``:
     their number, named after what a sample is; share inside the interval, Spearman rho
     within the group, median factor between predicted and measured)."""
-    groups = np.asarray(groups)
-    q_n, error = np.asarray(q_n, float), np.asarray(error, float)
-    keep = np.isfinite(q_n) & np.isfinite(error) & (q_n > 0) & (error > 0)
-    groups, x, y = groups[keep], np.log(q_n[keep]), np.log(error[keep])
+    q_n, keep, x, y = _logs(q_n, error)
+    groups = np.asarray(groups)[keep]
 
     def fit(sel):
         b, a = np.polyfit(x[sel], y[sel], 1)
-        lo, hi = np.quantile(y[sel] - (a + b * x[sel]), INTERVAL_QUANTILES)
-        return {"a": float(a), "b": float(b), "log_lo": float(lo), "log_hi": float(hi)}
+        return _line(a, b, x[sel], y[sel])
 
     validation = {}
     for name in sorted(set(groups.tolist())):
@@ -184,14 +181,32 @@ def fit_on_q_n(groups, q_n, error, *, provenance: dict, counted: str = "plans") 
             continue
         validation[name] = {counted: int(held.sum()), **_judged(fit(~held), x[held], y[held])}
     return {
-        "predictor": "q_n",
-        **fit(np.ones(len(x), bool)),
-        "interval_quantiles": list(INTERVAL_QUANTILES),
-        "samples": int(len(x)),
+        **_header(fit(np.ones(len(x), bool)), x),
         "q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
         "validation": validation,
         "provenance": provenance,
     }
+
+
+def _logs(q_n, error) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(q_n as float64, which pairs are kept: both finite and positive, ln q_n and ln error
+    of those)."""
+    q_n, error = np.asarray(q_n, float), np.asarray(error, float)
+    keep = np.isfinite(q_n) & np.isfinite(error) & (q_n > 0) & (error > 0)
+    return q_n, keep, np.log(q_n[keep]), np.log(error[keep])
+
+
+def _line(a: float, b: float, x: np.ndarray, y: np.ndarray) -> dict:
+    """The line ln error = a + b ln q_n with its interval: the 10-90 % quantiles of the
+    residuals of the samples (``x``, ``y``: logs) it was fitted on."""
+    lo, hi = np.quantile(y - (a + b * x), INTERVAL_QUANTILES)
+    return {"a": float(a), "b": float(b), "log_lo": float(lo), "log_hi": float(hi)}
+
+
+def _header(line: dict, x: np.ndarray) -> dict:
+    """What every fit on q_n begins with: its predictor, ``line``, the interval's quantiles
+    and its sample count."""
+    return {"predictor": "q_n", **line, "interval_quantiles": list(INTERVAL_QUANTILES), "samples": int(len(x))}
 
 
 def _judged(line: dict, x: np.ndarray, y: np.ndarray) -> dict:
@@ -231,22 +246,18 @@ def calibrate_factor(base: dict, q_n, error, *, provenance: dict, segments: int 
     interval refitted on the run's samples (``q_n`` and ``error`` in time order; non-finite
     or non-positive pairs left out). ``q_n_range`` spans ``base``'s and the run's
     (``run_q_n_range``): the slope that carries the run's offset across it was measured
-    over ``base``'s. ``factor``: how much the
-    run's errors exceed ``base``'s prediction (exp of the offsets' difference). Validated
+    over ``base``'s. ``factor``: how much the run's errors exceed ``base``'s prediction (exp
+    of the offsets' difference). Validated
     by leaving out each of ``segments`` contiguous segments in turn (neighbouring scans see
     the same place): ``validation`` per segment, the recalibrated fit and ``base`` judged on
     it (:func:`_judged`). Raises Lf3pmError below 2 samples per segment."""
-    q_n, error = np.asarray(q_n, float), np.asarray(error, float)
-    keep = np.isfinite(q_n) & np.isfinite(error) & (q_n > 0) & (error > 0)
-    x, y = np.log(q_n[keep]), np.log(error[keep])
+    q_n, keep, x, y = _logs(q_n, error)
     if len(x) < 2 * segments:
         raise Lf3pmError(f"calibrating needs at least {2 * segments} scans with a finite q_n and error, got {len(x)}")
     b = base["b"]
 
     def fit(sel):
-        a = float(np.median(y[sel] - b * x[sel]))
-        lo, hi = np.quantile(y[sel] - (a + b * x[sel]), INTERVAL_QUANTILES)
-        return {"a": a, "b": b, "log_lo": float(lo), "log_hi": float(hi)}
+        return _line(float(np.median(y[sel] - b * x[sel])), b, x[sel], y[sel])
 
     validation = {}
     for k, held in enumerate(np.array_split(np.arange(len(x)), segments)):
@@ -259,10 +270,7 @@ def calibrate_factor(base: dict, q_n, error, *, provenance: dict, segments: int 
         }
     line = fit(np.ones(len(x), bool))
     return {
-        "predictor": "q_n",
-        **line,
-        "interval_quantiles": list(INTERVAL_QUANTILES),
-        "samples": int(len(x)),
+        **_header(line, x),
         "q_n_range": [min(float(q_n[keep].min()), support(base)[0]), max(float(q_n[keep].max()), support(base)[1])],
         "run_q_n_range": [float(q_n[keep].min()), float(q_n[keep].max())],
         "factor": math.exp(line["a"] - base["a"]),
