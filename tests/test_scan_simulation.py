@@ -218,3 +218,72 @@ def test_every_hit_is_the_nearest_disc_a_float64_brute_force_finds():
     ok = (ours >= widened - tol) & (ours <= inside + tol)
     assert ok.all(), f"{(~ok).sum()} of {len(dirs)} rays off the brute force"
     assert np.isfinite(ours[:1500]).mean() > 0.5  # most grazing rays meet the ground (some leave it first)
+
+
+def _returns(table, range_edges=(0.1, 2.0, 3.0, 100.0), cos_edges=(0.0, 0.5, 1.0)):
+    from lf3pm.sensors import ReturnModel
+
+    return ReturnModel(range_edges, cos_edges, table)
+
+
+def test_a_return_model_drops_exactly_the_hits_its_table_and_draws_say(room):
+    """Return probabilities of 0 and 1 by range and incidence: the rays kept are exactly those
+    whose bin holds 1, computed in float64 from the full scan's ranges and the walls' normals
+    (the box room's are the axes); a table of ones is no model at all; a probability of 0.3
+    keeps a seeded, thread-independent 30 % of the hits (binomial: within 5 sigma), whose
+    noisy ranges are those of the full scan (the draws are independent of the noise)."""
+    dirs = random_directions(np.random.default_rng(5), 30000)
+    origin = np.array([0.4, -0.6, 0.1])
+    full = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.01, seed=3))
+    ones = _core.simulate_scan(
+        room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.01, seed=3, returns=_returns([[1, 1]] * 3))
+    )
+    for name in ("sensor_points", "ray", "surfel"):
+        np.testing.assert_array_equal(ones[name], full[name])
+    clean = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0))
+    rng = np.linalg.norm(clean["sensor_points"], axis=1)
+    normal = np.abs(np.abs(clean["world_points"]) - np.asarray(HALF)).argmin(axis=1)  # the wall's axis
+    cos = np.abs(dirs[clean["ray"], normal])
+    model = _returns([[1, 0], [0, 1], [1, 1]])
+    away = np.min(np.abs(np.abs(clean["world_points"]) - np.asarray(HALF)), axis=1) < 1e-6
+    corner = np.sum(np.abs(np.abs(clean["world_points"]) - np.asarray(HALF)) < 0.1, axis=1) > 1
+    exact = away & ~corner & (np.abs(rng - 2.0) > 1e-6) & (np.abs(rng - 3.0) > 1e-6) & (np.abs(cos - 0.5) > 1e-6)
+    kept = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, returns=model))
+    expected = clean["ray"][(model.at(rng, cos) == 1) & exact]
+    got = np.intersect1d(kept["ray"], clean["ray"][exact])
+    np.testing.assert_array_equal(got, expected)
+    assert 0 < len(expected) < exact.sum()
+
+    third = _returns([[0.3, 0.3]] * 3)
+    a = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.01, seed=3, returns=third))
+    b = _core.simulate_scan(
+        room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.01, seed=3, threads=1, returns=third)
+    )
+    c = _core.simulate_scan(room, pose_at(*origin), dirs, scan_params(0.1, 100.0, noise=0.01, seed=4, returns=third))
+    np.testing.assert_array_equal(a["ray"], b["ray"])
+    assert not np.array_equal(a["ray"], c["ray"])
+    n = len(full["ray"])
+    assert abs(len(a["ray"]) - 0.3 * n) < 5 * np.sqrt(n * 0.3 * 0.7)
+    np.testing.assert_array_equal(a["sensor_points"], full["sensor_points"][np.isin(full["ray"], a["ray"])])
+
+
+def test_a_bad_return_table_is_refused_in_one_line(tmp_path):
+    from lf3pm.errors import SensorError
+    from lf3pm.sensors import get_sensor
+
+    with pytest.raises(SensorError, match="must increase"):
+        _returns([[1, 1]] * 3, range_edges=(0.1, 3.0, 2.0, 100.0))
+    with pytest.raises(SensorError, match=r"in \[0, 1\]"):
+        _returns([[1, 1.5]] * 3)
+    with pytest.raises(SensorError, match="3 rows"):
+        _returns([[1, 1]] * 2)
+    path = tmp_path / "s.yaml"
+    path.write_text(
+        "name: s\nmin_range: 0.1\nmax_range: 50\nelevations_deg: [0]\nazimuth_count: 8\n"
+        "return_probability: {range_edges_m: [0.1, 50], cos_edges: [0, 1], table: [[0.5]]}\n"
+    )
+    assert get_sensor(str(path)).returns == _returns([[0.5]], (0.1, 50.0), (0.0, 1.0))
+    path.write_text(path.read_text().replace("[[0.5]]", "[[2]]"))
+    with pytest.raises(SensorError, match=r"s\.yaml: key return_probability: every probability") as err:
+        get_sensor(str(path))
+    assert "\n" not in str(err.value)

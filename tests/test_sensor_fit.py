@@ -24,9 +24,9 @@ POSES = [(-3.0 + 0.5 * i, -1.0 + 0.2 * i, 0.3 * i) for i in range(6)]  # clear o
 STAMPS = [round(0.1 * i, 1) for i in range(6)]
 
 
-def scanned_run(folder, world, sensor, noise=0.0):
-    """A run folder of ``sensor``'s scans at POSES (range noise ``noise``, seed 0, one
-    noise stream per scan); returns the folder."""
+def scanned_run(folder, world, sensor, noise=0.0, returns=None):
+    """A run folder of ``sensor``'s scans at POSES (range noise ``noise``, the hits that
+    return by ``returns``, seed 0, one stream per scan); returns the folder."""
     scans = [
         simulate_scan(
             world,
@@ -36,6 +36,7 @@ def scanned_run(folder, world, sensor, noise=0.0):
             sensor.max_range,
             noise=noise,
             stream=k,
+            returns=returns,
         ).sensor_points
         for k, (x, y, yaw) in enumerate(POSES)
     ]
@@ -60,6 +61,7 @@ def test_a_spinning_sensor_is_fitted_back_from_its_scans(preset, room, tmp_path)
     assert fit.yaml["azimuth_count"] == sensor.num_rays // len(beams)
     assert sensor.min_range <= fit.yaml["min_range"] and fit.yaml["max_range"] <= sensor.max_range
     assert fit.yaml["range_noise_sigma"] < 1e-3  # noise-free scans on the map they were cast on
+    assert set(np.ravel(fit.yaml["return_probability"]["table"])) == {1.0}  # every hit returned
     for c in fit.comparisons:  # the same rays return, at the same ranges
         assert c.share_both > 0.99 and abs(c.residual_median_m) < 1e-3
         assert c.q_n_ratio == pytest.approx(1.0, rel=0.05)
@@ -78,6 +80,34 @@ def test_the_range_noise_is_the_noise_the_scans_were_drawn_with(room, tmp_path):
     folder = scanned_run(tmp_path / "run", room, get_sensor("vlp16"), noise=0.01)
     fit = fit_sensor(folder, room)
     assert fit.yaml["range_noise_sigma"] == pytest.approx(0.01, rel=0.1) and fit.noise_returns > 100_000
+
+
+def test_which_rays_return_is_fitted_back_and_simulated_scans_lose_as_many(room, tmp_path):
+    """OS1-64 scans that lose returns by range and incidence (a known table): the fitted
+    table, applied to the hits of a scan it was not fitted on, expects as many returns as
+    the truth does (within 4 binomial sigma of the scan's hits plus the table's 0.001
+    rounding), and on the compared scans (left out of the fit) the simulated sensor returns
+    on as many rays as the real one, within 5 points; without --returns, every hit returns."""
+    from lf3pm.audit.sensor_fit import COS_EDGES
+    from lf3pm.sensors import ReturnModel
+
+    os1 = get_sensor("os1-64")
+    # The room's hits lie 2.9 to 10.4 m away: two range bins, each with its own incidence law.
+    truth = ReturnModel(
+        (os1.min_range, 4.0, os1.max_range), COS_EDGES, [[0.3, 0.4, 0.5, 0.6, 0.7], [0.1, 0.2, 0.3, 0.4, 0.5]]
+    )
+    folder = scanned_run(tmp_path / "run", room, os1, returns=truth)
+    fit = fit_sensor(folder, room)
+    sensor = fitted_sensor(fit)
+    assert fit.return_scans == 1 and len(fit.comparisons) == 5
+    hits = simulate_scan(room, pose_matrix((0.5, 0.5, 0.0, 1.0)), os1.directions, os1.min_range, os1.max_range)
+    rng = np.linalg.norm(hits.sensor_points, axis=1)
+    cos = np.abs(np.einsum("ij,ij->i", hits.world_points - [0.5, 0.5, 0.0], room.index.normals[hits.surfel])) / rng
+    p = truth.at(rng, cos)
+    assert abs(sensor.returns.at(rng, cos).sum() - p.sum()) < 4 * np.sqrt((p * (1 - p)).sum()) + 0.001 * len(p)
+    for c in fit.comparisons:
+        assert abs(c.real_share - c.sim_share) < 0.05
+    assert fit_sensor(folder, room, returns=False).comparisons[0].sim_share > 0.99
 
 
 def test_a_livox_pattern_is_read_back_in_the_order_recorded(room, tmp_path):

@@ -68,6 +68,35 @@ def test_a_cell_equals_evaluate_at_its_centre(boxes, built):
     assert q[k, iy, ix] == pytest.approx(ref.metric.q_n, rel=1e-6)  # stored as float32
 
 
+def test_a_sensor_that_loses_returns_builds_cells_that_lose_them_as_evaluate_does(boxes, tmp_path):
+    """A fitted sensor's return model reaches the SOLM's casts: a cell equals evaluate with
+    the same model and noise stream, differs from the cell of the sensor that returns
+    every hit, and the store records the model."""
+    from dataclasses import replace
+
+    from lf3pm.sensors import ReturnModel
+
+    _, world, vlp16 = boxes
+    sensor = replace(vlp16, returns=ReturnModel((0.1, 100.0), (0.0, 1.0), [[0.5]]))
+    grid = make_grid(world, "r2", 1.0, bounds=(-1.5, -1.5, 1.5, 1.5), height=1.0)
+    lossy, full = tmp_path / "lossy.zarr", tmp_path / "full.zarr"
+    build_solm(world, sensor, grid, lossy, tile=4)
+    build_solm(world, vlp16, grid, full, tile=4)
+    solm = Solm.open(lossy)
+    assert solm.attrs["sensor_returns"] == sensor.returns.to_yaml()
+    x, y = solm.grid()
+    q, ground = solm.channel("q_n"), solm.channel("ground_z")
+    iy, ix = np.argwhere(np.isfinite(q))[3]
+    cell = np.ravel_multi_index((iy, ix), q.shape)
+    pose = pose_matrix((x[iy, ix], y[iy, ix], ground[iy, ix] + 1.0, 0.0))
+    limits = (vlp16.min_range, vlp16.max_range)
+    params = eval_params(*limits, noise=vlp16.range_noise_sigma, seed=0, stream=int(cell), returns=sensor.returns)
+    ref = _core.evaluate(world.index, pose, sensor.directions, params)
+    assert q[iy, ix] == pytest.approx(ref.metric.q_n, rel=1e-6)  # stored as float32
+    assert ref.hits < 0.6 * _core.evaluate(world.index, pose, sensor.directions, eval_params(*limits)).hits
+    assert Solm.open(full).channel("q_n")[iy, ix] != q[iy, ix]
+
+
 @pytest.mark.slow
 def test_resume_after_interruption_is_bitwise_identical(boxes, built, tmp_path):
     _, world, sensor = boxes

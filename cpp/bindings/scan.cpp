@@ -1,6 +1,7 @@
 // nanobind bindings of the scan stage (cpp/lf3pm/scan/): its parameters and the scan simulator.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/vector.h>
 
 #include <stdexcept>
 #include <string>
@@ -36,6 +37,21 @@ void bind_scan(nb::module_& m) {
   using PoseIn = nb::ndarray<const double, nb::shape<4, 4>, nb::c_contig, nb::device::cpu>;
   using PosesIn = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
 
+  nb::class_<ReturnModel>(m, "ReturnModel", "Return probability over (range, |cos incidence|) bins; empty: all return.")
+      .def(nb::init<>())
+      .def(
+          "__init__",
+          [](ReturnModel* self, std::vector<double> range_edges, std::vector<double> cos_edges,
+             std::vector<double> probability) {
+            new (self) ReturnModel{std::move(range_edges), std::move(cos_edges), std::move(probability)};
+            self->check();
+          },
+          "range_edges"_a, "cos_edges"_a, "probability"_a)
+      .def_ro("range_edges", &ReturnModel::range_edges, "Range bin edges (m), ascending.")
+      .def_ro("cos_edges", &ReturnModel::cos_edges, "|cos incidence| bin edges, ascending in [0, 1].")
+      .def_ro("probability", &ReturnModel::probability, "(range bins) x (cosine bins), row-major.")
+      .def("at", &ReturnModel::at, "range"_a, "cos"_a, "The probability of a return from such a hit.");
+
   nb::class_<ScanParams>(m, "ScanParams", "Scan simulation parameters (the defaults).")
       .def(nb::init<>())
       .def_rw("min_range", &ScanParams::min_range, "Nearer first hits give no return (they still block the ray), m.")
@@ -44,7 +60,8 @@ void bind_scan(nb::module_& m) {
       .def_rw("seed", &ScanParams::seed, "Seed of the range noise.")
       .def_rw("stream", &ScanParams::stream, "Independent noise stream (per pose) under one seed.")
       .def_rw("scan_voxel", &ScanParams::scan_voxel, "Keep the first hit per voxel of this edge (m; 0 = off).")
-      .def_rw("threads", &ScanParams::threads, "Worker threads (0 = all cores).");
+      .def_rw("threads", &ScanParams::threads, "Worker threads (0 = all cores).")
+      .def_rw("returns", &ScanParams::returns, "Which hits return (ReturnModel; empty: all).");
 
   m.def(
       "simulate_scan",

@@ -162,6 +162,7 @@ class ScanConfig(Section):
             stream=stream,
             scan_voxel=self.scan_voxel,
             threads=self.threads,
+            returns=sensor.returns,
         )
 
 
@@ -679,9 +680,11 @@ def scan_params(
     stream: int = 0,
     scan_voxel: float = 0.0,
     threads: int = 0,
+    returns=None,
 ) -> _core.ScanParams:
-    """The core's ScanParams (values as given: ScanConfig validates what users set)."""
-    return core_struct(
+    """The core's ScanParams (values as given: ScanConfig validates what users set);
+    ``returns``: the sensor's lf3pm.sensors.ReturnModel (None: every hit returns)."""
+    params = core_struct(
         _core.ScanParams(),
         min_range=float(min_range),
         max_range=float(max_range),
@@ -691,6 +694,9 @@ def scan_params(
         scan_voxel=float(scan_voxel),
         threads=int(threads),
     )
+    if returns is not None:
+        params.returns = returns.core()
+    return params
 
 
 def validated(section: type[Section], where: str = "", flags: dict | None = None, **values) -> Section:

@@ -19,6 +19,7 @@ SimulatedScan simulate(const MapIndex& map, PoseOf pose_of, const double* direct
   if (!(params.max_range > params.min_range) || params.min_range < 0)
     throw std::invalid_argument("ranges must satisfy 0 <= min_range < max_range");
   if (!(params.noise_sigma >= 0)) throw std::invalid_argument("range noise sigma must be >= 0");
+  params.returns.check();
   std::vector<double> range(count);
   std::vector<std::uint32_t> hit(count);
   parallel_for(count, 2048, params.threads, [&](std::size_t b, std::size_t e) {
@@ -37,6 +38,12 @@ SimulatedScan simulate(const MapIndex& map, PoseOf pose_of, const double* direct
       if (!(std::abs(s - h.range) < 1e-3)) s = h.range;
       if (s < params.min_range) {
         hit[k] = kNoHit;  // blocked below the minimum range: no return
+        return;
+      }
+      // The return is decided on the true range and incidence (d and n are unit vectors).
+      if (!params.returns.empty() &&
+          !ray_returns(params.returns.at(s, std::abs(denom)), params.seed, params.stream, k)) {
+        hit[k] = kNoHit;
         return;
       }
       if (params.noise_sigma > 0) s += params.noise_sigma * normal_sample(params.seed, params.stream, k);

@@ -10,6 +10,7 @@
 
 #include "lf3pm/common/pose.hpp"
 #include "lf3pm/map/map_index.hpp"
+#include "lf3pm/scan/return_model.hpp"
 
 namespace lf3pm {
 
@@ -21,6 +22,7 @@ struct ScanParams {
   std::uint64_t stream = 0;  // independent noise per pose under one seed
   double scan_voxel = 0.0;   // keep the first hit per voxel of this edge (sensor frame); 0 = off
   int threads = 0;           // 0 = all cores
+  ReturnModel returns;       // which hits return (drawn per ray like the noise); empty: all
 };
 
 struct SimulatedScan {

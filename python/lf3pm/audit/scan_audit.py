@@ -59,7 +59,7 @@ def audit_scan(
         out["sim_error"] = str(err)
     else:
         out.update(_metric("sim", simulated), sim_hits=simulated.hits)
-        out["q_n_ratio"] = _ratio(simulated.q_n, real.q_n)
+        out["q_n_ratio"] = finite_ratio(simulated.q_n, real.q_n)
         out["direction_angle_deg"] = _angle(real.least_observable, simulated.least_observable)
         if simulated.predicted_localization_error_m is not None:
             lo, hi = simulated.predicted_localization_error_interval_m
@@ -97,7 +97,8 @@ def _angle(a, b) -> float:
     return math.degrees(math.acos(cos)) if len(a) == len(b) and len(a) else math.nan
 
 
-def _ratio(a: float, b: float) -> float:
+def finite_ratio(a: float, b: float) -> float:
+    """a / b, NaN unless both are finite and b > 0."""
     return a / b if math.isfinite(a) and math.isfinite(b) and b > 0 else math.nan
 
 

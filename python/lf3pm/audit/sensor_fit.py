@@ -21,6 +21,11 @@ real ones at the reference poses.
   incidence below 60 degrees), as a robust sigma (1.4826 x MAD). The map's own noise and
   the reference poses' error add to it: an upper bound, unless the map holds the scan,
   which makes it too small (docs/real.md measures the bias).
+- **Returns** (with a map): which rays return, as a :class:`~lf3pm.sensors.ReturnModel`:
+  the fitted sensor's noise-free simulated scan at each reference pose, and for each ray
+  it returns on, whether the real scan returned on that ray (a real return belongs to its
+  nearest ray), tabulated over the hit's range (:data:`RANGE_EDGES_M`) and |cos incidence|
+  (:data:`COS_EDGES`). Fitted on the scans not compared, so the comparison is held out.
 """
 
 from __future__ import annotations
@@ -31,12 +36,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lf3pm.atomic import atomic_write
+from lf3pm.audit.scan_audit import finite_ratio
 from lf3pm.config import DEFAULTS
 from lf3pm.errors import Lf3pmError
 from lf3pm.metric import evaluate, evaluate_points
 from lf3pm.runs import Run
 from lf3pm.scan.scan_simulator import simulate_scan
-from lf3pm.sensors import Sensor, directions_from_angles, spinning_directions
+from lf3pm.sensors import ReturnModel, Sensor, directions_from_angles, spinning_directions
 
 #: Elevation histogram bin (deg) and its Gaussian smoothing (bins).
 ELEVATION_BIN_DEG, ELEVATION_SMOOTHING_BINS = 0.02, 2
@@ -50,12 +56,23 @@ RING_SEPARATION_SHARE = 0.3
 RING_PROMINENCE = 0.5
 #: A scan is spinning when its beams' returns fill this share of 1-degree azimuth bins.
 SPINNING_COVERAGE = 0.9
+#: Steps between one beam's returns that must be whole multiples of an azimuth step for it
+#: to be the sensor's (see azimuth_count).
+STEP_MULTIPLE_SHARE = 0.8
 #: The directions of a pattern sensor accumulated over this many seconds of scans.
 PATTERN_SECONDS = 1.0
 #: Incidence cosines below this leave a return out of the range-noise estimate.
 MIN_INCIDENCE_COS = 0.5
 #: Scans read by default (evenly over the run), and scans compared with their simulation.
 DEFAULT_SCANS, COMPARED_SCANS = 20, 5
+#: Bins of the return model: range edges (m; the sensor's own limits close the first and
+#: last bin) doubling from 1 m, as the hits per range bin fall with range, and |cos
+#: incidence| in fifths.
+RANGE_EDGES_M = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+COS_EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
+#: A bin with fewer simulated hits than this takes its range row's share (or, if the row
+#: has fewer too, the share over all hits): 200 hits give a share to within 3.5 points.
+MIN_BIN_HITS = 200
 
 
 @dataclass(frozen=True)
@@ -63,7 +80,8 @@ class Comparison:
     """One scan's real returns against the fitted sensor's simulated scan at its reference
     pose: rays that returned in both, in the real scan only, in the simulation only (a
     real return belongs to its nearest ray of the fitted pattern), the range residual
-    real - simulated over rays in both (median and robust sigma, m), and sim_q_n / real_q_n."""
+    real - simulated over rays in both (median and robust sigma, m), sim_q_n / real_q_n and
+    sim_sigma1 / real_sigma1; ``rays``: the sensor's rays in a scan."""
 
     index: int
     both: int
@@ -72,6 +90,18 @@ class Comparison:
     residual_median_m: float
     residual_sigma_m: float
     q_n_ratio: float
+    sigma1_ratio: float
+    rays: int
+
+    @property
+    def real_share(self) -> float:
+        """Rays the real scan returned on, over the sensor's rays."""
+        return (self.both + self.real_only) / self.rays
+
+    @property
+    def sim_share(self) -> float:
+        """Rays the simulated scan returned on, over the sensor's rays."""
+        return (self.both + self.sim_only) / self.rays
 
     @property
     def share_both(self) -> float:
@@ -86,7 +116,8 @@ class SensorFit:
     pattern sensor's ``pattern_file`` is named on writing), ``pattern`` ((N, 2) azimuth,
     elevation in radians, pattern sensors), what it was fitted from (``scans``,
     ``points``, per scan ``ring_counts``), ``noise_returns`` (returns the range noise was
-    estimated from; 0 without a map) and the per-scan :class:`Comparison` s."""
+    estimated from; 0 without a map), ``return_scans`` (the scans the return model was
+    fitted on; 0: none fitted) and the per-scan :class:`Comparison` s."""
 
     kind: str
     yaml: dict
@@ -95,6 +126,7 @@ class SensorFit:
     pattern: np.ndarray | None = None
     ring_counts: tuple = ()
     noise_returns: int = 0
+    return_scans: int = 0
     comparisons: tuple = field(default_factory=tuple)
 
     def to_dict(self) -> dict:
@@ -107,7 +139,11 @@ class SensorFit:
             "pattern_rays": None if self.pattern is None else len(self.pattern),
             "ring_counts": list(self.ring_counts),
             "noise_returns": self.noise_returns,
-            "comparisons": [{**c.__dict__, "share_both": c.share_both} for c in self.comparisons],
+            "return_scans": self.return_scans,
+            "comparisons": [
+                {**c.__dict__, "share_both": c.share_both, "real_share": c.real_share, "sim_share": c.sim_share}
+                for c in self.comparisons
+            ],
         }
 
 
@@ -167,8 +203,10 @@ def fit_rings(elevations: list[np.ndarray]) -> tuple[np.ndarray, tuple]:
 
 def azimuth_count(points: list[np.ndarray], rings_deg: np.ndarray) -> int:
     """Columns per turn: 360 degrees over the azimuth step between neighbouring returns of
-    one beam (the median of the steps no larger than 1.5 times their lower quartile, so
-    that gaps of missing returns do not count)."""
+    one beam: the median of the steps no larger than 1.5 times their lower quartile, so
+    that gaps of missing returns do not count, or the largest of its halves, thirds and
+    quarters that :data:`STEP_MULTIPLE_SHARE` of the steps are whole multiples of (to a
+    quarter step): a sensor that loses most returns has gaps as its lower quartile."""
     half = np.min(np.diff(rings_deg)) / 2 if len(rings_deg) > 1 else 1.0
     steps = []
     for p in points:
@@ -184,6 +222,10 @@ def azimuth_count(points: list[np.ndarray], rings_deg: np.ndarray) -> int:
     if not len(d):
         raise Lf3pmError("no two returns of one beam: cannot find the azimuth step")
     step = float(np.median(d[d <= 1.5 * np.percentile(d, 25)]))
+    for fraction in range(1, 5):
+        multiple = d / (step / fraction)
+        if np.mean(np.abs(multiple - np.round(multiple)) < 0.25) >= STEP_MULTIPLE_SHARE:
+            return round(360.0 * fraction / step)
     return round(360.0 / step)
 
 
@@ -238,10 +280,20 @@ def _chosen(count: int, wanted: int) -> np.ndarray:
     return np.unique(np.linspace(0, count - 1, min(wanted, count)).round().astype(int))
 
 
-def fit_sensor(run, world=None, config=None, *, scans: int = DEFAULT_SCANS, name: str | None = None, progress=None):
+def fit_sensor(
+    run,
+    world=None,
+    config=None,
+    *,
+    scans: int = DEFAULT_SCANS,
+    name: str | None = None,
+    returns: bool = True,
+    progress=None,
+):
     """The :class:`SensorFit` of ``run`` (a path or lf3pm.runs.Run; bad scans skipped) from
     ``scans`` scans spread over it; ``world``: a Map (or lf3pm.audit.SelfMap) in the frame of
-    the run's reference poses for the range noise and the comparison (None: neither);
+    the run's reference poses for the range noise, the return model (``returns``) and the
+    comparison (None: none of them);
     ``config``: the scan and metric sections for the association (default: the defaults).
     ``progress(done, total)`` after each scan read and compared."""
     config = DEFAULTS if config is None else config
@@ -295,8 +347,14 @@ def fit_sensor(run, world=None, config=None, *, scans: int = DEFAULT_SCANS, name
     fit = SensorFit(kind, keys, len(read), int(sum(len(p) for p in points)), pattern, counts, sum(map(len, residuals)))
     if world is None:
         return fit
-    sensor = fitted_sensor(fit)
     chosen = [posed[i] for i in _chosen(len(posed), COMPARED_SCANS)]
+    if returns:
+        # Fitted on the scans not compared (on all of them when every scan is compared).
+        others = [s for s in posed if all(s is not c for c in chosen)] or posed
+        model = fit_returns(fitted_sensor(fit), [(_map_for(world, s), s) for s in others])
+        keys = {**fit.yaml, "return_probability": model.to_yaml()}
+        fit = SensorFit(**{**fit.__dict__, "yaml": keys, "return_scans": len(others)})
+    sensor = fitted_sensor(fit)
     comparisons = tuple(compare(sensor, _map_for(world, s), s, config) for s in chosen)
     return SensorFit(**{**fit.__dict__, "comparisons": comparisons})
 
@@ -325,29 +383,78 @@ def fitted_sensor(fit: SensorFit):
         horizontal_fov=2 * math.pi if fit.kind == "spinning" else float(np.ptp(fit.pattern[:, 0])),
         approximate=False,
         source="fitted from a recorded run",
+        returns=ReturnModel(**_renamed(y["return_probability"])) if "return_probability" in y else None,
     )
+
+
+def _renamed(keys: dict) -> dict:
+    """ReturnModel's arguments from the YAML's return_probability mapping."""
+    return {"range_edges_m": keys["range_edges_m"], "cos_edges": keys["cos_edges"], "probability": keys["table"]}
+
+
+def real_rays(sensor, points: np.ndarray) -> dict:
+    """The real returns by ray: each return belongs to the nearest of ``sensor``'s rays, and a
+    ray keeps the nearest of its returns; {ray: range}."""
+    from scipy.spatial import cKDTree
+
+    real_range = np.linalg.norm(points, axis=1)
+    nearest = cKDTree(sensor.directions).query(points / real_range[:, None])[1]
+    order = np.lexsort((real_range, nearest))
+    rays, first = np.unique(nearest[order], return_index=True)
+    return dict(zip(rays.tolist(), real_range[order][first].tolist()))
+
+
+def fit_returns(sensor, scans) -> ReturnModel:
+    """The return model of ``sensor`` (without one) from ``scans``, (map, scan) pairs of
+    scans with reference poses: over the rays its noise-free simulated scan returns on,
+    the share the real scan returned on too, per (range, |cos incidence|) bin."""
+    ranges, coses, returned = [], [], []
+    for world, scan in scans:
+        pose = np.asarray(scan.pose, dtype=np.float64)
+        simulated = simulate_scan(world, pose, sensor.directions, sensor.min_range, sensor.max_range)
+        real = real_rays(sensor, scan.points)
+        rays = sensor.directions[simulated.ray] @ pose[:3, :3].T
+        normals = world.index.normals[simulated.surfel]
+        ranges.append(np.linalg.norm(simulated.sensor_points, axis=1))
+        coses.append(np.abs(np.einsum("ij,ij->i", rays, normals)))
+        returned.append(np.isin(simulated.ray, list(real)))
+    edges = [e for e in RANGE_EDGES_M if sensor.min_range < e < sensor.max_range]
+    range_edges = (sensor.min_range, *edges, sensor.max_range)
+    r = np.searchsorted(range_edges[1:-1], np.concatenate(ranges), side="right")
+    c = np.searchsorted(COS_EDGES[1:-1], np.concatenate(coses), side="right")
+    hit = np.concatenate(returned)
+    shape = (len(range_edges) - 1, len(COS_EDGES) - 1)
+    hits = np.zeros(shape)
+    back = np.zeros(shape)
+    np.add.at(hits, (r, c), 1)
+    np.add.at(back, (r, c), hit)
+    overall = back.sum() / hits.sum() if hits.sum() else 1.0
+    row = np.where(hits.sum(1) >= MIN_BIN_HITS, back.sum(1) / np.maximum(hits.sum(1), 1), overall)
+    table = np.where(hits >= MIN_BIN_HITS, back / np.maximum(hits, 1), row[:, None])
+    return ReturnModel(range_edges, COS_EDGES, np.round(table, 3).tolist())
 
 
 def compare(sensor, world, scan, config) -> Comparison:
     """The real returns of ``scan`` against ``sensor``'s noise-free simulated scan at the
-    scan's reference pose on ``world`` (see :class:`Comparison`)."""
-    from scipy.spatial import cKDTree
-
+    scan's reference pose on ``world`` (see :class:`Comparison`; the sensor's returns drawn
+    with the scan section's seed)."""
     pose = np.asarray(scan.pose, dtype=np.float64)
-    simulated = simulate_scan(world, pose, sensor.directions, sensor.min_range, sensor.max_range)
-    real_range = np.linalg.norm(scan.points, axis=1)
-    nearest = cKDTree(sensor.directions).query(scan.points / real_range[:, None])[1]
-    # One return per ray: the nearest to the ray of the real returns that chose it.
-    order = np.lexsort((real_range, nearest))
-    rays, first = np.unique(nearest[order], return_index=True)
-    real_by_ray = dict(zip(rays.tolist(), real_range[order][first].tolist()))
+    simulated = simulate_scan(
+        world,
+        pose,
+        sensor.directions,
+        sensor.min_range,
+        sensor.max_range,
+        seed=config.scan.seed,
+        returns=sensor.returns,
+    )
+    real_by_ray = real_rays(sensor, scan.points)
     sim_range = np.linalg.norm(simulated.sensor_points, axis=1)
     sim_by_ray = dict(zip(np.asarray(simulated.ray).tolist(), sim_range.tolist()))
     both = sorted(set(real_by_ray) & set(sim_by_ray))
     residual = np.array([real_by_ray[r] - sim_by_ray[r] for r in both])
     real = evaluate_points(world, pose, scan.points, config)
     sim = evaluate(world, pose, sensor, config)
-    ratio = sim.q_n / real.q_n if math.isfinite(sim.q_n) and math.isfinite(real.q_n) and real.q_n > 0 else math.nan
     return Comparison(
         index=scan.index,
         both=len(both),
@@ -355,7 +462,9 @@ def compare(sensor, world, scan, config) -> Comparison:
         sim_only=len(sim_by_ray) - len(both),
         residual_median_m=float(np.median(residual)) if len(residual) else math.nan,
         residual_sigma_m=robust_sigma(residual),
-        q_n_ratio=ratio,
+        q_n_ratio=finite_ratio(sim.q_n, real.q_n),
+        sigma1_ratio=finite_ratio(sim.sigma1, real.sigma1),
+        rays=sensor.num_rays,
     )
 
 

@@ -66,6 +66,11 @@ def fit(
     ),
     scans: int = typer.Option(20, min=2, metavar="N", help="Scans read, spread evenly over the run."),
     name: str = typer.Option("fitted", help="The sensor's name in the YAML."),
+    returns: bool = typer.Option(
+        True,
+        "--returns/--no-returns",
+        help="With --map: fit which rays return (return_probability over range and incidence; docs/sensors.md).",
+    ),
     config: Path | None = CONFIG_OPTION,
     exclude_window: float | None = option("run.exclude_window", metavar="SECONDS"),
     scans_topic: str | None = option("run.scans_topic"),
@@ -73,8 +78,9 @@ def fit(
     threads: int | None = option("scan.threads"),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object: the fit and the comparison."),
 ):
-    """Fit a sensor (ray pattern, range limits, range noise) from a recorded run's scans
-    and write it as a YAML that works wherever a preset does (docs/sensors.md)."""
+    """Fit a sensor (ray pattern, range limits, range noise, which rays return) from a
+    recorded run's scans and write it as a YAML that works wherever a preset does
+    (docs/sensors.md)."""
     with user_errors():
         paths = {
             **MAP_PATHS,
@@ -96,7 +102,13 @@ def fit(
                     world = load_map(map_path, cfg.map, threads=cfg.scan.threads, progress=loading)
         with progress_bar() as step:
             fitted = fit_sensor(
-                run, world, cfg, scans=scans, name=name, progress=lambda d, t: step("range noise and comparison", t, 1)
+                run,
+                world,
+                cfg,
+                scans=scans,
+                name=name,
+                returns=returns,
+                progress=lambda d, t: step("range noise and comparison", t, 1),
             )
         written = write_sensor(fitted, out)
         if as_json:
@@ -104,11 +116,14 @@ def fit(
             return
         say = lambda text: console.print(text, highlight=False, soft_wrap=True)  # noqa: E731
         say(fitted.yaml["description"])
+        if fitted.return_scans:
+            say(f"return probability fitted on {fitted.return_scans} scans, the scans below left out")
         for c in fitted.comparisons:
             say(
-                f"scan {c.index}: {c.share_both:.0%} of rays returned in both (real only {c.real_only}, simulated only "
-                f"{c.sim_only}); range real - simulated {c.residual_median_m:+.3f} m (sigma {c.residual_sigma_m:.3f}); "
-                f"q_n simulated/real {c.q_n_ratio:.3g}"
+                f"scan {c.index}: rays returning real {c.real_share:.1%}, simulated {c.sim_share:.1%}; "
+                f"{c.share_both:.0%} of rays returned in both (real only {c.real_only}, simulated only {c.sim_only}); "
+                f"range real - simulated {c.residual_median_m:+.3f} m (sigma {c.residual_sigma_m:.3f}); "
+                f"q_n simulated/real {c.q_n_ratio:.3g}, sigma1 {c.sigma1_ratio:.3g}"
             )
         if world is None:
             say("no --map: range noise not estimated (0 written) and no comparison with simulated scans")

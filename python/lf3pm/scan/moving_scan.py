@@ -81,13 +81,14 @@ def simulate_moving_scan(
     seed: int = DEFAULTS.scan.seed,
     stream: int = 0,
     threads: int = DEFAULTS.scan.threads,
+    returns=None,
 ) -> MovingScan:
     """The scan whose rays (``directions`` (K, 3), emission order) fire over
     (end - period, end] while the sensor follows ``motion`` (anything with
     ``pose(times) -> (n, 4, 4)`` that holds the end poses outside its span:
     lf3pm.replays.motion.Motion, lf3pm.trajectory.sampling.LinearMotion).
-    Noise as :func:`lf3pm.scan.scan_simulator.simulate_scan`'s: ray k gets the same range noise under
-    the same seed and stream whatever the motion.
+    Noise and ``returns`` as :func:`lf3pm.scan.scan_simulator.simulate_scan`'s: ray k gets the same
+    range noise (and return draw) under the same seed and stream whatever the motion.
     """
     if not (np.isfinite(period) and period > 0):
         raise Lf3pmError(f"the scan period must be > 0 s, got {period}")
@@ -98,7 +99,7 @@ def simulate_moving_scan(
         index,
         ray_poses,
         directions,
-        scan_params(min_range, max_range, noise=noise, seed=seed, stream=stream, threads=threads),
+        scan_params(min_range, max_range, noise=noise, seed=seed, stream=stream, threads=threads, returns=returns),
     )
     reference = ray_poses[-1]  # the last ray fires at the reference time
     world = scan["world_points"]

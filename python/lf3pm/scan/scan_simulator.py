@@ -40,15 +40,24 @@ def simulate_scan(
     stream: int = 0,
     scan_voxel: float = DEFAULTS.scan.scan_voxel,
     threads: int = DEFAULTS.scan.threads,
+    returns=None,
 ) -> SimulatedScan:
     """The scan of rays ``directions`` (N, 3, sensor frame) from the 4 x 4 sensor-to-world
-    ``pose``; range noise sigma ``noise`` from noise stream (``seed``, ``stream``, ray)."""
+    ``pose``; range noise sigma ``noise`` from noise stream (``seed``, ``stream``, ray);
+    ``returns``: the sensor's ReturnModel (None: every hit returns)."""
     raw = _core.simulate_scan(
         map.index,
         np.ascontiguousarray(pose, dtype=np.float64),
         np.ascontiguousarray(directions, dtype=np.float64),
         scan_params(
-            min_range, max_range, noise=noise, seed=seed, stream=stream, scan_voxel=scan_voxel, threads=threads
+            min_range,
+            max_range,
+            noise=noise,
+            seed=seed,
+            stream=stream,
+            scan_voxel=scan_voxel,
+            threads=threads,
+            returns=returns,
         ),
     )
     return SimulatedScan(**raw)

@@ -95,6 +95,7 @@ class ScanStream(Sequence):
                 seed=self.seed,
                 stream=k,
                 threads=self.threads,
+                returns=s.returns,
             )
         else:
             raw = simulate_scan(
@@ -107,6 +108,7 @@ class ScanStream(Sequence):
                 seed=self.seed,
                 stream=k,
                 threads=self.threads,
+                returns=s.returns,
             )
             scan = MovingScan(
                 end=float(self.times[k]),

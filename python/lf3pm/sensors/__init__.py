@@ -34,6 +34,10 @@ with :func:`load_sensor_yaml`. Keys:
 - ``name`` (string, required), ``description`` (string, optional)
 - ``min_range``, ``max_range`` (metres, required, 0 < min < max)
 - ``range_noise_sigma`` (metres, 1-sigma Gaussian range noise, default 0)
+- ``return_probability`` (optional; `lf3pm sensors fit` writes it): ``range_edges_m``,
+  ``cos_edges`` (|cos incidence|, in [0, 1]) and ``table`` (one row per range bin, a
+  probability per cosine bin): the chance that a ray hitting a surface there returns
+  (:class:`ReturnModel`); without it every hit returns
 - then EITHER a spinning sensor:
 
   - ``elevations_deg``: list of beam elevations in degrees, in firing order
@@ -75,9 +79,11 @@ from lf3pm.errors import SensorError
 
 from ._model import Sensor, directions_from_angles, spinning_directions, spinning_rings
 from ._presets import DEFAULT_INTEGRATION_TIME, PRESET_NAMES, find_preset, presets
+from ._returns import ReturnModel
 from ._yaml import load_sensor_yaml
 
 __all__ = [
+    "ReturnModel",
     "Sensor",
     "SensorError",
     "as_sensor",

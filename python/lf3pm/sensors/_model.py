@@ -11,6 +11,8 @@ import numpy as np
 from lf3pm import libm
 from lf3pm.errors import SensorError
 
+from ._returns import ReturnModel
+
 #: Largest scan the helpers build (rays); beyond this a typo in a rate or time
 #: would silently allocate gigabytes.
 MAX_RAYS = 20_000_000
@@ -29,7 +31,8 @@ class Sensor:
 
     ``directions`` are K x 3 float64 unit vectors in the sensor frame (x forward,
     y left, z up), C-contiguous, in emission order. Ranges in metres,
-    ``horizontal_fov`` in radians (2*pi for spinning sensors).
+    ``horizontal_fov`` in radians (2*pi for spinning sensors). ``returns``: which
+    hits give a return (:class:`~lf3pm.sensors.ReturnModel`; None: all of them).
     """
 
     name: str
@@ -44,6 +47,8 @@ class Sensor:
     #: Non-repetitive sensors (Livox): the whole recorded azimuth/elevation
     #: pattern, read as a ring buffer, so consecutive scans continue it.
     pattern: np.ndarray | None = dataclass_field(default=None, repr=False, compare=False)
+    #: Which hits return (a fitted sensor's; lf3pm.sensors.ReturnModel); None: every hit.
+    returns: ReturnModel | None = None
 
     def __post_init__(self):
         for field in ("name", "description", "source"):
@@ -52,6 +57,8 @@ class Sensor:
         if not self.name.strip():
             raise SensorError("sensor name must not be empty")
         label = f"sensor '{self.name}'"
+        if self.returns is not None and not isinstance(self.returns, ReturnModel):
+            raise SensorError(f"{label}: returns must be a ReturnModel or None")
         if not isinstance(self.approximate, (bool, np.bool_)):
             raise SensorError(f"{label}: approximate must be a bool")
         object.__setattr__(self, "approximate", bool(self.approximate))
@@ -119,6 +126,7 @@ class Sensor:
             and self.horizontal_fov == other.horizontal_fov
             and self.approximate == other.approximate
             and self.source == other.source
+            and self.returns == other.returns
             and self.directions.shape == other.directions.shape
             and bool(np.array_equal(self.directions, other.directions))
         )

@@ -13,8 +13,9 @@ from lf3pm.errors import SensorError
 from lf3pm.limits import clip, excerpt, load_yaml, read_text_file
 
 from ._model import MAX_RAYS, Sensor, _is_number, pattern_directions, ray_count, spinning_directions
+from ._returns import ReturnModel
 
-_COMMON_KEYS = ("name", "description", "min_range", "max_range", "range_noise_sigma")
+_COMMON_KEYS = ("name", "description", "min_range", "max_range", "range_noise_sigma", "return_probability")
 _SPINNING_KEYS = ("elevations_deg", "azimuth_count", "horizontal_fov_deg")
 _PATTERN_KEYS = ("pattern_file", "point_rate", "integration_time")
 ALLOWED_KEYS = _COMMON_KEYS + _SPINNING_KEYS + _PATTERN_KEYS
@@ -223,6 +224,7 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
         )
 
     description = r.string("description", default_description)
+    returns = _returns(r) if r.has("return_probability") else None
     return Sensor(
         name=name,
         description=description,
@@ -233,4 +235,22 @@ def load_sensor_yaml(path, *, integration_time: float | None = None) -> Sensor:
         horizontal_fov=fov,
         approximate=False,
         source=source,
+        returns=returns,
     )
+
+
+def _returns(r: _Reader) -> ReturnModel:
+    """The ``return_probability`` mapping: range_edges_m, cos_edges and table (a list of
+    rows, one per range bin, each a value per cosine bin)."""
+    value = r.data["return_probability"]
+    keys = ("range_edges_m", "cos_edges", "table")
+    if not isinstance(value, dict) or set(value) != set(keys):
+        r.fail("return_probability", f"must be a mapping of {', '.join(keys)}")
+    table = value["table"]
+    if not isinstance(table, list) or not all(isinstance(row, list) for row in table):
+        r.fail("return_probability", "table must be a list of rows (one per range bin)")
+    inner = _Reader(r.path, value)
+    try:
+        return ReturnModel(inner.number_list("range_edges_m"), inner.number_list("cos_edges"), table)
+    except SensorError as err:
+        raise SensorError(f"sensor file {r.path}: key {err}") from None

@@ -142,6 +142,7 @@ def build_solm(
         "grid": grid.to_dict(),
         "sensor": sensor.name,
         "sensor_rays": sensor.num_rays,
+        "sensor_returns": None if sensor.returns is None else sensor.returns.to_yaml(),
         "noise": job.noise,
         "seed": scan.seed,
         "w1": metric.w1,

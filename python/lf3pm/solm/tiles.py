@@ -25,6 +25,7 @@ from lf3pm import _core
 from lf3pm.config import DEFAULTS, MetricConfig, ScanConfig, SolmConfig, core_struct, scan_params
 from lf3pm.grid import Space
 from lf3pm.map import Map, MapPoints
+from lf3pm.sensors import ReturnModel
 from lf3pm.solm.grid import SolmGrid
 from lf3pm.solm.ray_thinning import thin_rays
 from lf3pm.solm.store import CHANNELS, chunk_path, writing
@@ -45,13 +46,16 @@ class TileJob:
     max_range: float
     noise: float
     seed: int
+    returns: ReturnModel | None  # the sensor's: which hits return
     metric: MetricConfig
     robot_radius: float
     floor_clearance: float
 
     def params(self, threads: int) -> _core.EvalParams:
         """The core's evaluation parameters, with ``threads`` workers."""
-        scan = scan_params(self.min_range, self.max_range, noise=self.noise, seed=self.seed, threads=threads)
+        scan = scan_params(
+            self.min_range, self.max_range, noise=self.noise, seed=self.seed, threads=threads, returns=self.returns
+        )
         return self.metric.core(scan, self.ray_weight)
 
     def slices(self, ty: int, tx: int) -> tuple[slice, slice]:
@@ -92,6 +96,7 @@ def make_job(
         max_range=float(sensor.max_range),
         noise=float(scan.noise_for(sensor)),
         seed=int(scan.seed),
+        returns=sensor.returns,
         metric=metric,
         robot_radius=float(solm.robot_radius),
         floor_clearance=float(solm.floor_clearance),

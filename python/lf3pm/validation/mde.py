@@ -132,6 +132,7 @@ def mde(
         seed=scan_config.seed,
         scan_voxel=scan_config.scan_voxel,
         threads=scan_config.threads,
+        returns=sensor.returns,
     )
     return _registered(map, truth, scan.sensor_points, config, target, sensor.name, scan_config.noise_for(sensor))
 
