@@ -1,6 +1,6 @@
 // nanobind module lf3pm._core.<level> (LF3PM_MODULE; one per instruction set, CMakeLists.txt):
 // a thin layer over the C++ core, one binding file per stage (map, scan, metric, graph
-// search, car search, trajectory); no logic here. lf3pm._core loads the one the CPU runs.
+// search, car search, trajectory, flight); no logic here. lf3pm._core loads the one the CPU runs.
 #include <nanobind/nanobind.h>
 
 #include <stdexcept>
@@ -13,6 +13,7 @@ void bind_metric(nb::module_& m);
 void bind_graph_search(nb::module_& m);
 void bind_hybrid_search(nb::module_& m);
 void bind_trajectory(nb::module_& m);
+void bind_flight(nb::module_& m);
 
 NB_MODULE(LF3PM_MODULE, m) {
   m.doc() = "lf3pm C++ core: map index, surfel ray casting, FAST-LIO observations, LF-3PM metric, planner";
@@ -35,4 +36,5 @@ NB_MODULE(LF3PM_MODULE, m) {
   bind_graph_search(m);
   bind_hybrid_search(m);
   bind_trajectory(m);
+  bind_flight(m);
 }

@@ -2,7 +2,7 @@
 
 Each section maps one to one onto a C++ parameter struct of the core and reads its
 defaults from it, so that a default is written once, in C++ (``MapParams``,
-``ScanParams``, ``EvalParams``, ``RobotLimits``; the sections with no C++ struct write
+``ScanParams``, ``EvalParams``, ``RobotLimits``, ``QuadrotorParams``, ``QuadrotorLimits``; the sections with no C++ struct write
 theirs here). Every value is validated once, here: finite, in range, an integer where
 one is meant. The library's entry points (``load_map``, ``evaluate``, ``mde``,
 ``make_grid``, ``build_solm``, ``replay``, ``Robot``) validate their arguments through
@@ -35,6 +35,8 @@ _MAP = _core.MapParams()
 _SCAN = _core.ScanParams()
 _EVAL = _core.EvalParams()
 _LIMITS = _core.RobotLimits()
+_QUADROTOR = _core.QuadrotorParams()
+_FLIGHT_LIMITS = _core.QuadrotorLimits()
 
 #: The core's noise streams take 64-bit seeds (Python's and numpy's seed sequences take
 #: any non-negative int; 2^63 - 1 keeps a seed an int64 in JSON and Zarr attributes).
@@ -52,6 +54,8 @@ ODOMETRY_DRIVES = ("boxes", "houses", "gobi", "tunnel", "hall", "hall3")
 
 #: Robot kinds (lf3pm.trajectory.robots.Robot) and the SOLM channels a plan can be guided by.
 ROBOT_KINDS = ("omni", "diff", "car")
+#: Where a quadrotor carries its LiDAR (lf3pm.flight.mounts.MOUNTS holds them by these names).
+SENSOR_MOUNTS = ("top", "down20", "side")
 #: What the planner makes of a SOLM's unknown cells (no map under them; planner/esdf.py).
 UNKNOWN_POLICIES = ("obstacle", "free")
 COST_CHANNELS = ("q_n", "q_min", "q_max", "step_norm", "q_n_q_min", "none")
@@ -320,6 +324,56 @@ class RobotConfig(Section):
         if self.kind != "car" and self.min_turn_radius > 0:
             raise ValueError(f"a minimum turning radius applies to car robots only, not {self.kind!r}")
         return self
+
+
+class QuadrotorConfig(Section):
+    """A quadrotor's mass, drag and flight limits (SI units, angles in radians; C++
+    QuadrotorParams and QuadrotorLimits) and where it carries its LiDAR (lf3pm.flight).
+
+    The thrust limits must hold the hover thrust, mass x gravity, between them.
+    ``mount``: ``top`` (a Mid-360 on top, level), ``down20`` (a forward LiDAR pitched down
+    20 degrees, as EAROL's), ``side`` (a VLP-16 on its side, its spin axis along the body's
+    x axis); docs/flight.md.
+    """
+
+    mass: float = Field(_QUADROTOR.mass, ge=0.01, le=1000.0, description="Mass (kg).")
+    drag_h: float = Field(_QUADROTOR.drag_h, ge=0, le=MAX_LIMIT, description="Horizontal linear drag (N per m/s).")
+    drag_v: float = Field(_QUADROTOR.drag_v, ge=0, le=MAX_LIMIT, description="Vertical linear drag (N per m/s).")
+    vmax: float = Field(_FLIGHT_LIMITS.vmax, ge=MIN_LIMIT, le=MAX_LIMIT, description="Speed limit (m/s).")
+    omega_max: float = Field(
+        _FLIGHT_LIMITS.omega_max, ge=MIN_LIMIT, le=MAX_LIMIT, description="Body-rate limit (rad/s)."
+    )
+    tilt_max: float = Field(
+        _FLIGHT_LIMITS.tilt_max, ge=MIN_LIMIT, le=1.5, description="Tilt limit from the vertical (rad)."
+    )
+    thrust_min: float = Field(_FLIGHT_LIMITS.thrust_min, ge=0, description="Least thrust (N).")
+    thrust_max: float = Field(_FLIGHT_LIMITS.thrust_max, gt=0, description="Largest thrust (N).")
+    mount: Literal[SENSOR_MOUNTS] = Field("top", description="Where the LiDAR sits: top, down20 or side.")
+
+    @model_validator(mode="after")
+    def _hover(self):
+        hover = self.mass * _QUADROTOR.gravity
+        if not self.thrust_min < hover < self.thrust_max:
+            raise ValueError(
+                f"the hover thrust {hover:.3g} N (mass x gravity) must lie between thrust_min "
+                f"({self.thrust_min:g}) and thrust_max ({self.thrust_max:g})"
+            )
+        return self
+
+    def params(self) -> _core.QuadrotorParams:
+        """The C++ parameters."""
+        return core_struct(_core.QuadrotorParams(), mass=self.mass, drag_h=self.drag_h, drag_v=self.drag_v)
+
+    def limits(self) -> _core.QuadrotorLimits:
+        """The C++ limits."""
+        return core_struct(
+            _core.QuadrotorLimits(),
+            vmax=self.vmax,
+            omega_max=self.omega_max,
+            tilt_max=self.tilt_max,
+            thrust_min=self.thrust_min,
+            thrust_max=self.thrust_max,
+        )
 
 
 class GuidanceConfig(Section):
@@ -647,6 +701,7 @@ class Config(Section):
     mde: MdeConfig = MdeConfig()
     solm: SolmConfig = SolmConfig()
     robot: RobotConfig = RobotConfig()
+    quadrotor: QuadrotorConfig = QuadrotorConfig()
     guidance: GuidanceConfig = GuidanceConfig()
     planner: PlannerConfig = PlannerConfig()
     ground: GroundConfig = GroundConfig()
