@@ -21,7 +21,8 @@ NAMES = {space.value for space in Space}
 
 def test_a_space_is_its_name_at_the_boundary():
     assert Space("se2") is Space.SE2 and f"{Space.R3}" == "r3" and str(Space.R2) == "r2"
-    assert [s.ground for s in Space] == [True, True, False]
+    assert [s.ground for s in Space] == [True, True, False, False]
+    assert [s.yawed for s in Space] == [False, True, False, True]
     with pytest.raises(ValueError):
         Space("r4")
 

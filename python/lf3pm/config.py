@@ -2,9 +2,9 @@
 
 Each section maps one to one onto a C++ parameter struct of the core and reads its
 defaults from it, so that a default is written once, in C++ (``MapParams``,
-``ScanParams``, ``EvalParams``, ``RobotLimits``, ``QuadrotorParams``, ``QuadrotorLimits``; the sections with no C++ struct write
-theirs here). Every value is validated once, here: finite, in range, an integer where
-one is meant. The library's entry points (``load_map``, ``evaluate``, ``mde``,
+``ScanParams``, ``EvalParams``, ``RobotLimits``, ``QuadrotorParams``, ``QuadrotorLimits``;
+the sections with no C++ struct write theirs here). Every value is validated once,
+here: finite, in range, an integer where one is meant. The library's entry points (``load_map``, ``evaluate``, ``mde``,
 ``make_grid``, ``build_solm``, ``replay``, ``Robot``) validate their arguments through
 these sections, and the CLI builds a :class:`Config` from ``--config FILE.yaml``
 overridden by its flags. Checks that need the data (bounds inside the map, a grid's
@@ -216,9 +216,11 @@ class MdeConfig(Section):
 class SolmConfig(Section):
     """The SOLM grid and build."""
 
-    space: Space = Field(Space.R2, description="r2 (x, y), se2 (x, y, yaw) or r3 (x, y, z).")
+    space: Space = Field(
+        Space.R2, description="r2 (x, y), se2 (x, y, yaw), r3 (x, y, z) or r3yaw (x, y, z, yaw: quadrotors)."
+    )
     res: float = Field(0.5, gt=0, le=MAX_RES, description="Cell size (m).")
-    yaw_bins: int = Field(36, ge=1, le=3600, description="Yaw bins (se2).")
+    yaw_bins: int = Field(36, ge=1, le=3600, description="Yaw bins (se2, r3yaw).")
     yaw_reuse: bool = Field(
         False, description="se2: one scan per yaw sector, summed per bin (faster, approximate; docs/solm.md)."
     )

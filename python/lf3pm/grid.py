@@ -4,11 +4,12 @@ planner's ESDF and cost layers, the ground model's columns, the viewer's squares
 Cell (ix, iy) covers [x0 + ix res, x0 + (ix + 1) res) x [y0 + iy res, y0 + (iy + 1) res)
 and is centred at (x0 + (ix + 0.5) res, y0 + (iy + 0.5) res); arrays over it are
 indexed [iy, ix] (rows are y). Above the plane a grid has one layer (``Space.R2``),
-``yaw_bins`` periodic yaw bins centred on k 2 pi / yaw_bins (``Space.SE2``) or the
-heights ``z_levels`` (``Space.R3``); docs/design.md, "State spaces and grids".
+``yaw_bins`` periodic yaw bins centred on k 2 pi / yaw_bins (``Space.SE2``), the
+heights ``z_levels`` (``Space.R3``) or every yaw bin at every height (``Space.R3YAW``:
+layer iz * yaw_bins + ib); docs/design.md, "State spaces and grids".
 
-The space names ("r2", "se2", "r3") are what YAML, the CLI and a SOLM's attributes on
-disk hold; in code a space is a :class:`Space` and is compared as one.
+The space names ("r2", "se2", "r3", "r3yaw") are what YAML, the CLI and a SOLM's
+attributes on disk hold; in code a space is a :class:`Space` and is compared as one.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ class Space(str, enum.Enum):
     R2 = "r2"  #: (x, y): 360-degree LiDARs on ground robots
     SE2 = "se2"  #: (x, y, yaw): ground robots whose sensor sees a limited field of view
     R3 = "r3"  #: (x, y, z): aerial robots, at fixed heights
+    R3YAW = "r3yaw"  #: (x, y, z, yaw): quadrotors, at fixed heights, level, each yaw bin
 
     def __str__(self) -> str:
         return self.value
@@ -37,7 +39,12 @@ class Space(str, enum.Enum):
     @property
     def ground(self) -> bool:
         """A ground robot's space: poses ride a height above the local ground."""
-        return self is not Space.R3
+        return self in (Space.R2, Space.SE2)
+
+    @property
+    def yawed(self) -> bool:
+        """A space with yaw bins (se2, r3yaw)."""
+        return self in (Space.SE2, Space.R3YAW)
 
 
 @dataclass(frozen=True)
@@ -79,10 +86,14 @@ class Grid:
 
     @property
     def shape(self) -> tuple:
-        """Shape of an array over every pose: (ny, nx), (yaw_bins, ny, nx) or (nz, ny, nx)."""
+        """Shape of an array over every pose: (ny, nx), (yaw_bins, ny, nx), (nz, ny, nx) or
+        (nz * yaw_bins, ny, nx) (r3yaw: layer iz * yaw_bins + ib)."""
         if self.space is Space.R2:
             return self.plane_shape
-        return (self.yaw_bins if self.space is Space.SE2 else len(self.z_levels), self.ny, self.nx)
+        layers = {Space.SE2: self.yaw_bins, Space.R3: len(self.z_levels)}.get(
+            self.space, len(self.z_levels) * self.yaw_bins
+        )
+        return (layers, self.ny, self.nx)
 
     @property
     def layers(self) -> int:
@@ -109,6 +120,14 @@ class Grid:
         """Centres of the yaw bins, (yaw_bins,)."""
         return np.arange(self.yaw_bins) * 2 * math.pi / self.yaw_bins
 
+    def layer_poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """(z, yaw) of every layer of an aerial grid (r3: yaw 0; r3yaw: layer iz *
+        yaw_bins + ib at z_levels[iz] and yaw bin ib), arrays of shape (layers,)."""
+        levels = np.asarray(self.z_levels, dtype=np.float64)
+        if self.space is Space.R3YAW:
+            return np.repeat(levels, self.yaw_bins), np.tile(self.yaws(), len(levels))
+        return levels, np.zeros(len(levels))
+
     def centres(self) -> tuple[np.ndarray, np.ndarray]:
         """(x, y) of every cell centre, arrays of shape (ny, nx)."""
         return tuple(np.meshgrid(self.xs(), self.ys()))
@@ -132,21 +151,25 @@ class Grid:
         ix, iy = int(np.floor((x - self.x0) / self.res)), int(np.floor((y - self.y0) / self.res))
         return (ix, iy) if 0 <= ix < self.nx and 0 <= iy < self.ny else None
 
-    def cell(self, x, y, third=None) -> tuple:
+    def cell(self, x, y, third=None, yaw=None) -> tuple:
         """Index of the cell nearest to each (x, y[, yaw or z]), clamped to the grid,
         as an index tuple into an array of :attr:`shape`: (iy, ix) for R2, (k, iy, ix)
-        otherwise (SE2: the nearest yaw bin, periodic; R3: the nearest level)."""
+        otherwise (SE2: the nearest yaw bin, periodic; R3: the nearest level; R3YAW:
+        ``third`` the height and ``yaw`` the yaw, k = iz * yaw_bins + ib)."""
         ix = np.clip(np.floor((np.asarray(x, float) - self.x0) / self.res).astype(int), 0, self.nx - 1)
         iy = np.clip(np.floor((np.asarray(y, float) - self.y0) / self.res).astype(int), 0, self.ny - 1)
         if self.space is Space.R2:
             return iy, ix
+        step = 2 * math.pi / self.yaw_bins
         if self.space is Space.SE2:
-            step = 2 * math.pi / self.yaw_bins
             k = np.round(np.mod(np.asarray(0.0 if third is None else third, float), 2 * math.pi) / step)
             return np.broadcast_to(k.astype(int) % self.yaw_bins, ix.shape), iy, ix
         levels = np.asarray(self.z_levels, float)
         z = np.asarray(levels[0] if third is None else third, float)
         k = np.argmin(np.abs(z[..., None] - levels), axis=-1)
+        if self.space is Space.R3YAW:
+            b = np.round(np.mod(np.asarray(0.0 if yaw is None else yaw, float), 2 * math.pi) / step)
+            k = k * self.yaw_bins + b.astype(int) % self.yaw_bins
         return np.broadcast_to(k, ix.shape), iy, ix
 
     def same_cells(self, other: Grid) -> bool:

@@ -42,6 +42,7 @@ def solm_build(
     noise: float | None = option("scan.noise"),
     threads: int | None = option("scan.threads"),
     max_cells: int | None = option("solm.max_cells"),
+    mount: str | None = option("quadrotor.mount"),
     engine: str = typer.Option(
         "local", help="local (this machine, --threads) or ray (one task per tile on a Ray cluster; docs/scale.md)."
     ),
@@ -67,6 +68,7 @@ def solm_build(
             "sensor": "sensor",
             "calibration": "prediction.calibration",
             **section_paths("scan", "seed", "noise", "threads"),
+            **section_paths("quadrotor", "mount"),
             **section_paths(
                 "solm",
                 "space",

@@ -15,6 +15,7 @@ from lf3pm import __version__
 from lf3pm.calibration import localization_fit
 from lf3pm.config import Config, configured
 from lf3pm.errors import Lf3pmError, StorageError
+from lf3pm.flight.mounts import MOUNTS
 from lf3pm.grid import Space
 from lf3pm.map import Map, MapPoints
 from lf3pm.sensors import Sensor, as_sensor
@@ -74,7 +75,7 @@ def stray_points_warning(points: np.ndarray, grid: SolmGrid) -> str | None:
 
 
 #: The sections of the configuration a build reads.
-SECTIONS = ("scan", "metric", "solm")
+SECTIONS = ("scan", "metric", "solm", "quadrotor")
 #: The solm section's parameters that make the grid (make_grid), which a build takes whole.
 GRID_FIELDS = ("space", "res", "yaw_bins", "height", "bounds", "max_cells")
 
@@ -99,7 +100,11 @@ def build_solm(
     ``config`` (lf3pm.config.Config; default: the defaults), whose fields may also be
     given by name (``seed=3, ray_stride=4``; lf3pm.config.configured). Cell c (linear index
     over the channel's shape) uses noise stream c, so results do not depend on tiling or
-    resumption. Of the solm section: ``yaw_reuse`` (SE2 only) scans each yaw sector once
+    resumption. An r3yaw grid's poses are a level body at each height and yaw bin carrying
+    the sensor on the quadrotor section's ``mount``; where turning the body by a bin only
+    permutes the rays (a level 360-degree sensor on the body's axis: tiles.yaw_invariant)
+    each cell is cast once for all its bins (attribute ``yaw_once``). Of the solm
+    section: ``yaw_reuse`` (SE2 only) scans each yaw sector once
     and sums sector Grams per bin (yaw_reuse.py): about 2F+1 times faster, approximate
     (docs/solm.md); ``ray_stride`` K casts every K-th azimuth column of the pattern and
     scales the Gram up (ray_thinning.py): about K times faster, approximate; ``tile`` is
@@ -136,13 +141,18 @@ def build_solm(
     hint = stray_points_warning(world.points, grid)
     if hint is not None:
         warnings.warn(hint, UserWarning, stacklevel=2)
-    job = make_job(sensor, grid, scan, metric, layout)
+    aerial_yaw = grid.space is Space.R3YAW
+    mount = MOUNTS[config.quadrotor.mount] if aerial_yaw else None
+    job = make_job(sensor, grid, scan, metric, layout, None if mount is None else mount.matrix())
     attrs = {
         "lf3pm_version": __version__,
         "grid": grid.to_dict(),
         "sensor": sensor.name,
         "sensor_rays": sensor.num_rays,
         "sensor_returns": None if sensor.returns is None else sensor.returns.to_yaml(),
+        # r3yaw: the body level at each cell's height and yaw, the sensor on this mount.
+        "mount": None if mount is None else {"name": mount.name, "matrix": mount.matrix().tolist()},
+        "yaw_once": job.yaw_once,
         "noise": job.noise,
         "seed": scan.seed,
         "w1": metric.w1,

@@ -94,7 +94,8 @@ def draw_heat_map(
         label=f"{channel} (lower = better localization)" if channel.startswith("q") else channel,
         shrink=0.85,
     )
-    how = "" if g.space is Space.R2 else f", {reduce} over {'yaw' if g.space is Space.SE2 else 'z'}"
+    over = {Space.SE2: "yaw", Space.R3: "z", Space.R3YAW: "yaw and z"}
+    how = "" if g.space is Space.R2 else f", {reduce} over {over[g.space]}"
     ax.set_title(
         f"SOLM {channel}{how}: {g.space}, {g.res} m, sensor {solm.attrs['sensor']} (black: obstacle, blank: unknown)",
         fontsize=9,

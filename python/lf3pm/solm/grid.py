@@ -3,7 +3,9 @@
 Spaces (docs/design.md, "State spaces and grids"; lf3pm.grid.Space):
 - ``R2``: (y, x) cells, yaw 0: for 360-degree LiDARs;
 - ``SE2``: (yaw, y, x), K yaw bins centred on k * 2 pi / K: for limited fields of view;
-- ``R3``: (z, y, x) for aerial robots, at fixed heights.
+- ``R3``: (z, y, x) for aerial robots, at fixed heights;
+- ``R3YAW``: (z * yaw, y, x) for quadrotors: every yaw bin at every height (layer
+  iz * yaw_bins + ib), the body level and the sensor on its mount (lf3pm.flight).
 Ground robots (R2, SE2) keep the sensor ``height`` above the local ground under
 each cell (terrain following): the lowest map point in the cell's column.
 """
@@ -45,7 +47,7 @@ def make_grid(
     ymax; default the map's extent). The grid parameters given (not None) override the
     section's and are validated by it: ``make_grid(world, config=config.solm)`` and
     ``make_grid(world, "se2", 1.0, yaw_bins=12)`` are both the usual calls. ``z_levels``
-    (R3): the heights, default every ``res`` from the map's floor plus ``height`` up.
+    (R3, R3YAW): the heights, default every ``res`` from the map's floor plus ``height`` up.
     Lf3pmError when the grid would hold more than ``max_cells`` poses (at most
     lf3pm.config.MAX_CELLS_CEILING) or when a cell would be wider than the grid (``res``
     above the larger side of the bounds)."""
@@ -74,7 +76,8 @@ def make_grid(
             "would cover it all; use a --res below that"
         )
     # One axis first, in floats: at a res of 1e-300 m its count would not even convert to an int.
-    along = max(xmax - xmin, ymax - ymin, upper[2] - lower[2] - height if space is Space.R3 else 0.0) / res
+    aerial = not space.ground
+    along = max(xmax - xmin, ymax - ymin, upper[2] - lower[2] - height if aerial else 0.0) / res
     if along > config.max_cells:
         raise Lf3pmError(
             f"the grid would hold more than {config.max_cells:,} poses ({along:.3g} cells along one "
@@ -82,8 +85,9 @@ def make_grid(
         )
     nx, ny = math.ceil((xmax - xmin) / res), math.ceil((ymax - ymin) / res)
     layers = yaw_bins if space is Space.SE2 else 1
-    if space is Space.R3:
+    if aerial:
         layers = len(z_levels) if z_levels is not None else max(0, math.ceil((upper[2] - lower[2] - height) / res))
+        layers *= yaw_bins if space is Space.R3YAW else 1
     cells = nx * ny * max(layers, 1)
     if cells > config.max_cells:
         raise Lf3pmError(
@@ -91,13 +95,13 @@ def make_grid(
             f"{config.max_cells:,}: use a coarser --res or smaller --bounds, or raise --max-cells"
         )
     levels = ()
-    if space is Space.R3:
+    if aerial:
         if z_levels is None:
             z_levels = np.arange(lower[2] + height, upper[2], res)
         levels = tuple(float(z) for z in z_levels)
         if not all(math.isfinite(z) for z in levels):
             raise Lf3pmError(f"z levels must be finite, got {levels}")
         if not levels:
-            raise Lf3pmError("an r3 grid needs at least one z level")
-    yaw_bins = yaw_bins if space is Space.SE2 else 1
+            raise Lf3pmError(f"an {space} grid needs at least one z level")
+    yaw_bins = yaw_bins if space.yawed else 1
     return SolmGrid(space, xmin, ymin, float(res), nx, ny, yaw_bins, levels, float(height))

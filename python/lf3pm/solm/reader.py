@@ -76,24 +76,44 @@ class Solm:
 
     def grid(self) -> tuple:
         """Cell-centre coordinates as arrays of the channels' shape: (x, y) for r2,
-        (x, y, yaw) for se2, (x, y, z) for r3."""
+        (x, y, yaw) for se2, (x, y, z) for r3, (x, y, z, yaw) for r3yaw."""
         g = self.grid_spec
         if g.space is Space.R2:
             y, x = np.meshgrid(g.ys(), g.xs(), indexing="ij")
             return x, y
+        if g.space is Space.R3YAW:
+            z, yaw = g.layer_poses()
+            k, y, x = np.meshgrid(np.arange(g.layers), g.ys(), g.xs(), indexing="ij")
+            return x, y, z[k], yaw[k]
         third = g.yaws() if g.space is Space.SE2 else np.asarray(g.z_levels)
         t, y, x = np.meshgrid(third, g.ys(), g.xs(), indexing="ij")
         return x, y, t
 
+    def over_yaw(self, channel: str = "q_n") -> tuple[np.ndarray, np.ndarray]:
+        """An r3yaw SOLM's ``channel`` at its best yaw: (the minimum over the yaw bins, the
+        yaw of that bin in radians), each of shape (nz, ny, nx); NaN where no bin was
+        evaluated (obstacles)."""
+        g = self.grid_spec
+        if g.space is not Space.R3YAW:
+            raise Lf3pmError(f"over_yaw needs an r3yaw SOLM, this one is {g.space}")
+        data = self.channel(channel).reshape(len(g.z_levels), g.yaw_bins, g.ny, g.nx)
+        evaluated = np.isfinite(data).any(axis=1)
+        best = np.argmin(np.where(np.isfinite(data), data, np.inf), axis=1)
+        low = np.where(evaluated, np.take_along_axis(data, best[:, None], axis=1)[:, 0], np.nan)
+        return low, np.where(evaluated, g.yaws()[best], np.nan)
+
     def query(self, x, y, yaw=0.0, channel: str = "q_n", *, z=None):
-        """Trilinear interpolation of ``channel`` at (x, y, yaw) (se2: yaw periodic)
-        or (x, y, z) (r3), vectorised; returns (value, gradient) with the gradient's
-        last axis d/dx, d/dy, d/dyaw (or d/dz; r2: d/dx, d/dy). Positions are
-        clamped to the grid's cell centres. The coordinates must be finite numbers of
-        shapes that broadcast together (else Lf3pmError)."""
+        """Interpolation of ``channel`` at (x, y, yaw) (se2: yaw periodic), (x, y, z) (r3)
+        or (x, y, z, yaw) (r3yaw: linear in each, yaw periodic), vectorised; returns
+        (value, gradient) with the gradient's last axis d/dx, d/dy and d/dyaw (se2), d/dz
+        (r3) or d/dz, d/dyaw (r3yaw); r2: d/dx, d/dy. Positions are clamped to the grid's
+        cell centres. The coordinates must be finite numbers of shapes that broadcast
+        together (else Lf3pmError)."""
         g = self.grid_spec
         x, y, yaw, *z = _coordinates(x=x, y=y, yaw=yaw, **({} if z is None else {"z": z}))
         data = self.channel(channel).astype(np.float64)
+        if g.space is Space.R3YAW:
+            return _query_r3yaw(g, data, x, y, yaw, z[0] if z else np.float64(g.z_levels[0]))
         if g.space is Space.R2:
             data = data[None]  # one layer: the same code, no third axis
             k0 = k1 = np.zeros(np.broadcast(x, y).shape, dtype=np.int64)
@@ -120,6 +140,32 @@ class Solm:
         value = (1 - tk) * a + tk * b
         grad = np.stack([(1 - tk) * ax + tk * bx, (1 - tk) * ay + tk * by, (b - a) / step * fk], axis=-1)
         return value, (grad[..., :2] if g.space is Space.R2 else grad)
+
+
+def _query_r3yaw(g, data, x, y, yaw, z):
+    """Solm.query on an r3yaw grid: bilinear in (x, y) on the four layers around (z,
+    yaw), linear between them in z and periodic yaw."""
+    levels = np.asarray(g.z_levels)
+    dz = levels[1] - levels[0] if len(levels) > 1 else 1.0
+    fz, z0, z1, tz = axis_weights(z, levels[0] - 0.5 * dz, dz, len(levels))
+    step = 2 * math.pi / g.yaw_bins
+    f = np.mod(yaw, 2 * math.pi) / step
+    ib = np.floor(f).astype(int)
+    tb = f - ib
+    b0, b1 = ib % g.yaw_bins, (ib + 1) % g.yaw_bins
+    fb = 1.0 if g.yaw_bins > 1 else 0.0
+
+    def plane(iz, b):
+        return bilinear(data, x, y, g.x0, g.y0, g.res, layer=iz * g.yaw_bins + b)
+
+    corners = {(i, j): plane(iz, b) for i, iz in enumerate((z0, z1)) for j, b in enumerate((b0, b1))}
+    wz, wb = (1 - tz, tz), (1 - tb, tb)
+    value = sum(wz[i] * wb[j] * corners[i, j][0] for i in (0, 1) for j in (0, 1))
+    gx = sum(wz[i] * wb[j] * corners[i, j][1] for i in (0, 1) for j in (0, 1))
+    gy = sum(wz[i] * wb[j] * corners[i, j][2] for i in (0, 1) for j in (0, 1))
+    along_z = sum(wb[j] * (corners[1, j][0] - corners[0, j][0]) for j in (0, 1)) / dz * fz
+    along_yaw = sum(wz[i] * (corners[i, 1][0] - corners[i, 0][0]) for i in (0, 1)) / step * fb
+    return value, np.stack([gx, gy, along_z, along_yaw], axis=-1)
 
 
 def _coordinates(**named) -> list[np.ndarray]:

@@ -47,6 +47,8 @@ class TileJob:
     noise: float
     seed: int
     returns: ReturnModel | None  # the sensor's: which hits return
+    mount: tuple | None  # r3yaw: the sensor-to-body 4 x 4 (lf3pm.flight.mounts), rows as tuples
+    yaw_once: bool  # r3yaw: every yaw bin of a cell from the cast at bin 0 (yaw_invariant)
     metric: MetricConfig
     robot_radius: float
     floor_clearance: float
@@ -80,12 +82,15 @@ def make_job(
     scan: ScanConfig = DEFAULTS.scan,
     metric: MetricConfig = DEFAULTS.metric,
     solm: SolmConfig = DEFAULTS.solm,
+    mount: np.ndarray | None = None,
 ) -> TileJob:
     """The job of a build with these sections (build_solm): the sensor's rays, thinned by
     the solm section's ``ray_stride`` and, under ``yaw_reuse``, laid out in yaw sectors;
-    the noise the scan section's or the sensor's."""
+    the noise the scan section's or the sensor's; ``mount`` (r3yaw): the sensor-to-body
+    4 x 4, the body level at each cell's height and yaw."""
     sectors = sector_layout(sensor, grid.yaw_bins) if solm.yaw_reuse else None
     rays, ray_weight = thin_rays(sensor.directions if sectors is None else sectors[0], solm.ray_stride)
+    mount = None if mount is None or grid.space is not Space.R3YAW else np.asarray(mount, dtype=np.float64)
     return TileJob(
         grid=grid,
         tile=solm.tile,
@@ -97,10 +102,32 @@ def make_job(
         noise=float(scan.noise_for(sensor)),
         seed=int(scan.seed),
         returns=sensor.returns,
+        mount=None if mount is None else tuple(map(tuple, mount)),
+        yaw_once=grid.space is Space.R3YAW and yaw_invariant(rays, grid.yaw_bins, mount),
         metric=metric,
         robot_radius=float(solm.robot_radius),
         floor_clearance=float(solm.floor_clearance),
     )
+
+
+def yaw_invariant(rays: np.ndarray, yaw_bins: int, mount: np.ndarray | None) -> bool:
+    """Whether turning the body by one yaw bin only permutes the sensor's rays in the world:
+    the mount keeps the sensor on the body's vertical axis and its z axis vertical, and the
+    rays turned by 2 pi / yaw_bins about z are the rays themselves (a 360-degree spinning
+    sensor whose columns the bins divide). Then every bin of a cell sees the same hits and
+    one cast gives them all (the Gram summed in another order: docs/flight.md measures it)."""
+    if mount is not None:
+        m = np.asarray(mount)
+        if np.abs(m[:2, 3]).max() > 0 or np.abs(m[:3, 2] - [0, 0, 1]).max() > 1e-12:
+            return False
+    from scipy.spatial import cKDTree
+
+    a = 2 * np.pi / yaw_bins
+    turn = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    if mount is not None:  # the rays as the body carries them
+        rays = rays @ np.asarray(mount)[:3, :3].T
+    gap, _ = cKDTree(rays).query(rays @ turn.T)
+    return bool(gap.max() < 1e-9)
 
 
 def crop_margin(job: TileJob, world: Map | MapPoints) -> float:
@@ -129,9 +156,10 @@ def compute_tile(
         unknown = ~np.isfinite(g)
         yaw = np.broadcast_to(grid.yaws()[:, None, None], layer_shape)
     else:
-        z = np.broadcast_to(np.asarray(grid.z_levels)[:, None, None], layer_shape)
+        levels, yaws = grid.layer_poses()
+        z = np.broadcast_to(levels[:, None, None], layer_shape)
         unknown = np.zeros(layer_shape, bool)
-        yaw = np.zeros(layer_shape)
+        yaw = np.broadcast_to(yaws[:, None, None], layer_shape)
     X, Y = np.broadcast_to(xx, layer_shape), np.broadcast_to(yy, layer_shape)
     obstacle = np.zeros(layer_shape, bool)
     known = ~unknown
@@ -162,11 +190,19 @@ def compute_tile(
             values[name][:, cell2d] = res[name].T
         degenerate[:, cell2d] = res["degenerate"].T.astype(np.uint8)
     elif valid.any():
-        poses = pose_matrices(X[valid], Y[valid], z[valid], yaw[valid])
-        res = _core.evaluate_many(world.index, poses, cell_index[valid].astype(np.uint64), job.rays, params)
+        # Under yaw_once only bin 0 of each height is cast; its values fill the other bins.
+        cast = valid & (np.arange(grid.layers) % grid.yaw_bins == 0)[:, None, None] if job.yaw_once else valid
+        poses = pose_matrices(X[cast], Y[cast], z[cast], yaw[cast])
+        if job.mount is not None:
+            poses = np.ascontiguousarray(poses @ np.asarray(job.mount))
+        res = _core.evaluate_many(world.index, poses, cell_index[cast].astype(np.uint64), job.rays, params)
         for name in CHANNELS:
-            values[name][valid] = res[name]
-        degenerate[valid] = res["degenerate"].astype(np.uint8)
+            values[name][cast] = res[name]
+        degenerate[cast] = res["degenerate"].astype(np.uint8)
+        if job.yaw_once:
+            for array in (*values.values(), degenerate):
+                shaped = array.reshape(-1, grid.yaw_bins, *array.shape[1:])
+                shaped[:] = shaped[:, :1]
     return {
         **values,
         "obstacle": obstacle.astype(np.uint8),
