@@ -1,4 +1,5 @@
-// nanobind bindings of the front end's grid search (cpp/lf3pm/planner/graph_search.hpp).
+// nanobind bindings of the front ends' grid searches (cpp/lf3pm/planner/graph_search.hpp,
+// volume_search.hpp).
 #include "lf3pm/planner/graph_search.hpp"
 
 #include <nanobind/nanobind.h>
@@ -7,6 +8,7 @@
 #include <vector>
 
 #include "bindings/numpy.hpp"
+#include "lf3pm/planner/volume_search.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -52,6 +54,33 @@ void bind_graph_search(nb::module_& m) {
       "path "
       "(uint32 state indices), expanded, pushed, heap_peak, relaxed_expanded (cells the SE(2) heuristic's backward "
       "pass closed).");
+  m.def(
+      "volume_search",
+      [](Flat cost, Mask traversable, int nx, int ny, int nz, double res, double dz, std::uint32_t start,
+         std::uint32_t goal, const lf3pm::SearchParams& params) {
+        const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(nz);
+        if (cost.shape(0) != n || traversable.shape(0) != n)
+          throw std::invalid_argument("cost and traversable need nx * ny * nz values");
+        const lf3pm::VolumeGrid grid{nx, ny, nz, res, dz};
+        lf3pm::SearchResult r;
+        {
+          nb::gil_scoped_release release;
+          r = lf3pm::volume_search(cost.data(), traversable.data(), grid, start, goal, params);
+        }
+        nb::dict out;
+        out["found"] = r.found;
+        out["cost"] = r.cost;
+        out["path"] = lf3pm::bindings::to_numpy(std::move(r.path));
+        out["expanded"] = r.expanded;
+        out["pushed"] = r.pushed;
+        out["heap_peak"] = r.heap_peak;
+        return out;
+      },
+      "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "nz"_a, "res"_a, "dz"_a, "start"_a, "goal"_a,
+      "params"_a = lf3pm::SearchParams(),
+      "A* (heuristic=True) or Dijkstra over nx x ny x nz cells, 26-connected (flat float64 cost, uint8 traversable, "
+      "index (z * ny + y) * nx + x). Returns a dict: found, cost, path (uint32 cell indices), expanded, pushed, "
+      "heap_peak.");
   m.def(
       "search_heuristic",
       [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t goal,
