@@ -4,6 +4,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/function.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 
 #include <stdexcept>
@@ -13,6 +14,7 @@
 #include "lf3pm/planner/grid_field.hpp"
 #include "lf3pm/trajectory/lbfgs.hpp"
 #include "lf3pm/trajectory/minco.hpp"
+#include "lf3pm/trajectory/minco_s3.hpp"
 #include "lf3pm/trajectory/trajectory_cost.hpp"
 #include "lf3pm/trajectory/trajectory_optimizer.hpp"
 #include "lf3pm/trajectory/travel_heading.hpp"
@@ -121,6 +123,39 @@ void bind_trajectory(nb::module_& m) {
       "Cubic MINCO: (coefficients (N, 4, 3), acceleration energy) from head/tail (3 x 2: position, velocity; "
       "3 x 3: and acceleration, which frees the neighbouring junction's waypoint), the free intermediate "
       "waypoints (K, 3) and durations (N,).");
+
+  m.def(
+      "minco_s3",
+      [](const MincoS3::State& head, const MincoS3::State& tail, const MincoS3::Points& waypoints, Vec durations,
+         const Eigen::Vector4d& weights, std::optional<MincoS3::Coefficients> grad_c,
+         std::optional<Eigen::VectorXd> grad_t) {
+        MincoS3 minco;
+        minco.set_conditions(head, tail, int(durations.shape(0)));
+        minco.set_parameters(waypoints, to_vector(durations));
+        nb::dict out;
+        out["coefficients"] = minco.coefficients();
+        out["jerk_energy"] = minco.jerk_energy(weights);
+        MincoS3::Coefficients ec = MincoS3::Coefficients::Zero(minco.coefficients().rows(), MincoS3::kDims);
+        Eigen::VectorXd et = Eigen::VectorXd::Zero(minco.pieces());
+        minco.add_jerk_energy_gradient(weights, ec, et);
+        out["energy_grad_c"] = ec;
+        out["energy_grad_t"] = et;
+        if (grad_c) {
+          if (grad_c->rows() != minco.coefficients().rows() || !grad_t || grad_t->size() != minco.pieces())
+            throw std::invalid_argument("grad_c must be 6N x 4 and grad_t N");
+          MincoS3::Points gq;
+          Eigen::VectorXd gT;
+          minco.propagate_gradient(*grad_c, *grad_t, gq, gT);
+          out["grad_q"] = gq;
+          out["grad_T"] = gT;
+        }
+        return out;
+      },
+      "head"_a, "tail"_a, "waypoints"_a, "durations"_a, "weights"_a, "grad_c"_a = nb::none(), "grad_t"_a = nb::none(),
+      "Quintic MINCO in (x, y, z, yaw) (minco_s3.hpp): from head/tail (4 x 3: position, velocity, acceleration), "
+      "waypoints (4 x (N - 1)) and durations (N), a dict of coefficients (6N x 4), jerk_energy with per-dimension "
+      "weights (4) and its partial gradients (energy_grad_c, energy_grad_t); given partial gradients of a cost by c "
+      "and T, also its total gradients grad_q (4 x (N - 1)) and grad_T (N).");
 
   m.def(
       "travel_heading",

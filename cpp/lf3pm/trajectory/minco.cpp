@@ -6,48 +6,6 @@
 
 namespace lf3pm {
 
-void BandedSystem::reset(int n, int lower, int upper) {
-  n_ = n;
-  lower_ = lower;
-  upper_ = upper;
-  band_.assign(std::size_t(lower + upper + 1) * n, 0.0);
-}
-
-void BandedSystem::factorize() {
-  for (int k = 0; k < n_; ++k) {
-    const int last_row = std::min(k + lower_, n_ - 1), last_col = std::min(k + upper_, n_ - 1);
-    const double pivot = (*this)(k, k);
-    for (int i = k + 1; i <= last_row; ++i) {
-      double& l = (*this)(i, k);
-      if (l == 0.0) continue;
-      l /= pivot;
-      for (int j = k + 1; j <= last_col; ++j) (*this)(i, j) -= l * (*this)(k, j);
-    }
-  }
-}
-
-void BandedSystem::solve(Eigen::MatrixX3d& b) const {
-  for (int j = 0; j < n_; ++j)  // L y = b (unit diagonal)
-    for (int i = j + 1; i <= std::min(j + lower_, n_ - 1); ++i)
-      if ((*this)(i, j) != 0.0) b.row(i) -= (*this)(i, j) * b.row(j);
-  for (int j = n_ - 1; j >= 0; --j) {  // U x = y
-    b.row(j) /= (*this)(j, j);
-    for (int i = std::max(0, j - upper_); i < j; ++i)
-      if ((*this)(i, j) != 0.0) b.row(i) -= (*this)(i, j) * b.row(j);
-  }
-}
-
-void BandedSystem::solve_transposed(Eigen::MatrixX3d& b) const {
-  for (int j = 0; j < n_; ++j) {  // U^T y = b
-    b.row(j) /= (*this)(j, j);
-    for (int i = j + 1; i <= std::min(j + upper_, n_ - 1); ++i)
-      if ((*this)(j, i) != 0.0) b.row(i) -= (*this)(j, i) * b.row(j);
-  }
-  for (int j = n_ - 1; j >= 0; --j)  // L^T x = y
-    for (int i = std::max(0, j - lower_); i < j; ++i)
-      if ((*this)(j, i) != 0.0) b.row(i) -= (*this)(j, i) * b.row(j);
-}
-
 void MincoS2::set_conditions(const State& head, const State& tail, int pieces, bool head_acceleration,
                              bool tail_acceleration) {
   if (pieces < 1) throw std::invalid_argument("a trajectory needs at least one piece");

@@ -22,27 +22,9 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "lf3pm/trajectory/banded_system.hpp"
+
 namespace lf3pm {
-
-/// Square banded matrix with an in-place LU factorisation without pivoting.
-class BandedSystem {
- public:
-  /// n x n, `lower` sub-diagonals and `upper` super-diagonals, all zero.
-  void reset(int n, int lower, int upper);
-  double& operator()(int i, int j) { return band_[index(i, j)]; }
-  double operator()(int i, int j) const { return band_[index(i, j)]; }
-  /// LU-factorise in place (Doolittle, unit lower triangle).
-  void factorize();
-  /// Solve A X = B in place (after factorize).
-  void solve(Eigen::MatrixX3d& b) const;
-  /// Solve A^T X = B in place (after factorize).
-  void solve_transposed(Eigen::MatrixX3d& b) const;
-
- private:
-  std::size_t index(int i, int j) const { return std::size_t(i - j + upper_) * n_ + j; }
-  int n_ = 0, lower_ = 0, upper_ = 0;
-  std::vector<double> band_;
-};
 
 /// Cubic MINCO (GCOPTER's MINCO_S2NU class) in three dimensions (x, y, yaw).
 class MincoS2 {
