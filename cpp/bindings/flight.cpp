@@ -1,7 +1,9 @@
 // nanobind bindings of the flight stage (cpp/lf3pm/flight/): a quadrotor's parameters and
 // limits, and its flatness map over arrays of samples (logic lives in cpp/lf3pm/).
+#include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/string.h>
 
 #include <stdexcept>
 #include <string>
@@ -9,6 +11,8 @@
 
 #include "bindings/numpy.hpp"
 #include "lf3pm/flight/flatness.hpp"
+#include "lf3pm/flight/flight_optimizer.hpp"
+#include "lf3pm/flight/volume_field.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -37,6 +41,17 @@ std::vector<FlatState> flat_states(Rows3 v, Rows3 a, Rows3 j, Vec yaw, Vec yaw_r
     out[i].yaw_rate = yaw_rate(i);
   }
   return out;
+}
+
+nb::dict terms_dict(const FlightTerms& t) {
+  nb::dict d;
+  d["guidance"] = t.guidance;
+  d["speed"] = t.speed;
+  d["omega"] = t.omega;
+  d["tilt"] = t.tilt;
+  d["thrust"] = t.thrust;
+  d["clearance"] = t.clearance;
+  return d;
 }
 
 std::string singular(std::size_t i) {
@@ -129,4 +144,93 @@ void bind_flight(nb::module_& m) {
       "g_omega"_a, "g_cos_tilt"_a,
       "Gradients of a cost at n samples with respect to velocity, acceleration, jerk (n, 3), yaw and yaw_rate (n), "
       "from its gradients with respect to thrust, rotation, omega and cos_tilt.");
+
+  nb::class_<VolumeField>(m, "VolumeField",
+                          "Values over (x, y, z[, yaw bins]) interpolated linearly (volume_field.hpp).")
+      .def(nb::init<>())
+      .def(
+          "__init__",
+          [](VolumeField* self, Vec values, int nx, int ny, int nz, int bins, double x0, double y0, double z0,
+             double res, double dz) {
+            new (self) VolumeField(std::vector<double>(values.data(), values.data() + values.shape(0)), nx, ny, nz,
+                                   bins, x0, y0, z0, res, dz);
+          },
+          "values"_a, "nx"_a, "ny"_a, "nz"_a, "bins"_a, "x0"_a, "y0"_a, "z0"_a, "res"_a, "dz"_a,
+          "values[((iz * bins + ib) * ny + iy) * nx + ix]; cells centred at x0 + (ix + 0.5) res, y0 + (iy + 0.5) "
+          "res, levels at z0 + iz dz, bins at ib 2 pi / bins.")
+      .def(
+          "sample",
+          [](const VolumeField& f, Rows3 p, Vec yaw) {
+            const std::size_t n = p.shape(0);
+            if (yaw.shape(0) != n) throw std::invalid_argument("one yaw per point");
+            std::vector<double> value(n), grad(4 * n);
+            for (std::size_t i = 0; i < n; ++i) {
+              Eigen::Vector4d g;
+              value[i] = f.sample(Eigen::Vector3d(p(i, 0), p(i, 1), p(i, 2)), yaw(i), g);
+              for (int k = 0; k < 4; ++k) grad[4 * i + k] = g(k);
+            }
+            return nb::make_tuple(to_numpy(std::move(value)), to_numpy(std::move(grad), {n, 4}));
+          },
+          "points"_a, "yaw"_a, "Values (n) and gradients (n, 4: d/dx, d/dy, d/dz, d/dyaw).");
+
+  nb::class_<FlightWeights>(m, "FlightWeights", "Weights of the flight objective's sampled terms (the defaults).")
+      .def(nb::init<>())
+      .def_rw("w_q", &FlightWeights::w_q)
+      .def_rw("penalty", &FlightWeights::penalty)
+      .def_rw("r_safe", &FlightWeights::r_safe)
+      .def_rw("esdf_margin", &FlightWeights::esdf_margin)
+      .def_rw("samples", &FlightWeights::samples);
+
+  nb::class_<FlightProblem>(m, "FlightProblem", "The flight back end's objective over a quintic MINCO.")
+      .def(
+          "__init__",
+          [](FlightProblem* self, const QuadrotorParams& params, const QuadrotorLimits& limits,
+             const FlightWeights& weights, const VolumeField& guidance, const VolumeField& esdf, double rho_t,
+             double w_energy, double yaw_energy, const MincoS3::State& head, const MincoS3::State& tail,
+             const MincoS3::Points& waypoints, const Eigen::VectorXd& durations) {
+            new (self) FlightProblem(FlightCost(params, limits, weights, guidance, esdf), rho_t, w_energy, yaw_energy,
+                                     head, tail, waypoints, durations);
+          },
+          "params"_a, "limits"_a, "weights"_a, "guidance"_a, "esdf"_a, "rho_t"_a, "w_energy"_a, "yaw_energy"_a,
+          "head"_a, "tail"_a, "waypoints"_a, "durations"_a)
+      .def_prop_ro("dimension", &FlightProblem::dimension)
+      .def_prop_ro("initial", &FlightProblem::initial)
+      .def(
+          "evaluate",
+          [](FlightProblem& p, const Eigen::VectorXd& x) {
+            Eigen::VectorXd g;
+            FlightTerms t;
+            const double f = p.evaluate(x, g, &t);
+            return nb::make_tuple(f, g, terms_dict(t));
+          },
+          "x"_a, "(objective, gradient, terms) at x.")
+      .def(
+          "trajectory",
+          [](FlightProblem& p, const Eigen::VectorXd& x) {
+            MincoS3::Coefficients c;
+            Eigen::VectorXd t;
+            p.trajectory(x, c, t);
+            return nb::make_tuple(c, t);
+          },
+          "x"_a, "(coefficients 6N x 4, durations N) at x.")
+      .def(
+          "optimize",
+          [](FlightProblem& p, const LbfgsParams& lbfgs) {
+            FlightOutcome o;
+            {
+              nb::gil_scoped_release release;
+              o = optimize_flight(p, lbfgs);
+            }
+            nb::dict d;
+            d["x"] = o.x;
+            d["iterations"] = o.iterations;
+            d["evaluations"] = o.evaluations;
+            d["status"] = o.status;
+            d["reason"] = o.reason;
+            d["terms"] = terms_dict(o.terms);
+            return d;
+          },
+          "lbfgs"_a,
+          "Minimise with L-BFGS from the initial point: dict of x, iterations, evaluations, status, reason, "
+          "terms.");
 }

@@ -4,7 +4,9 @@
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 
+#include <optional>
 #include <vector>
 
 #include "bindings/numpy.hpp"
@@ -57,15 +59,18 @@ void bind_graph_search(nb::module_& m) {
   m.def(
       "volume_search",
       [](Flat cost, Mask traversable, int nx, int ny, int nz, double res, double dz, std::uint32_t start,
-         std::uint32_t goal, const lf3pm::SearchParams& params) {
+         std::uint32_t goal, const lf3pm::SearchParams& params, std::optional<Mask> move_free) {
         const std::size_t n = std::size_t(nx) * std::size_t(ny) * std::size_t(nz);
         if (cost.shape(0) != n || traversable.shape(0) != n)
           throw std::invalid_argument("cost and traversable need nx * ny * nz values");
+        if (move_free && move_free->shape(0) != n * lf3pm::kVolumeMoves)
+          throw std::invalid_argument("move_free needs 26 values per cell");
         const lf3pm::VolumeGrid grid{nx, ny, nz, res, dz};
         lf3pm::SearchResult r;
         {
           nb::gil_scoped_release release;
-          r = lf3pm::volume_search(cost.data(), traversable.data(), grid, start, goal, params);
+          r = lf3pm::volume_search(cost.data(), traversable.data(), grid, start, goal, params,
+                                   move_free ? move_free->data() : nullptr);
         }
         nb::dict out;
         out["found"] = r.found;
@@ -77,10 +82,10 @@ void bind_graph_search(nb::module_& m) {
         return out;
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "nz"_a, "res"_a, "dz"_a, "start"_a, "goal"_a,
-      "params"_a = lf3pm::SearchParams(),
+      "params"_a = lf3pm::SearchParams(), "move_free"_a = nb::none(),
       "A* (heuristic=True) or Dijkstra over nx x ny x nz cells, 26-connected (flat float64 cost, uint8 traversable, "
-      "index (z * ny + y) * nx + x). Returns a dict: found, cost, path (uint32 cell indices), expanded, pushed, "
-      "heap_peak.");
+      "index (z * ny + y) * nx + x; move_free: optional uint8, 26 per cell, moves in dz, dy, dx order). Returns a "
+      "dict: found, cost, path (uint32 cell indices), expanded, pushed, heap_peak.");
   m.def(
       "search_heuristic",
       [](Flat cost, Mask traversable, int nx, int ny, int layers, double res, std::uint32_t goal,

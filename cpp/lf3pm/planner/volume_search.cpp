@@ -50,7 +50,8 @@ void check(const double* cost, const std::uint8_t* traversable, const VolumeGrid
 }  // namespace
 
 SearchResult volume_search(const double* cost, const std::uint8_t* traversable, const VolumeGrid& g,
-                           std::uint32_t start, std::uint32_t goal, const SearchParams& params) {
+                           std::uint32_t start, std::uint32_t goal, const SearchParams& params,
+                           const std::uint8_t* move_free) {
   double c_min = 0.0;
   check(cost, traversable, g, start, goal, c_min);
   if (!(params.weight >= 0) || !std::isfinite(params.weight)) throw std::invalid_argument("weight must be >= 0");
@@ -83,7 +84,9 @@ SearchResult volume_search(const double* cost, const std::uint8_t* traversable, 
     ++out.expanded;
     if (s == goal) break;
     const int x = int(s % g.nx), y = int(s / g.nx % g.ny), z = int(s / (std::size_t(g.nx) * g.ny));
-    for (const Step& m : moves) {
+    for (int mi = 0; mi < kVolumeMoves; ++mi) {
+      const Step& m = moves[mi];
+      if (move_free != nullptr && !move_free[std::size_t(s) * kVolumeMoves + mi]) continue;
       const int nx = x + m.dx, ny = y + m.dy, nz = z + m.dz;
       if (nx < 0 || ny < 0 || nz < 0 || nx >= g.nx || ny >= g.ny || nz >= g.nz) continue;
       // Every cell of the box the move spans.

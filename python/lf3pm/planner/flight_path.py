@@ -3,6 +3,11 @@ SOLM's cells (26-connected, cpp/lf3pm/planner/volume_search.hpp) on length plus 
 guidance cost at each cell's best yaw, then the yaw along that path by dynamic
 programming over the yaw bins, as fast as the quadrotor may turn.
 
+Given the map's ESDF (lf3pm.planner.flight_plan.flight_esdf), a move is also allowed only
+where its segment between the cell centres keeps ``clearance`` from the map's points
+(sampled every ESDF voxel or finer): a thin wall between two free cell centres (the corner
+of a room, 1 m cells) is in neither cell.
+
 Costs as the ground planner's (lf3pm.planner.cost_map): the guidance channel over its
 median, to the guidance section's power, capped; a move of length l between cells of costs
 c_a, c_b costs l (1 + weight (c_a + c_b) / 2), each cell at its least cost over yaw.
@@ -79,6 +84,27 @@ def yaw_profile(
     return out
 
 
+#: Samples along a move's segment for its clearance check (both ends included).
+MOVE_SAMPLES = 9
+
+
+def clear_moves(g, traversable: np.ndarray, dz: float, esdf, clearance: float) -> np.ndarray:
+    """uint8 (cells * 26): whether each move's segment from a traversable cell's centre keeps
+    ``clearance`` on the ESDF, moves in the search's order (dz, dy, dx = -1..1, x fastest)."""
+    iz, iy, ix = np.nonzero(traversable)
+    centres = np.column_stack([g.xs()[ix], g.ys()[iy], np.asarray(g.z_levels, dtype=np.float64)[iz]])
+    out = np.zeros((traversable.size, 26), dtype=np.uint8)
+    rows = np.ravel_multi_index((iz, iy, ix), traversable.shape)
+    fractions = np.linspace(0.0, 1.0, MOVE_SAMPLES)
+    moves = [(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) != (0, 0, 0)]
+    for m, (mz, my, mx) in enumerate(moves):
+        step = np.array([mx * g.res, my * g.res, mz * dz])
+        points = (centres[:, None, :] + fractions[None, :, None] * step).reshape(-1, 3)
+        distance, _ = esdf.sample(np.ascontiguousarray(points), np.zeros(len(points)))
+        out[rows, m] = (distance.reshape(len(centres), MOVE_SAMPLES) >= clearance).all(axis=1)
+    return np.ascontiguousarray(out.ravel())
+
+
 def plan_flight_path(
     solm,
     start,
@@ -86,11 +112,14 @@ def plan_flight_path(
     *,
     guidance: GuidanceConfig = DEFAULTS.guidance,
     quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
+    esdf=None,
+    clearance: float = 0.0,
 ) -> FlightPath:
     """The front-end path on ``solm`` (an r3yaw Solm) from ``start`` (x, y, z, yaw) to
     ``goal`` (x, y, z[, yaw]) with the guidance section (metric, weight, power,
-    turn_radius) and the quadrotor's limits (vmax, omega_max). A start or goal outside the
-    grid, in an obstacle cell, or with no path between them is an Lf3pmError in one line."""
+    turn_radius) and the quadrotor's limits (vmax, omega_max); ``esdf`` (a VolumeField,
+    None: no check) and ``clearance`` (m) for the moves' segments. A start or goal outside
+    the grid, in an obstacle cell, or with no path between them is an Lf3pmError in one line."""
     g = solm.grid_spec
     if g.space is not Space.R3YAW:
         raise Lf3pmError(f"the flight planner needs an r3yaw SOLM (lf3pm solm build --space r3yaw), got {g.space}")
@@ -123,6 +152,7 @@ def plan_flight_path(
             raise Lf3pmError(f"the {name} {tuple(round(float(v), 3) for v in point[:3])} lies in an obstacle cell")
         cells.append((iz * g.ny + int(iy)) * g.nx + int(ix))
     dz = float(np.diff(g.z_levels).mean()) if nz > 1 else g.res
+    move_free = None if esdf is None else clear_moves(g, traversable, dz, esdf, clearance)
     params = _core.SearchParams()
     params.weight = float(guidance.weight)
     result = _core.volume_search(
@@ -136,6 +166,7 @@ def plan_flight_path(
         cells[0],
         cells[1],
         params,
+        move_free,
     )
     if not result["found"]:
         raise Lf3pmError("no flight path between the start and the goal through the SOLM's free cells")

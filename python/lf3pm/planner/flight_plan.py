@@ -1,0 +1,278 @@
+"""A quadrotor's perception-aware flight on an r3yaw SOLM (issue 43, item 3): the front end
+(lf3pm.planner.flight_path), then the back end, a quintic MINCO in (x, y, z, yaw) minimised
+by L-BFGS (cpp/lf3pm/flight/flight_optimizer.hpp) on
+
+    integral of (rho_T + w_q q(x, y, z, yaw) + feasibility penalties) dt + jerk energy,
+
+w_q = weight * rho_T as for ground robots (a median cell then costs as the front end
+charges it), the penalties on speed, body rate, tilt and thrust through the flatness map,
+and on clearance through a 3-D ESDF of the map (:func:`flight_esdf`). The limits are
+penalties, so the optimum may pass them slightly: time is then stretched uniformly (every
+coefficient c_k / s^k over durations s T, the same path flown slower) until every limit
+holds on samples at ``check_rate`` Hz, as for ground robots."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lf3pm import _core
+from lf3pm.config import DEFAULTS, GuidanceConfig, QuadrotorConfig
+from lf3pm.errors import Lf3pmError
+from lf3pm.flight import Quadrotor
+from lf3pm.planner.cost_map import cost_from_values
+from lf3pm.planner.flight_path import FlightPath, plan_flight_path
+
+#: Samples a second on which the limits are checked (as for ground robots).
+CHECK_RATE = 1000.0
+#: Edge of the flight ESDF's voxels (m).
+ESDF_RES = 0.2
+#: Weight of the yaw's jerk against the position's in the energy.
+YAW_ENERGY = 0.1
+
+
+@dataclass(frozen=True)
+class FlightTrajectory:
+    """A quintic trajectory of (x, y, z, yaw): ``coefficients`` (N, 6, 4), piece k of
+    dimension d being sum_j c[k, j, d] t^j on [0, durations[k]]."""
+
+    coefficients: np.ndarray
+    durations: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return float(self.durations.sum())
+
+    def sample(self, rate: float = 100.0) -> dict:
+        """Samples every 1 / rate s and at the end: t, position (n, 3), velocity,
+        acceleration, jerk (n, 3), yaw and yaw_rate (n)."""
+        ends = np.concatenate([[0.0], np.cumsum(self.durations)])
+        t = np.append(np.arange(0.0, ends[-1], 1.0 / rate), ends[-1])
+        piece = np.clip(np.searchsorted(ends, t, side="right") - 1, 0, len(self.durations) - 1)
+        tau = t - ends[piece]
+        c = self.coefficients[piece]  # (n, 6, 4)
+        out = {"t": t}
+        for order, name in enumerate(("position", "velocity", "acceleration", "jerk")):
+            powers = np.stack(
+                [math.perm(k, order) * tau ** (k - order) if k >= order else np.zeros_like(tau) for k in range(6)],
+                axis=1,
+            )
+            value = np.einsum("nk,nkd->nd", powers, c)
+            out[name] = value[:, :3]
+            if order == 0:
+                out["yaw"] = value[:, 3]
+            if order == 1:
+                out["yaw_rate"] = value[:, 3]
+        return out
+
+    def time_scaled(self, factor: float) -> FlightTrajectory:
+        """The same path flown ``factor`` times slower: p(t / factor)."""
+        powers = factor ** -np.arange(6)
+        return FlightTrajectory(self.coefficients * powers[None, :, None], self.durations * factor)
+
+
+@dataclass(frozen=True)
+class FlightPlan:
+    """A planned flight: the front end's ``path``, the ``trajectory``, the ``time_scale``
+    applied after optimisation, the largest ratio to each limit on the 1 kHz samples
+    (``limits``; clearance: r_safe over the least distance to the map), the objective's
+    sampled ``terms``, the optimiser's iterations, status and reason, and the seconds
+    each stage took."""
+
+    path: FlightPath
+    trajectory: FlightTrajectory
+    time_scale: float
+    limits: dict
+    terms: dict
+    iterations: int
+    status: str
+    reason: str
+    seconds: dict = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """JSON-ready figures of the plan."""
+        samples = self.trajectory.sample(100.0)
+        return {
+            "duration_s": self.trajectory.duration,
+            "trajectory_length_m": float(np.linalg.norm(np.diff(samples["position"], axis=0), axis=1).sum()),
+            "path_length_m": self.path.length,
+            "time_scale": self.time_scale,
+            "limits": self.limits,
+            "terms": self.terms,
+            "iterations": self.iterations,
+            "status": self.status,
+            "reason": self.reason,
+            **{f"{name}_s": value for name, value in self.seconds.items()},
+        }
+
+
+def flight_esdf(points: np.ndarray, lower, upper, res: float = ESDF_RES) -> _core.VolumeField:
+    """The distance (m) from each voxel centre of edge ``res`` over the box [lower, upper] to
+    the nearest map point's voxel, less half a voxel diagonal (a point anywhere in its voxel),
+    as a VolumeField."""
+    from scipy.ndimage import distance_transform_edt
+
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    shape = np.maximum(np.ceil((upper - lower) / res).astype(int), 1)
+    inside = np.all((points >= lower) & (points < lower + shape * res), axis=1)
+    index = np.floor((points[inside] - lower) / res).astype(int)
+    free = np.ones(shape[::-1], dtype=bool)  # (z, y, x)
+    free[index[:, 2], index[:, 1], index[:, 0]] = False
+    distance = distance_transform_edt(free, sampling=res) - 0.5 * math.sqrt(3) * res
+    return _core.VolumeField(
+        np.ascontiguousarray(distance.ravel()),
+        int(shape[0]),
+        int(shape[1]),
+        int(shape[2]),
+        1,
+        float(lower[0]),
+        float(lower[1]),
+        float(lower[2] + 0.5 * res),
+        float(res),
+        float(res),
+    )
+
+
+def guidance_field(solm, guidance: GuidanceConfig) -> _core.VolumeField:
+    """The r3yaw SOLM's cost layer as the back end reads it: the guidance channel over its
+    median, to its power, capped (lf3pm.planner.cost_map), unevaluated cells at the cap."""
+    g = solm.grid_spec
+    metric = guidance.metric
+    values = np.zeros(g.shape) if metric == "none" else solm.channel(metric)
+    degenerate = np.asarray(solm.channel("degenerate")).astype(bool)
+    layer = cost_from_values(values, metric, degenerate=degenerate, power=guidance.power)
+    levels = np.asarray(g.z_levels, dtype=np.float64)
+    dz = float(np.diff(levels).mean()) if len(levels) > 1 else g.res
+    return _core.VolumeField(
+        np.ascontiguousarray(layer.filled.ravel()),
+        g.nx,
+        g.ny,
+        len(levels),
+        g.yaw_bins,
+        g.x0,
+        g.y0,
+        float(levels[0]),
+        g.res,
+        dz,
+    )
+
+
+def _initial_guess(path: FlightPath, piece_length: float, vmax: float):
+    """Waypoints (4 x (N - 1)) every ``piece_length`` metres along the front-end path (its
+    yaw unwrapped) and durations at half the speed limit."""
+    points = np.column_stack([path.positions, path.yaws])
+    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path.positions, axis=0), axis=1))])
+    pieces = max(1, round(along[-1] / piece_length))
+    at = np.linspace(0.0, along[-1], pieces + 1)
+    knots = np.column_stack([np.interp(at, along, points[:, d]) for d in range(4)])
+    lengths = np.maximum(np.linalg.norm(np.diff(knots[:, :3], axis=0), axis=1), 0.1)
+    return knots[1:-1].T.copy(), np.maximum(lengths / (0.5 * vmax), 0.5)
+
+
+def within_limits(trajectory: FlightTrajectory, quad: Quadrotor, esdf, r_safe: float, rate: float = CHECK_RATE):
+    """The trajectory stretched uniformly in time until speed, body rate, tilt and thrust
+    hold on samples at ``rate`` Hz: (trajectory, factor, the largest ratio to each limit,
+    clearance r_safe / least distance)."""
+
+    def ratios(traj):
+        s = traj.sample(rate)
+        att = quad.attitudes(s["velocity"], s["acceleration"], s["jerk"], s["yaw"], s["yaw_rate"])
+        return quad.limit_ratios(s["velocity"], att), s
+
+    factor = 1.0
+    current, s = ratios(trajectory)
+    if max(current.values()) > 1.0:
+        low, high = 1.0, 1.0
+        while max(ratios(trajectory.time_scaled(high))[0].values()) > 1.0:
+            low, high = high, 2.0 * high
+            if high > 1e3:
+                raise Lf3pmError("no time scaling brings the flight within its limits (check thrust_min/max)")
+        for _ in range(30):  # bisection to 1e-9 relative
+            mid = 0.5 * (low + high)
+            if max(ratios(trajectory.time_scaled(mid))[0].values()) > 1.0:
+                low = mid
+            else:
+                high = mid
+        factor = high
+        trajectory = trajectory.time_scaled(factor)
+        current, s = ratios(trajectory)
+    distance, _ = esdf.sample(np.ascontiguousarray(s["position"]), np.zeros(len(s["t"])))
+    current["clearance"] = float(r_safe / max(distance.min(), 1e-9))
+    return trajectory, factor, current
+
+
+def plan_flight(
+    solm,
+    world_points: np.ndarray,
+    start,
+    goal,
+    *,
+    guidance: GuidanceConfig = DEFAULTS.guidance,
+    quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
+    rho_T: float = 1.0,
+    w_energy: float = 1e-2,
+    piece_length: float = 2.0,
+    check_rate: float = CHECK_RATE,
+) -> FlightPlan:
+    """A flight on ``solm`` (r3yaw) over the map ``world_points`` (N x 3, for the ESDF) from
+    ``start`` (x, y, z, yaw) to ``goal`` (x, y, z[, yaw]), at rest at both ends, with the
+    guidance and quadrotor sections (module docstring). Single-threaded."""
+    quad = quadrotor if isinstance(quadrotor, Quadrotor) else Quadrotor.from_config(quadrotor)
+    began = time.perf_counter()
+    g = solm.grid_spec
+    levels = np.asarray(g.z_levels)
+    x0, y0, x1, y1 = g.bounds
+    margin = 1.0
+    esdf = flight_esdf(
+        np.asarray(world_points, dtype=np.float64),
+        (x0 - margin, y0 - margin, levels.min() - margin),
+        (x1 + margin, y1 + margin, levels.max() + margin),
+    )
+    r_safe = float(solm.attrs.get("robot_radius", _core.FlightWeights().r_safe))
+    field_built = time.perf_counter()
+    path = plan_flight_path(solm, start, goal, guidance=guidance, quadrotor=quad, esdf=esdf, clearance=r_safe)
+    searched = time.perf_counter()
+    waypoints, durations = _initial_guess(path, piece_length, quad.vmax)
+    head, tail = np.zeros((4, 3)), np.zeros((4, 3))
+    head[:, 0] = [*path.positions[0], path.yaws[0]]
+    tail[:, 0] = [*path.positions[-1], path.yaws[-1]]
+    weights = _core.FlightWeights()
+    weights.w_q = guidance.weight * rho_T if guidance.metric != "none" else 0.0
+    weights.r_safe = r_safe
+    problem = _core.FlightProblem(
+        quad.params(),
+        quad.limits(),
+        weights,
+        guidance_field(solm, guidance),
+        esdf,
+        rho_T,
+        w_energy,
+        YAW_ENERGY,
+        head,
+        tail,
+        waypoints,
+        durations,
+    )
+    out = problem.optimize(_core.trajectory_lbfgs())
+    coefficients, durations = problem.trajectory(out["x"])
+    trajectory = FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
+    optimized = time.perf_counter()
+    trajectory, factor, limits = within_limits(trajectory, quad, esdf, r_safe, check_rate)
+    return FlightPlan(
+        path=path,
+        trajectory=trajectory,
+        time_scale=factor,
+        limits=limits,
+        terms=dict(out["terms"]),
+        iterations=int(out["iterations"]),
+        status=str(out["status"]),
+        reason=str(out["reason"]),
+        seconds={
+            "esdf": field_built - began,
+            "search": searched - field_built,
+            "optimize": optimized - searched,
+        },
+    )
