@@ -139,7 +139,7 @@ def boxes_flight(tmp_path_factory):
     grid = make_grid(world, "r3yaw", 1.0, bounds=(-6.0, -6.0, 6.0, 6.0), yaw_bins=8, z_levels=(1.0, 2.0, 3.0))
     path = tmp_path_factory.mktemp("flight") / "boxes.zarr"
     build_solm(world, "vlp16", grid, path, noise=0.0, mount="top", tile=6)
-    return world, Solm.open(path)
+    return world, Solm.open(path), path
 
 
 def test_a_planned_flight_holds_every_limit_and_keeps_clear_of_the_map(boxes_flight):
@@ -149,7 +149,7 @@ def test_a_planned_flight_holds_every_limit_and_keeps_clear_of_the_map(boxes_fli
     over the map), at rest at both ends, there exactly."""
     from scipy.spatial import cKDTree
 
-    world, solm = boxes_flight
+    world, solm, _ = boxes_flight
     start, goal = (-5.5, -5.5, 1.0, 0.0), (5.5, 5.5, 3.0)
     plan = plan_flight(solm, world.points, start, goal)
     quad = Quadrotor()
@@ -163,3 +163,29 @@ def test_a_planned_flight_holds_every_limit_and_keeps_clear_of_the_map(boxes_fli
     np.testing.assert_allclose(s["position"][-1], goal, atol=1e-9)
     assert np.abs(s["velocity"][[0, -1]]).max() < 1e-9
     assert plan.limits["clearance"] <= 1.0 and plan.status in ("converged", "stalled")
+
+
+def test_lf3pm_plan_flies_a_quadrotor_and_refuses_what_it_cannot(boxes_flight, tmp_path):
+    from typer.testing import CliRunner
+
+    from lf3pm.cli import app
+
+    world, _, store = boxes_flight
+    map_path = tmp_path / "boxes.npy"
+    np.save(map_path, world.points)
+    out = tmp_path / "flight.csv"
+    args = ["plan", "--robot", "quadrotor", "--solm", str(store), "--map", str(map_path), "-o", str(out)]
+    args += ["--start", "-5.5", "-5.5", "0", "--goal", "5.5", "5.5", "0.5"]
+    done = CliRunner().invoke(app, [*args, "--start-z", "1", "--goal-z", "2", "--json"])
+    assert done.exit_code == 0, done.output
+    import json
+
+    summary = json.loads(done.stdout)
+    assert max(summary["limits"].values()) <= 1.0 + 1e-9
+    rows = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert out.read_text().splitlines()[0] == "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust"
+    np.testing.assert_allclose(rows[-1, 1:5], [5.5, 5.5, 2.0, 0.5], atol=1e-6)
+    missing = CliRunner().invoke(app, args)
+    assert missing.exit_code == 2 and "--start-z and --goal-z" in missing.output
+    ground = CliRunner().invoke(app, [*args[:2], "omni", *args[3:], "--start-z", "1", "--goal-z", "2"])
+    assert ground.exit_code == 2 and len(ground.output.strip().splitlines()) == 1

@@ -47,14 +47,29 @@ PLAN_PATHS = {
 
 @app.command()
 def plan(
-    solm_path: Path = typer.Option(..., "--solm", metavar="S.zarr", help="A built r2 or se2 SOLM."),
+    solm_path: Path = typer.Option(
+        ..., "--solm", metavar="S.zarr", help="A built r2 or se2 SOLM (an r3yaw one for --robot quadrotor)."
+    ),
     start: tuple[float, float, float] = typer.Option(..., help="Start X Y YAW (m, rad)."),
     goal: tuple[float, float, float] = typer.Option(..., help="Goal X Y YAW (m, rad)."),
     out: Path = typer.Option(
-        ..., "-o", "--out", metavar="TRAJ.csv", help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame)."
+        ...,
+        "-o",
+        "--out",
+        metavar="TRAJ.csv",
+        help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame); a quadrotor's "
+        "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust.",
     ),
     config: Path | None = CONFIG_OPTION,
-    robot: str | None = option("robot.kind"),
+    robot: str | None = typer.Option(
+        None,
+        "--robot",
+        help="omni, diff or car (ground robots; config robot.kind, default omni) or quadrotor (an r3yaw SOLM; "
+        "config section quadrotor; docs/flight.md).",
+    ),
+    start_z: float | None = typer.Option(None, metavar="Z", help="Quadrotor: the start's height (m)."),
+    goal_z: float | None = typer.Option(None, metavar="Z", help="Quadrotor: the goal's height (m)."),
+    mount: str | None = option("quadrotor.mount"),
     metric: str | None = option("guidance.metric"),
     weight: float | None = option("guidance.weight"),
     power: float | None = option("guidance.power"),
@@ -80,9 +95,17 @@ def plan(
 ):
     """Plan a perception-aware trajectory on a SOLM (graph search, then MINCO + L-BFGS)."""
     with user_errors():
-        cfg = configure(config, locals(), PLAN_PATHS)
+        flying = robot == "quadrotor"
+        if flying:
+            robot = None  # the quadrotor section holds what flies
+        cfg = configure(config, locals(), {**PLAN_PATHS, "mount": "quadrotor.mount"})
         check_output(out)
         check_output(png)
+        if flying:
+            _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json)
+            return
+        if start_z is not None or goal_z is not None:
+            raise Lf3pmError("--start-z and --goal-z are a quadrotor's (--robot quadrotor)")
         from lf3pm.planner.plan import Planner
         from lf3pm.prediction import predicted_error_along, solm_fit
         from lf3pm.solm import Solm
@@ -132,3 +155,44 @@ def plan(
                 f"{summary['optimize_s'] * 1e3:.0f} ms; predicted localization error "
                 + (f"{error * 100:.1f} cm" if error is not None else f"withheld: {withheld}")
             )
+
+
+def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json) -> None:
+    """`lf3pm plan --robot quadrotor`: a flight on an r3yaw SOLM (lf3pm.planner.flight_plan)."""
+    from lf3pm.atomic import atomic_write
+    from lf3pm.flight import Quadrotor
+    from lf3pm.map import load_map
+    from lf3pm.planner.flight_plan import plan_flight
+    from lf3pm.solm import Solm
+
+    if start_z is None or goal_z is None:
+        raise Lf3pmError("a quadrotor's plan needs --start-z and --goal-z (m)")
+    solm = Solm.open(solm_path)
+    source = map_path if map_path is not None else solm.attrs.get("map_source")
+    if not source or not Path(str(source)).exists():
+        raise Lf3pmError(f"the flight's clearance needs the map: give --map (the SOLM names {source!r})")
+    with map_loading() as progress:
+        points = load_map(source, progress=progress).points
+    quad = Quadrotor.from_config(cfg.quadrotor)
+    flight = plan_flight(
+        solm,
+        points,
+        (start[0], start[1], start_z, start[2]),
+        (goal[0], goal[1], goal_z, goal[2]),
+        guidance=cfg.guidance,
+        quadrotor=quad,
+    )
+    with atomic_write(out) as fp:
+        fp.write(flight.trajectory.csv_bytes(quad))
+    summary = flight.summary()
+    if as_json:
+        print(json.dumps(summary, indent=1))
+        return
+    worst = max(summary["limits"], key=summary["limits"].get)
+    console.print(
+        f"{out}: {summary['duration_s']:.1f} s, {summary['trajectory_length_m']:.1f} m (front-end path "
+        f"{summary['path_length_m']:.1f} m); search {summary['search_s'] * 1e3:.0f} ms, optimisation "
+        f"{summary['optimize_s'] * 1e3:.0f} ms; closest to its limit: {worst} at "
+        f"{summary['limits'][worst]:.0%}",
+        highlight=False,
+    )

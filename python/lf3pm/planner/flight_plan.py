@@ -56,11 +56,11 @@ class FlightTrajectory:
         c = self.coefficients[piece]  # (n, 6, 4)
         out = {"t": t}
         for order, name in enumerate(("position", "velocity", "acceleration", "jerk")):
-            powers = np.stack(
-                [math.perm(k, order) * tau ** (k - order) if k >= order else np.zeros_like(tau) for k in range(6)],
-                axis=1,
-            )
-            value = np.einsum("nk,nkd->nd", powers, c)
+            # Horner's rule: products and sums in a fixed order, the same on every CPU
+            # (einsum's and power's vector kernels differ with it).
+            value = math.perm(5, order) * c[:, 5]
+            for k in range(4, order - 1, -1):
+                value = value * tau[:, None] + math.perm(k, order) * c[:, k]
             out[name] = value[:, :3]
             if order == 0:
                 out["yaw"] = value[:, 3]
@@ -72,6 +72,22 @@ class FlightTrajectory:
         """The same path flown ``factor`` times slower: p(t / factor)."""
         powers = factor ** -np.arange(6)
         return FlightTrajectory(self.coefficients * powers[None, :, None], self.durations * factor)
+
+    def csv_bytes(self, quad: Quadrotor, rate: float = 100.0) -> bytes:
+        """Samples at ``rate`` Hz as CSV: t, x, y, z, yaw, vx, vy, vz, yaw_rate, the body's
+        attitude quaternion qw, qx, qy, qz (body to world) and thrust (N)."""
+        import io
+
+        from scipy.spatial.transform import Rotation
+
+        s = self.sample(rate)
+        att = quad.attitudes(s["velocity"], s["acceleration"], s["jerk"], s["yaw"], s["yaw_rate"])
+        xyzw = Rotation.from_matrix(att.rotation).as_quat()
+        columns = [s["t"], *s["position"].T, s["yaw"], *s["velocity"].T, s["yaw_rate"], xyzw[:, 3], *xyzw[:, :3].T]
+        buf = io.StringIO()
+        header = "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust"
+        np.savetxt(buf, np.column_stack([*columns, att.thrust]), delimiter=",", fmt="%.9g", header=header, comments="")
+        return buf.getvalue().encode()
 
 
 @dataclass(frozen=True)
