@@ -189,3 +189,28 @@ def test_lf3pm_plan_flies_a_quadrotor_and_refuses_what_it_cannot(boxes_flight, t
     assert missing.exit_code == 2 and "--start-z and --goal-z" in missing.output
     ground = CliRunner().invoke(app, [*args[:2], "omni", *args[3:], "--start-z", "1", "--goal-z", "2"])
     assert ground.exit_code == 2 and len(ground.output.strip().splitlines()) == 1
+
+
+def test_the_baseline_planners_hold_the_yaw_along_the_velocity_or_optimise_it_alone(boxes_flight):
+    """velocity_yaw: the heading follows the horizontal velocity (median within 1 degree where
+    faster than 0.5 m/s); yaw_only: the same positions (its samples on velocity_yaw's path to
+    1e-6 m, its durations that path's, time-scaled), a different yaw; both within the limits."""
+    world, solm, _ = boxes_flight
+    start, goal = (-5.5, -5.5, 1.0, 0.0), (5.5, 5.5, 2.0)
+    a = plan_flight(solm, world.points, start, goal, planner="velocity_yaw")
+    b = plan_flight(solm, world.points, start, goal, planner="yaw_only")
+    s = a.trajectory.sample(100.0)
+    speed = np.linalg.norm(s["velocity"][:, :2], axis=1)
+    heading = np.arctan2(s["velocity"][:, 1], s["velocity"][:, 0])
+    error = np.abs(np.angle(np.exp(1j * (s["yaw"] - heading))))[speed > 0.5]
+    assert np.degrees(np.median(error)) < 1.0
+    # The same path: b's trajectory is a's positions under a (uniform) time scaling.
+    ratio = b.trajectory.duration / a.trajectory.duration
+    sb = b.trajectory.sample(100.0 / ratio)
+    n = min(len(s["t"]), len(sb["t"])) - 1
+    np.testing.assert_allclose(sb["position"][:n], s["position"][:n], atol=1e-6)
+    assert np.abs(sb["yaw"][:n] - s["yaw"][:n]).max() > 0.1
+    for plan in (a, b):
+        assert max(plan.limits.values()) <= 1.0 + 1e-9 and plan.planner in ("velocity_yaw", "yaw_only")
+    with pytest.raises(Exception, match="unknown flight planner"):
+        plan_flight(solm, world.points, start, goal, planner="gcopter")

@@ -51,6 +51,7 @@ nb::dict terms_dict(const FlightTerms& t) {
   d["tilt"] = t.tilt;
   d["thrust"] = t.thrust;
   d["clearance"] = t.clearance;
+  d["heading"] = t.heading;
   return d;
 }
 
@@ -179,7 +180,8 @@ void bind_flight(nb::module_& m) {
       .def_rw("penalty", &FlightWeights::penalty)
       .def_rw("r_safe", &FlightWeights::r_safe)
       .def_rw("esdf_margin", &FlightWeights::esdf_margin)
-      .def_rw("samples", &FlightWeights::samples);
+      .def_rw("samples", &FlightWeights::samples)
+      .def_rw("w_heading", &FlightWeights::w_heading);
 
   nb::class_<FlightProblem>(m, "FlightProblem", "The flight back end's objective over a quintic MINCO.")
       .def(

@@ -95,6 +95,16 @@ double FlightCost::evaluate(const MincoS3::Coefficients& c, const Eigen::VectorX
         g_p += weights_.w_q * g.head<3>();
         g_yaw += weights_.w_q * g(3);
       }
+      // Yaw along the velocity.
+      if (weights_.w_heading != 0.0) {
+        const double sn = std::sin(s.yaw), cs = std::cos(s.yaw);
+        const double lateral = s.velocity.x() * sn - s.velocity.y() * cs;
+        f += weights_.w_heading * lateral * lateral, local.heading += weight * step * lateral * lateral;
+        const double k2 = 2.0 * weights_.w_heading * lateral;
+        g_v.x() += k2 * sn;
+        g_v.y() -= k2 * cs;
+        g_yaw += k2 * (s.velocity.x() * cs + s.velocity.y() * sn);
+      }
       total += weight * step * f;
       // Back to the flat outputs' derivatives, then to the coefficients and T.
       const FlatGradient gf = flatness_.backward(s, ga);

@@ -6,6 +6,9 @@
 //   W * P((cos tilt_max - cos tilt) / (1 - cos tilt_max))   tilt (flatness map)
 //   W * P(((f - f_mid) / f_half)^2 - 1)          thrust within [thrust_min, thrust_max]
 //   W * P((r_safe + margin - esdf(p)) / 0.1 m)   clearance from the map's points
+//   w_heading * (vx sin(yaw) - vy cos(yaw))^2      yaw along the velocity (the baseline
+//                                                  planners'; the lateral speed in the
+//                                                  heading's frame, zero at hover)
 // with the cubic penalty P(z) = max(z, 0)^3 (C^2). The attitude, body rates and thrust come
 // from the flatness map (flatness.hpp) and its gradients from its backward pass. The
 // guidance is read at level attitude: docs/flight.md measures what the tilt changes.
@@ -25,11 +28,12 @@ struct FlightWeights {
   double r_safe = 0.4;       ///< clearance kept from the map's points, m
   double esdf_margin = 0.1;  ///< the clearance penalty starts at r_safe + margin
   int samples = 16;          ///< K: samples per piece (K + 1 with both ends)
+  double w_heading = 0.0;    ///< weight of the yaw-along-velocity term (0: off)
 };
 
 /// Each sampled term's integral over time (before its weight), for reports.
 struct FlightTerms {
-  double guidance = 0, speed = 0, omega = 0, tilt = 0, thrust = 0, clearance = 0;
+  double guidance = 0, speed = 0, omega = 0, tilt = 0, thrust = 0, clearance = 0, heading = 0;
 };
 
 class FlightCost {

@@ -70,6 +70,12 @@ def plan(
     start_z: float | None = typer.Option(None, metavar="Z", help="Quadrotor: the start's height (m)."),
     goal_z: float | None = typer.Option(None, metavar="Z", help="Quadrotor: the goal's height (m)."),
     mount: str | None = option("quadrotor.mount"),
+    flight_planner: str = typer.Option(
+        "joint",
+        "--planner",
+        help="Quadrotor: joint (position and yaw on the SOLM), velocity_yaw (minimum time, yaw along the "
+        "velocity, no perception) or yaw_only (that flight, its yaw alone on the SOLM); docs/flight.md.",
+    ),
     metric: str | None = option("guidance.metric"),
     weight: float | None = option("guidance.weight"),
     power: float | None = option("guidance.power"),
@@ -102,7 +108,7 @@ def plan(
         check_output(out)
         check_output(png)
         if flying:
-            _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json)
+            _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json, flight_planner)
             return
         if start_z is not None or goal_z is not None:
             raise Lf3pmError("--start-z and --goal-z are a quadrotor's (--robot quadrotor)")
@@ -157,7 +163,7 @@ def plan(
             )
 
 
-def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json) -> None:
+def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json, planner) -> None:
     """`lf3pm plan --robot quadrotor`: a flight on an r3yaw SOLM (lf3pm.planner.flight_plan)."""
     from lf3pm.atomic import atomic_write
     from lf3pm.flight import Quadrotor
@@ -179,6 +185,7 @@ def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as
         points,
         (start[0], start[1], start_z, start[2]),
         (goal[0], goal[1], goal_z, goal[2]),
+        planner=planner,
         guidance=cfg.guidance,
         quadrotor=quad,
     )

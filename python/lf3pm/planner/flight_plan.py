@@ -95,8 +95,8 @@ class FlightPlan:
     """A planned flight: the front end's ``path``, the ``trajectory``, the ``time_scale``
     applied after optimisation, the largest ratio to each limit on the 1 kHz samples
     (``limits``; clearance: r_safe over the least distance to the map), the objective's
-    sampled ``terms``, the optimiser's iterations, status and reason, and the seconds
-    each stage took."""
+    sampled ``terms``, the optimiser's iterations, status and reason, the ``planner``
+    (:data:`PLANNERS`) and the seconds each stage took."""
 
     path: FlightPath
     trajectory: FlightTrajectory
@@ -106,6 +106,7 @@ class FlightPlan:
     iterations: int
     status: str
     reason: str
+    planner: str = "joint"
     seconds: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
@@ -121,6 +122,7 @@ class FlightPlan:
             "iterations": self.iterations,
             "status": self.status,
             "reason": self.reason,
+            "planner": self.planner,
             **{f"{name}_s": value for name, value in self.seconds.items()},
         }
 
@@ -220,12 +222,22 @@ def within_limits(trajectory: FlightTrajectory, quad: Quadrotor, esdf, r_safe: f
     return trajectory, factor, current
 
 
+#: The flight planners (docs/flight.md, "Baselines"): joint position and yaw on the SOLM
+#: (lf3pm's), GCOPTER-style minimum time with the yaw along the velocity (no perception),
+#: and that flight with only its yaw optimised on the SOLM (the EAROL / AWARE idea).
+PLANNERS = ("joint", "velocity_yaw", "yaw_only")
+#: Weight of the yaw-along-velocity term of the baselines (per (m/s)^2 of lateral speed in
+#: the heading's frame: at 3 m/s a crosswise heading costs 90 s of flight a second).
+W_HEADING = 10.0
+
+
 def plan_flight(
     solm,
     world_points: np.ndarray,
     start,
     goal,
     *,
+    planner: str = "joint",
     guidance: GuidanceConfig = DEFAULTS.guidance,
     quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
     rho_T: float = 1.0,
@@ -235,7 +247,13 @@ def plan_flight(
 ) -> FlightPlan:
     """A flight on ``solm`` (r3yaw) over the map ``world_points`` (N x 3, for the ESDF) from
     ``start`` (x, y, z, yaw) to ``goal`` (x, y, z[, yaw]), at rest at both ends, with the
-    guidance and quadrotor sections (module docstring). Single-threaded."""
+    guidance and quadrotor sections (module docstring), by ``planner`` (:data:`PLANNERS`):
+    ``joint`` optimises position and yaw on the guidance; ``velocity_yaw`` takes the
+    shortest front-end path and no guidance, the yaw held along the velocity; ``yaw_only``
+    is that flight with its yaw waypoints alone then optimised on the guidance (positions
+    and durations kept, then time-scaled to the limits). Single-threaded."""
+    if planner not in PLANNERS:
+        raise Lf3pmError(f"unknown flight planner {planner!r}; use one of {', '.join(PLANNERS)}")
     quad = quadrotor if isinstance(quadrotor, Quadrotor) else Quadrotor.from_config(quadrotor)
     began = time.perf_counter()
     g = solm.grid_spec
@@ -249,31 +267,32 @@ def plan_flight(
     )
     r_safe = float(solm.attrs.get("robot_radius", _core.FlightWeights().r_safe))
     field_built = time.perf_counter()
-    path = plan_flight_path(solm, start, goal, guidance=guidance, quadrotor=quad, esdf=esdf, clearance=r_safe)
+    perceptive = planner == "joint"
+    front = guidance if perceptive else guidance.model_copy(update={"metric": "none"})
+    path = plan_flight_path(solm, start, goal, guidance=front, quadrotor=quad, esdf=esdf, clearance=r_safe)
     searched = time.perf_counter()
     waypoints, durations = _initial_guess(path, piece_length, quad.vmax)
+    if not perceptive:
+        waypoints[3] = _heading_yaws(path, waypoints)
     head, tail = np.zeros((4, 3)), np.zeros((4, 3))
     head[:, 0] = [*path.positions[0], path.yaws[0]]
     tail[:, 0] = [*path.positions[-1], path.yaws[-1]]
-    weights = _core.FlightWeights()
-    weights.w_q = guidance.weight * rho_T if guidance.metric != "none" else 0.0
-    weights.r_safe = r_safe
-    problem = _core.FlightProblem(
-        quad.params(),
-        quad.limits(),
-        weights,
-        guidance_field(solm, guidance),
-        esdf,
-        rho_T,
-        w_energy,
-        YAW_ENERGY,
-        head,
-        tail,
-        waypoints,
-        durations,
-    )
-    out = problem.optimize(_core.trajectory_lbfgs())
-    coefficients, durations = problem.trajectory(out["x"])
+    field = guidance_field(solm, guidance)
+
+    def problem(w_q: float, w_heading: float, q, T):
+        weights = _core.FlightWeights()
+        weights.w_q, weights.w_heading, weights.r_safe = w_q, w_heading, r_safe
+        return _core.FlightProblem(
+            quad.params(), quad.limits(), weights, field, esdf, rho_T, w_energy, YAW_ENERGY, head, tail, q, T
+        )
+
+    w_q = guidance.weight * rho_T if guidance.metric != "none" else 0.0
+    flight = problem(w_q if perceptive else 0.0, 0.0 if perceptive else W_HEADING, waypoints, durations)
+    out = flight.optimize(_core.trajectory_lbfgs())
+    x = np.asarray(out["x"])
+    if planner == "yaw_only":
+        flight, x, out = _yaw_only(problem, w_q, flight, x)
+    coefficients, durations = flight.trajectory(x)
     trajectory = FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
     optimized = time.perf_counter()
     trajectory, factor, limits = within_limits(trajectory, quad, esdf, r_safe, check_rate)
@@ -286,9 +305,52 @@ def plan_flight(
         iterations=int(out["iterations"]),
         status=str(out["status"]),
         reason=str(out["reason"]),
+        planner=planner,
         seconds={
             "esdf": field_built - began,
             "search": searched - field_built,
             "optimize": optimized - searched,
         },
     )
+
+
+def _heading_yaws(path: FlightPath, waypoints: np.ndarray) -> np.ndarray:
+    """Yaws along the direction of travel at the initial waypoints (unwrapped from the
+    start's yaw): the baselines' initial guess."""
+    knots = np.vstack([path.positions[0], waypoints[:3].T, path.positions[-1]])
+    direction = np.diff(knots, axis=0)
+    yaw = np.arctan2(direction[:, 1], direction[:, 0])
+    inner = np.unwrap(np.concatenate([[path.yaws[0]], yaw[1:]]))[1:]
+    return inner
+
+
+def _yaw_only(problem, w_q: float, flight, x: np.ndarray):
+    """The yaw waypoints of the flight at ``x`` optimised on the guidance with positions and
+    durations held (scipy L-BFGS-B over the C++ objective; the baseline is not timed):
+    (problem, x, outcome)."""
+    from scipy.optimize import minimize
+
+    coefficients, durations = flight.trajectory(x)
+    n = len(durations)
+    q = x[: 4 * (n - 1)].reshape(n - 1, 4).T.copy()
+    yawing = problem(w_q, 0.0, q, np.asarray(durations))
+    free = np.arange(3, 4 * (n - 1), 4)  # each waypoint's yaw (x holds them column by column)
+    base = np.asarray(yawing.initial).copy()
+
+    def objective(z):
+        full = base.copy()
+        full[free] = z
+        f, grad, _ = yawing.evaluate(full)
+        return f, np.asarray(grad)[free]
+
+    result = minimize(objective, base[free], jac=True, method="L-BFGS-B", options={"maxiter": 500})
+    full = base.copy()
+    full[free] = result.x
+    _, _, terms = yawing.evaluate(full)
+    outcome = {
+        "terms": terms,
+        "iterations": int(result.nit),
+        "status": "converged" if result.success else "stalled",
+        "reason": str(result.message),
+    }
+    return yawing, full, outcome
