@@ -19,6 +19,8 @@ from lf3pm.scenes.scene import FREE_BAND_HIGH, FREE_BAND_LOW
 from lf3pm.validation import RegistrationTarget, mde
 
 NAMES = ["houses", "house_meadow", "meadow", "wall", "gobi", "boxes", "tunnel", "orientation", "corridor", "field"]
+#: The flight scenes, registered beside these (tests/test_flight_scenes.py tests them).
+FLIGHT = ["drift", "forest", "bridge", "atrium", "open_field"]
 #: Scenes with planning-study zones, and whether their zones are clear of structure
 #: whatever the layout (boxes may stand in the boxes room's zones).
 ZONED = {"houses": True, "boxes": False, "tunnel": True, "orientation": True, "corridor": True, "field": True}
@@ -70,18 +72,18 @@ def run_cli(*args):
 
 
 def test_registry_names_and_descriptions():
-    assert sorted(scene_names()) == sorted(NAMES) and sorted(SCENES) == sorted(NAMES)
+    assert sorted(scene_names()) == sorted(NAMES + FLIGHT) and sorted(SCENES) == sorted(NAMES + FLIGHT)
     described = dict(describe_scenes())
-    assert sorted(described) == sorted(NAMES)
+    assert sorted(described) == sorted(NAMES + FLIGHT)
     for name, text in described.items():
         assert "\n" not in text and re.search(r"~[\d.]+ M points by default", text), name
 
 
 def test_unknown_scene_is_one_line_listing_the_known_names():
     with pytest.raises(Lf3pmError) as err:
-        build_scene("forest")
+        build_scene("jungle")
     message = str(err.value)
-    assert "\n" not in message and "forest" in message
+    assert "\n" not in message and "jungle" in message
     assert all(name in message for name in NAMES)
     assert build_scene("House-Meadow", extent=15.0).name == "house_meadow"
 
@@ -384,7 +386,7 @@ def test_cli_writes_a_readable_pcd(tmp_path):
 def test_cli_list_names_every_scene():
     result = run_cli("scene", "--list")
     assert result.returncode == 0
-    for name in NAMES:
+    for name in NAMES + FLIGHT:
         assert name in result.stdout
 
 
@@ -392,7 +394,7 @@ def test_cli_list_names_every_scene():
 @pytest.mark.parametrize(
     "args,needle",
     [
-        (("scene", "forest", "-o", "{tmp}/x.pcd"), "unknown scene"),
+        (("scene", "jungle", "-o", "{tmp}/x.pcd"), "unknown scene"),
         (("scene", "boxes"), "missing -o"),
         (("scene", "-o", "{tmp}/x.pcd"), "missing scene name"),
         (("scene", "boxes", "-o", "{tmp}/x.xyz"), "unknown suffix"),

@@ -57,7 +57,7 @@ def scene(
     """Build a procedural test scene (houses, meadow, gobi, ...) and write it as a map."""
     with user_errors():
         seed = configure(None, locals(), {"seed": "scene.seed"}).scene.seed
-        from lf3pm.scenes import build_scene, describe_scenes, scene_defaults, scene_names
+        from lf3pm.scenes import VOLUME_CLEARANCE, build_scene, describe_scenes, scene_defaults, scene_names
 
         if list_scenes:
             table = Table(title="Scenes (`lf3pm scene NAME -o MAP.pcd`; see docs/scenes.md)")
@@ -87,3 +87,9 @@ def scene(
             f"reference pose x y z yaw: {x:g} {y:g} {z:g} {yaw:g}  (free radius {built.free_radius:g} m)",
             highlight=False,
         )
+        for key, box in built.volumes.items():
+            console.print(
+                f"{key} volume x y z: {box.xmin:g}..{box.xmax:g} {box.ymin:g}..{box.ymax:g} "
+                f"{box.zmin:g}..{box.zmax:g}  (no map point within {VOLUME_CLEARANCE:g} m)",
+                highlight=False,
+            )

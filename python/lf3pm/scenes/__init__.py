@@ -8,6 +8,7 @@ seed::
     scene = build_scene("houses", seed=0)          # params override the defaults
     scene.points, scene.reference_pose, scene.free_radius
     scene.zones                                     # {"start": Zone, "goal": Zone} for studies
+    scene.volumes                                   # {"start": Volume, "goal": Volume} for flights
 
 ``SCENES`` maps each name to its builder ``build(seed=0, **params) -> Scene``;
 see docs/scenes.md for what each scene holds and its parameters.
@@ -17,15 +18,60 @@ from __future__ import annotations
 
 from lf3pm.config import DEFAULTS as CONFIG
 from lf3pm.errors import Lf3pmError
-from lf3pm.scenes import boxes, corridor, field, gobi, house_meadow, houses, meadow, orientation, tunnel, wall
-from lf3pm.scenes.scene import Scene, Zone, resolve_params
+from lf3pm.scenes import (
+    atrium,
+    boxes,
+    bridge,
+    corridor,
+    drift,
+    field,
+    forest,
+    gobi,
+    house_meadow,
+    houses,
+    meadow,
+    open_field,
+    orientation,
+    tunnel,
+    wall,
+)
+from lf3pm.scenes.scene import VOLUME_CLEARANCE, Scene, Volume, Zone, resolve_params
 
-_MODULES = (houses, house_meadow, meadow, wall, gobi, boxes, tunnel, orientation, corridor, field)
+_MODULES = (
+    houses,
+    house_meadow,
+    meadow,
+    wall,
+    gobi,
+    boxes,
+    tunnel,
+    orientation,
+    corridor,
+    field,
+    # For flights (docs/scenes.md, "Flight scenes"): start and goal volumes, no zones.
+    drift,
+    forest,
+    bridge,
+    atrium,
+    open_field,
+)
 
 #: Scene name -> builder ``build(seed=0, **params) -> Scene``.
 SCENES = {module.NAME: module.build for module in _MODULES}
 
-__all__ = ["SCENES", "Scene", "Zone", "build_scene", "describe_scenes", "scene_defaults", "scene_names", "scene_zones"]
+__all__ = [
+    "SCENES",
+    "VOLUME_CLEARANCE",
+    "Scene",
+    "Volume",
+    "Zone",
+    "build_scene",
+    "describe_scenes",
+    "scene_defaults",
+    "scene_names",
+    "scene_volumes",
+    "scene_zones",
+]
 
 
 def scene_names() -> list[str]:
@@ -51,6 +97,17 @@ def scene_zones(name: str, **params) -> dict:
     module = _module(name)
     zones = getattr(module, "zones", None)
     return zones(resolve_params(module.NAME, module.DEFAULTS, params)) if zones else {}
+
+
+def scene_volumes(name: str, **params) -> dict:
+    """The flight volumes of scene ``name`` with ``params`` (name -> :class:`Volume`; empty
+    for scenes without any), without building the scene: the same boxes as
+    ``build_scene(name, **params).volumes``, which the builder checks are free (no map
+    point within ``VOLUME_CLEARANCE`` of them)."""
+    module = _module(name)
+    volumes = getattr(module, "volumes", None)
+    boxes = volumes(resolve_params(module.NAME, module.DEFAULTS, params)) if volumes else {}
+    return {key: Volume(*map(float, box)) for key, box in boxes.items()}
 
 
 def build_scene(name: str, seed: int = CONFIG.scene.seed, **params) -> Scene:

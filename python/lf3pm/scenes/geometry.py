@@ -138,6 +138,26 @@ def box(
     return place(stack(faces), yaw, center)
 
 
+def cylinder(
+    rng: np.random.Generator, base, radius: float, height: float, spacing: float, jitter: float = JITTER
+) -> np.ndarray:
+    """Samples the side of a vertical cylinder (a trunk, a column, a pier) of ``radius``
+    rising ``height`` from ``base`` = (x, y, z) on a grid about ``spacing`` apart around it
+    and up it, turned at random, jittered by ``jitter`` along the surface and a third of
+    it along the radius."""
+    nu = max(3, int(round(2.0 * math.pi * radius / spacing)))
+    nv = max(1, int(round(height / spacing)))
+    angle = (np.arange(nu) + 0.5) * (2.0 * math.pi / nu) + rng.uniform(0.0, 2.0 * math.pi)
+    z = (np.arange(nv) + 0.5) * (height / nv)
+    aa, zz = (g.ravel() for g in np.meshgrid(angle, z, indexing="ij"))
+    r = np.full(aa.size, float(radius))
+    if jitter > 0:
+        aa = aa + rng.normal(0.0, jitter, aa.size) / radius
+        zz = zz + rng.normal(0.0, jitter, aa.size)
+        r = r + rng.normal(0.0, jitter / 3.0, aa.size)
+    return np.asarray(base, dtype=float) + np.stack([r * np.cos(aa), r * np.sin(aa), zz], axis=1)
+
+
 def smoothstep(t):
     """0 below 0, 1 above 1, and a C1 ramp between."""
     t = np.clip(t, 0.0, 1.0)

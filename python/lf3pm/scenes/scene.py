@@ -16,6 +16,9 @@ from lf3pm.errors import Lf3pmError
 FREE_BAND_LOW = 0.2
 #: ... up to this one (m).
 FREE_BAND_HIGH = 2.5
+#: The flight scenes' start and goal volumes keep this far (m) from the map: no map
+#: point lies within this distance of any point of the box.
+VOLUME_CLEARANCE = 0.6
 
 
 class Zone(NamedTuple):
@@ -36,6 +39,43 @@ class Zone(NamedTuple):
         )
 
 
+class Volume(NamedTuple):
+    """An axis-aligned box of space, metres: xmin <= x <= xmax, ymin <= y <= ymax,
+    zmin <= z <= zmax."""
+
+    xmin: float
+    ymin: float
+    zmin: float
+    xmax: float
+    ymax: float
+    zmax: float
+
+    @property
+    def centre(self) -> tuple:
+        """(x, y, z) of the box's centre."""
+        return ((self.xmin + self.xmax) / 2, (self.ymin + self.ymax) / 2, (self.zmin + self.zmax) / 2)
+
+    def contains(self, x, y, z):
+        """Whether (x, y, z) lies in the box (arrays broadcast)."""
+        x, y, z = (np.asarray(a) for a in (x, y, z))
+        return (
+            (x >= self.xmin)
+            & (x <= self.xmax)
+            & (y >= self.ymin)
+            & (y <= self.ymax)
+            & (z >= self.zmin)
+            & (z <= self.zmax)
+        )
+
+    def distance(self, points) -> np.ndarray:
+        """The Euclidean distance (m) from each row of the N x 3 ``points`` to the
+        nearest point of the box (0 inside it)."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        lower = np.array([self.xmin, self.ymin, self.zmin])
+        upper = np.array([self.xmax, self.ymax, self.zmax])
+        return np.linalg.norm(np.maximum(np.maximum(lower - points, points - upper), 0.0), axis=1)
+
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     """A procedural test scene: a point-cloud map and a known free sensor pose.
@@ -48,7 +88,9 @@ class Scene:
     defaults included. zones: named ground rectangles (:class:`Zone`) that
     planning studies draw start and goal positions from (docs/scenes.md says
     which pairs; a drawn position can still fall on an obstacle, so a study
-    checks it against the SOLM's traversable cells).
+    checks it against the SOLM's traversable cells). volumes: named boxes of free
+    space (:class:`Volume`) that flights start and end in (the flight scenes':
+    ``start`` and ``goal``); no map point lies within ``VOLUME_CLEARANCE`` of one.
     """
 
     name: str
@@ -59,6 +101,7 @@ class Scene:
     seed: int
     params: dict
     zones: dict = field(default_factory=dict)
+    volumes: dict = field(default_factory=dict)
 
     @property
     def size(self) -> int:
@@ -139,8 +182,10 @@ def finish(
     points: np.ndarray,
     ground_z: float = 0.0,
     zones: dict | None = None,
+    volumes: dict | None = None,
 ) -> Scene:
-    """Packs the points into a Scene, after checking that the reference pose is free."""
+    """Packs the points into a Scene, after checking that the reference pose and the
+    ``volumes`` (name -> (xmin, ymin, zmin, xmax, ymax, zmax)) are free."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     require(params["sensor_height"] > 0, name, "sensor_height must be > 0")
     radius = params["free_radius"]
@@ -152,6 +197,15 @@ def finish(
             name,
             f"free_radius {radius:g} m is too large: {len(bad)} points of the scene "
             f"lie within it (the closest {closest:.2f} m from the origin)",
+        )
+    volumes = {key: Volume(*map(float, box)) for key, box in (volumes or {}).items()}
+    for key, volume in volumes.items():
+        gap = float(volume.distance(points).min()) if len(points) else math.inf
+        require(
+            gap >= VOLUME_CLEARANCE,
+            name,
+            f"the {key} volume {tuple(volume)} is not free: a map point lies {gap:.2f} m from it "
+            f"(at least {VOLUME_CLEARANCE:g} m needed); change the parameters",
         )
     points.setflags(write=False)
     pose = (0.0, 0.0, float(ground_z + params["sensor_height"]), 0.0)
@@ -165,4 +219,5 @@ def finish(
         seed=seed,
         params=dict(params),
         zones=zones,
+        volumes=volumes,
     )
