@@ -57,6 +57,7 @@ bench: build
 	$(PY) bench/bench_graph_search.py
 	$(PY) bench/bench_esdf.py
 	$(PY) bench/bench_planner_backend.py
+	$(PY) bench/bench_flight_replan.py
 	$(PY) bench/bench_planner_occupancy.py
 	for robot in omni diff car; do $(PY) bench/bench_random_queries.py --robot $$robot || exit 1; done
 	$(PY) bench/bench_motion.py

@@ -227,6 +227,7 @@ void bind_flight(nb::module_& m) {
             d["x"] = o.x;
             d["iterations"] = o.iterations;
             d["evaluations"] = o.evaluations;
+            d["f"] = o.f;
             d["status"] = o.status;
             d["reason"] = o.reason;
             d["terms"] = terms_dict(o.terms);

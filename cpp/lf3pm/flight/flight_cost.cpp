@@ -107,7 +107,9 @@ double FlightCost::evaluate(const MincoS3::Coefficients& c, const Eigen::VectorX
       }
       total += weight * step * f;
       // Back to the flat outputs' derivatives, then to the coefficients and T.
-      const FlatGradient gf = flatness_.backward(s, ga);
+      // Inside every limit the penalties' gradients are zero: no backward pass (most samples).
+      const bool penalised = ga.thrust != 0.0 || ga.cos_tilt != 0.0 || !ga.omega.isZero();
+      const FlatGradient gf = penalised ? flatness_.backward(s, ga) : FlatGradient{};
       Eigen::Matrix<double, 4, 4> g_d = Eigen::Matrix<double, 4, 4>::Zero();  // by derivative order 0..3, dims
       g_d.row(0) << g_p.transpose(), g_yaw + gf.yaw;
       g_d.row(1) << (g_v + gf.velocity).transpose(), gf.yaw_rate;

@@ -62,6 +62,7 @@ FlightOutcome optimize_flight(FlightProblem& problem, const LbfgsParams& lbfgs) 
       [&](const Eigen::VectorXd& x, Eigen::VectorXd& g) { return problem.evaluate(x, g); }, out.x, lbfgs);
   out.iterations = r.iterations;
   out.evaluations = r.evaluations;
+  out.f = r.f;
   out.status = to_string(r.status);
   out.reason = r.reason;
   Eigen::VectorXd g;

@@ -49,6 +49,7 @@ struct FlightOutcome {
   Eigen::VectorXd x;
   int iterations = 0;
   int evaluations = 0;
+  double f = 0.0;  ///< the objective at x
   std::string status, reason;
   FlightTerms terms;
 };

@@ -88,9 +88,24 @@ def yaw_profile(
 MOVE_SAMPLES = 9
 
 
-def clear_moves(g, traversable: np.ndarray, dz: float, esdf, clearance: float) -> np.ndarray:
-    """uint8 (cells * 26): whether each move's segment from a traversable cell's centre keeps
-    ``clearance`` on the ESDF, moves in the search's order (dz, dy, dx = -1..1, x fastest)."""
+def free_volume(solm) -> np.ndarray:
+    """(nz, ny, nx) bool: the cells of an r3yaw SOLM evaluated at some yaw (no obstacle)."""
+    g = solm.grid_spec
+    return np.isfinite(solm.channel("q_n")).reshape(len(g.z_levels), g.yaw_bins, g.ny, g.nx).any(axis=1)
+
+
+def level_spacing(g) -> float:
+    """The spacing of an aerial grid's levels (its cell edge with one level)."""
+    return float(np.diff(g.z_levels).mean()) if len(g.z_levels) > 1 else g.res
+
+
+def clear_moves(solm, esdf, clearance: float) -> np.ndarray:
+    """uint8 (cells * 26): whether each move's segment from a free cell's centre of the r3yaw
+    ``solm`` keeps ``clearance`` on the ESDF, moves in the search's order (dz, dy, dx =
+    -1..1, x fastest)."""
+    g = solm.grid_spec
+    traversable = free_volume(solm)
+    dz = level_spacing(g)
     iz, iy, ix = np.nonzero(traversable)
     centres = np.column_stack([g.xs()[ix], g.ys()[iy], np.asarray(g.z_levels, dtype=np.float64)[iz]])
     out = np.zeros((traversable.size, 26), dtype=np.uint8)
@@ -114,11 +129,13 @@ def plan_flight_path(
     quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
     esdf=None,
     clearance: float = 0.0,
+    move_free: np.ndarray | None = None,
 ) -> FlightPath:
     """The front-end path on ``solm`` (an r3yaw Solm) from ``start`` (x, y, z, yaw) to
     ``goal`` (x, y, z[, yaw]) with the guidance section (metric, weight, power,
     turn_radius) and the quadrotor's limits (vmax, omega_max); ``esdf`` (a VolumeField,
-    None: no check) and ``clearance`` (m) for the moves' segments. A start or goal outside
+    None: no check) and ``clearance`` (m) for the moves' segments, or their flags
+    ``move_free`` computed once (:func:`clear_moves`; a replanner's). A start or goal outside
     the grid, in an obstacle cell, or with no path between them is an Lf3pmError in one line."""
     g = solm.grid_spec
     if g.space is not Space.R3YAW:
@@ -136,10 +153,11 @@ def plan_flight_path(
     metric = guidance.metric
     values = np.zeros(g.shape) if metric == "none" else solm.channel(metric)
     layer = cost_from_values(values, metric, degenerate=degenerate, power=guidance.power)
-    per_bin = layer.cost.reshape(nz, bins, g.ny, g.nx)
-    evaluated = np.isfinite(per_bin)
-    traversable = evaluated.any(axis=1)
-    volume = np.where(traversable, np.nanmin(np.where(evaluated, per_bin, np.inf), axis=1), 0.0)
+    # Where the SOLM evaluated the pose (not an obstacle), whatever the guidance channel.
+    evaluated = np.isfinite(solm.channel("q_n")).reshape(nz, bins, g.ny, g.nx)
+    per_bin = np.where(evaluated, layer.cost.reshape(nz, bins, g.ny, g.nx), np.inf)
+    traversable = free_volume(solm)
+    volume = np.where(traversable, np.min(per_bin, axis=1), 0.0)
     cells = []
     for name, point in (("start", start), ("goal", goal)):
         ix, iy = g.columns(point[0], point[1])
@@ -151,8 +169,9 @@ def plan_flight_path(
         if not traversable[iz, iy, ix]:
             raise Lf3pmError(f"the {name} {tuple(round(float(v), 3) for v in point[:3])} lies in an obstacle cell")
         cells.append((iz * g.ny + int(iy)) * g.nx + int(ix))
-    dz = float(np.diff(g.z_levels).mean()) if nz > 1 else g.res
-    move_free = None if esdf is None else clear_moves(g, traversable, dz, esdf, clearance)
+    dz = level_spacing(g)
+    if move_free is None and esdf is not None:
+        move_free = clear_moves(solm, esdf, clearance)
     params = _core.SearchParams()
     params.weight = float(guidance.weight)
     result = _core.volume_search(
@@ -178,7 +197,7 @@ def plan_flight_path(
     positions[0], positions[-1] = start[:3], goal[:3]
     lengths = np.linalg.norm(np.diff(positions, axis=0), axis=1)
     step = 2 * math.pi / bins
-    costs = np.where(evaluated[iz, :, iy, ix], per_bin[iz, :, iy, ix], np.inf)
+    costs = per_bin[iz, :, iy, ix]
     max_turns = np.floor(quadrotor.omega_max * lengths / quadrotor.vmax / step + 1e-9).astype(np.int64)
     start_bin = int(round((start[3] % (2 * math.pi)) / step)) % bins
     goal_bin = int(round((goal[3] % (2 * math.pi)) / step)) % bins if goal.shape == (4,) else None

@@ -24,12 +24,16 @@ from lf3pm.config import DEFAULTS, GuidanceConfig, QuadrotorConfig
 from lf3pm.errors import Lf3pmError
 from lf3pm.flight import Quadrotor
 from lf3pm.planner.cost_map import cost_from_values
-from lf3pm.planner.flight_path import FlightPath, plan_flight_path
+from lf3pm.planner.flight_path import FlightPath, clear_moves, plan_flight_path
 
 #: Samples a second on which the limits are checked (as for ground robots).
 CHECK_RATE = 1000.0
 #: Edge of the flight ESDF's voxels (m).
 ESDF_RES = 0.2
+#: Relative precision of the time scaling's factor (a 50 m flight: 18 ms longer at most).
+SCALE_TOLERANCE = 1e-3
+#: Samples a second of the time scaling's bisection (the result is then checked at CHECK_RATE).
+SEARCH_RATE = 100.0
 #: Weight of the yaw's jerk against the position's in the energy.
 YAW_ENERGY = 0.1
 
@@ -95,7 +99,8 @@ class FlightPlan:
     """A planned flight: the front end's ``path``, the ``trajectory``, the ``time_scale``
     applied after optimisation, the largest ratio to each limit on the 1 kHz samples
     (``limits``; clearance: r_safe over the least distance to the map), the objective's
-    sampled ``terms``, the optimiser's iterations, status and reason, the ``planner``
+    sampled ``terms``, the optimiser's iterations, status and reason, the ``objective`` at
+    its optimum (before time scaling), the ``planner``
     (:data:`PLANNERS`) and the seconds each stage took."""
 
     path: FlightPath
@@ -106,6 +111,7 @@ class FlightPlan:
     iterations: int
     status: str
     reason: str
+    objective: float = math.nan
     planner: str = "joint"
     seconds: dict = field(default_factory=dict)
 
@@ -122,6 +128,7 @@ class FlightPlan:
             "iterations": self.iterations,
             "status": self.status,
             "reason": self.reason,
+            "objective": self.objective,
             "planner": self.planner,
             **{f"{name}_s": value for name, value in self.seconds.items()},
         }
@@ -178,7 +185,7 @@ def guidance_field(solm, guidance: GuidanceConfig) -> _core.VolumeField:
     )
 
 
-def _initial_guess(path: FlightPath, piece_length: float, vmax: float):
+def initial_guess(path: FlightPath, piece_length: float, vmax: float):
     """Waypoints (4 x (N - 1)) every ``piece_length`` metres along the front-end path (its
     yaw unwrapped) and durations at half the speed limit."""
     points = np.column_stack([path.positions, path.yaws])
@@ -193,30 +200,40 @@ def _initial_guess(path: FlightPath, piece_length: float, vmax: float):
 def within_limits(trajectory: FlightTrajectory, quad: Quadrotor, esdf, r_safe: float, rate: float = CHECK_RATE):
     """The trajectory stretched uniformly in time until speed, body rate, tilt and thrust
     hold on samples at ``rate`` Hz: (trajectory, factor, the largest ratio to each limit,
-    clearance r_safe / least distance)."""
+    clearance r_safe / least distance). Flown s times slower, the speed falls as 1 / s and
+    the body rate, the tilt and the thrust's departure from hover about as fast or faster,
+    so s = the largest ratio nearly always holds (else it doubles); bisection on samples at
+    :data:`SEARCH_RATE` Hz then finds the least factor to :data:`SCALE_TOLERANCE`, and the
+    factor grows by that tolerance until the samples at ``rate`` Hz hold too."""
 
-    def ratios(traj):
-        s = traj.sample(rate)
+    def ratios(traj, hz):
+        s = traj.sample(hz)
         att = quad.attitudes(s["velocity"], s["acceleration"], s["jerk"], s["yaw"], s["yaw_rate"])
         return quad.limit_ratios(s["velocity"], att), s
 
+    def holds(factor, hz):
+        return max(ratios(trajectory.time_scaled(factor), hz)[0].values()) <= 1.0
+
     factor = 1.0
-    current, s = ratios(trajectory)
+    current, s = ratios(trajectory, rate)
     if max(current.values()) > 1.0:
-        low, high = 1.0, 1.0
-        while max(ratios(trajectory.time_scaled(high))[0].values()) > 1.0:
+        # A hair above the largest ratio: at exactly that factor the speed lands on its limit
+        # give or take rounding.
+        low, high = 1.0, max(current.values()) * (1.0 + SCALE_TOLERANCE)
+        while not holds(high, SEARCH_RATE):
             low, high = high, 2.0 * high
             if high > 1e3:
                 raise Lf3pmError("no time scaling brings the flight within its limits (check thrust_min/max)")
-        for _ in range(30):  # bisection to 1e-9 relative
+        while high - low > SCALE_TOLERANCE * low:
             mid = 0.5 * (low + high)
-            if max(ratios(trajectory.time_scaled(mid))[0].values()) > 1.0:
-                low = mid
-            else:
-                high = mid
+            low, high = (low, mid) if holds(mid, SEARCH_RATE) else (mid, high)
         factor = high
+        while True:
+            current, s = ratios(trajectory.time_scaled(factor), rate)
+            if max(current.values()) <= 1.0:
+                break
+            factor *= 1.0 + SCALE_TOLERANCE
         trajectory = trajectory.time_scaled(factor)
-        current, s = ratios(trajectory)
     distance, _ = esdf.sample(np.ascontiguousarray(s["position"]), np.zeros(len(s["t"])))
     current["clearance"] = float(r_safe / max(distance.min(), 1e-9))
     return trajectory, factor, current
@@ -229,6 +246,118 @@ PLANNERS = ("joint", "velocity_yaw", "yaw_only")
 #: Weight of the yaw-along-velocity term of the baselines (per (m/s)^2 of lateral speed in
 #: the heading's frame: at 3 m/s a crosswise heading costs 90 s of flight a second).
 W_HEADING = 10.0
+
+
+class FlightPlanner:
+    """Flights on one r3yaw SOLM over its map: the ESDF and the guidance field are built
+    once, so that replanning from a new start costs only the search and the optimisation.
+    ``world_points``: the map (N x 3); the guidance and quadrotor sections as in
+    :func:`plan_flight`."""
+
+    def __init__(
+        self,
+        solm,
+        world_points: np.ndarray,
+        *,
+        guidance: GuidanceConfig = DEFAULTS.guidance,
+        quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
+    ):
+        self.solm, self.guidance = solm, guidance
+        self.quad = quadrotor if isinstance(quadrotor, Quadrotor) else Quadrotor.from_config(quadrotor)
+        began = time.perf_counter()
+        g = solm.grid_spec
+        levels = np.asarray(g.z_levels)
+        x0, y0, x1, y1 = g.bounds
+        margin = 1.0
+        self.esdf = flight_esdf(
+            np.asarray(world_points, dtype=np.float64),
+            (x0 - margin, y0 - margin, levels.min() - margin),
+            (x1 + margin, y1 + margin, levels.max() + margin),
+        )
+        self.field = guidance_field(solm, guidance)
+        self.r_safe = float(solm.attrs.get("robot_radius", _core.FlightWeights().r_safe))
+        # The ESDF is conservative by half a voxel diagonal (flight_esdf); the front end's
+        # cells are checked exactly by the SOLM, so its moves ask the voxels' own distance:
+        # a wall across a move still stops it, a wall half a voxel nearer than exact does not.
+        self.front_clearance = max(0.0, self.r_safe - 0.5 * math.sqrt(3) * ESDF_RES)
+        self.move_free = clear_moves(solm, self.esdf, self.front_clearance)
+        self.setup_s = time.perf_counter() - began
+
+    def problem(self, w_q: float, w_heading: float, head, tail, q, T, rho_T: float, w_energy: float):
+        """The back end's objective (a C++ FlightProblem) with guidance weight ``w_q``,
+        heading weight ``w_heading``, head and tail states (4 x 3), initial waypoints (4 x
+        (N - 1)) and durations (N) on this planner's fields."""
+        weights = _core.FlightWeights()
+        weights.w_q, weights.w_heading, weights.r_safe = w_q, w_heading, self.r_safe
+        return _core.FlightProblem(
+            self.quad.params(),
+            self.quad.limits(),
+            weights,
+            self.field,
+            self.esdf,
+            rho_T,
+            w_energy,
+            YAW_ENERGY,
+            head,
+            tail,
+            q,
+            T,
+        )
+
+    def plan(
+        self,
+        start,
+        goal,
+        *,
+        planner: str = "joint",
+        rho_T: float = 1.0,
+        w_energy: float = 1e-2,
+        piece_length: float = 2.0,
+        check_rate: float = CHECK_RATE,
+    ) -> FlightPlan:
+        """A flight from ``start`` (x, y, z, yaw) to ``goal`` (x, y, z[, yaw]) by
+        ``planner`` (:func:`plan_flight`)."""
+        if planner not in PLANNERS:
+            raise Lf3pmError(f"unknown flight planner {planner!r}; use one of {', '.join(PLANNERS)}")
+        began = time.perf_counter()
+        guidance, quad = self.guidance, self.quad
+        perceptive = planner == "joint"
+        front = guidance if perceptive else guidance.model_copy(update={"metric": "none"})
+        path = plan_flight_path(self.solm, start, goal, guidance=front, quadrotor=quad, move_free=self.move_free)
+        searched = time.perf_counter()
+        waypoints, durations = initial_guess(path, piece_length, quad.vmax)
+        if not perceptive:
+            waypoints[3] = _heading_yaws(path, waypoints)
+        head, tail = np.zeros((4, 3)), np.zeros((4, 3))
+        head[:, 0] = [*path.positions[0], path.yaws[0]]
+        tail[:, 0] = [*path.positions[-1], path.yaws[-1]]
+
+        def problem(w_q, w_heading, q, T):
+            return self.problem(w_q, w_heading, head, tail, q, T, rho_T, w_energy)
+
+        w_q = guidance.weight * rho_T if guidance.metric != "none" else 0.0
+        flight = problem(w_q if perceptive else 0.0, 0.0 if perceptive else W_HEADING, waypoints, durations)
+        out = flight.optimize(_core.trajectory_lbfgs())
+        x = np.asarray(out["x"])
+        if planner == "yaw_only":
+            flight, x, out = _yaw_only(problem, w_q, flight, x)
+        coefficients, durations = flight.trajectory(x)
+        trajectory = FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
+        optimized = time.perf_counter()
+        trajectory, factor, limits = within_limits(trajectory, quad, self.esdf, self.r_safe, check_rate)
+        return FlightPlan(
+            path=path,
+            trajectory=trajectory,
+            time_scale=factor,
+            limits=limits,
+            terms=dict(out["terms"]),
+            iterations=int(out["iterations"]),
+            status=str(out["status"]),
+            reason=str(out["reason"]),
+            objective=float(out["f"]),
+            planner=planner,
+            seconds={"search": searched - began, "optimize": optimized - searched},
+        )
 
 
 def plan_flight(
@@ -251,67 +380,13 @@ def plan_flight(
     ``joint`` optimises position and yaw on the guidance; ``velocity_yaw`` takes the
     shortest front-end path and no guidance, the yaw held along the velocity; ``yaw_only``
     is that flight with its yaw waypoints alone then optimised on the guidance (positions
-    and durations kept, then time-scaled to the limits). Single-threaded."""
-    if planner not in PLANNERS:
-        raise Lf3pmError(f"unknown flight planner {planner!r}; use one of {', '.join(PLANNERS)}")
-    quad = quadrotor if isinstance(quadrotor, Quadrotor) else Quadrotor.from_config(quadrotor)
-    began = time.perf_counter()
-    g = solm.grid_spec
-    levels = np.asarray(g.z_levels)
-    x0, y0, x1, y1 = g.bounds
-    margin = 1.0
-    esdf = flight_esdf(
-        np.asarray(world_points, dtype=np.float64),
-        (x0 - margin, y0 - margin, levels.min() - margin),
-        (x1 + margin, y1 + margin, levels.max() + margin),
+    and durations kept, then time-scaled to the limits). Single-threaded. Replanning on
+    one SOLM: :class:`FlightPlanner`."""
+    planner_ = FlightPlanner(solm, world_points, guidance=guidance, quadrotor=quadrotor)
+    plan = planner_.plan(
+        start, goal, planner=planner, rho_T=rho_T, w_energy=w_energy, piece_length=piece_length, check_rate=check_rate
     )
-    r_safe = float(solm.attrs.get("robot_radius", _core.FlightWeights().r_safe))
-    field_built = time.perf_counter()
-    perceptive = planner == "joint"
-    front = guidance if perceptive else guidance.model_copy(update={"metric": "none"})
-    path = plan_flight_path(solm, start, goal, guidance=front, quadrotor=quad, esdf=esdf, clearance=r_safe)
-    searched = time.perf_counter()
-    waypoints, durations = _initial_guess(path, piece_length, quad.vmax)
-    if not perceptive:
-        waypoints[3] = _heading_yaws(path, waypoints)
-    head, tail = np.zeros((4, 3)), np.zeros((4, 3))
-    head[:, 0] = [*path.positions[0], path.yaws[0]]
-    tail[:, 0] = [*path.positions[-1], path.yaws[-1]]
-    field = guidance_field(solm, guidance)
-
-    def problem(w_q: float, w_heading: float, q, T):
-        weights = _core.FlightWeights()
-        weights.w_q, weights.w_heading, weights.r_safe = w_q, w_heading, r_safe
-        return _core.FlightProblem(
-            quad.params(), quad.limits(), weights, field, esdf, rho_T, w_energy, YAW_ENERGY, head, tail, q, T
-        )
-
-    w_q = guidance.weight * rho_T if guidance.metric != "none" else 0.0
-    flight = problem(w_q if perceptive else 0.0, 0.0 if perceptive else W_HEADING, waypoints, durations)
-    out = flight.optimize(_core.trajectory_lbfgs())
-    x = np.asarray(out["x"])
-    if planner == "yaw_only":
-        flight, x, out = _yaw_only(problem, w_q, flight, x)
-    coefficients, durations = flight.trajectory(x)
-    trajectory = FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
-    optimized = time.perf_counter()
-    trajectory, factor, limits = within_limits(trajectory, quad, esdf, r_safe, check_rate)
-    return FlightPlan(
-        path=path,
-        trajectory=trajectory,
-        time_scale=factor,
-        limits=limits,
-        terms=dict(out["terms"]),
-        iterations=int(out["iterations"]),
-        status=str(out["status"]),
-        reason=str(out["reason"]),
-        planner=planner,
-        seconds={
-            "esdf": field_built - began,
-            "search": searched - field_built,
-            "optimize": optimized - searched,
-        },
-    )
+    return FlightPlan(**{**plan.__dict__, "seconds": {"setup": planner_.setup_s, **plan.seconds}})
 
 
 def _heading_yaws(path: FlightPath, waypoints: np.ndarray) -> np.ndarray:
@@ -352,5 +427,6 @@ def _yaw_only(problem, w_q: float, flight, x: np.ndarray):
         "iterations": int(result.nit),
         "status": "converged" if result.success else "stalled",
         "reason": str(result.message),
+        "f": float(result.fun),
     }
     return yawing, full, outcome
