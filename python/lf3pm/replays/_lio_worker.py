@@ -15,7 +15,9 @@ the class to run (lf3pm.replays.adapters: the interface), this module's own clas
 ``lf3pm.replays._lio_worker``; ``paths``: the parent's sys.path, where a plugin's module
 is found; ``install``: what to do when it does not import. ``lidar``: {"beams": the
 beams' elevations (rad), lowest first, or None for a non-repetitive sensor; "columns":
-rays per beam and scan}.
+rays per beam and scan; "extrinsic": the LiDAR's pose in the IMU's frame (4 x 4 nested
+lists; the identity where the IMU samples are in the LiDAR's frame, a flight's mount
+where they are the body's)}. Every pose a worker returns is the LiDAR's.
 """
 
 import importlib
@@ -33,7 +35,9 @@ _GENZ_SECTIONS = ("preprocess", "mapping", "adaptive_voxelization", "hybrid_metr
 
 
 class GenZ:
-    """GenZ-LIO (PyPI genz-lio): its pose is the IMU's at the scan's end."""
+    """GenZ-LIO (PyPI genz-lio): its pose is the LiDAR's at the scan's end (its IMU state
+    times the extrinsic, FAST-LIO's extrinsic_r and extrinsic_t: the LiDAR in the IMU's
+    frame)."""
 
     def __init__(self, sensor_range, threads, settings, lidar):
         import genz_lio
@@ -45,6 +49,8 @@ class GenZ:
         config.preprocess.lidar_type = genz_lio.LidarType.LIVOX
         config.preprocess.blind_min, config.preprocess.blind_max = sensor_range
         config.preprocess.point_filter_num = 1
+        extrinsic = np.asarray(lidar["extrinsic"], dtype=np.float64)
+        config.mapping.extrinsic_r, config.mapping.extrinsic_t = extrinsic[:3, :3], extrinsic[:3, 3]
         for section, values in settings.items():
             if section == "initial_covariance":
                 self._initial_covariance(dict(values))
@@ -137,8 +143,9 @@ class _Evalio:
 
 class Dlio(_Evalio):
     """DLIO (Direct LiDAR-Inertial Odometry) as evalio compiles it. DLIO deskews each
-    scan to its median return time and its pose is the sensor's there (the state it
-    reports after the scan)."""
+    scan to its median return time; the state it reports after the scan is its base
+    frame's there, which evalio makes the IMU's (the LiDAR at the extrinsic in it), so
+    the LiDAR's pose is that state times the extrinsic."""
 
     PIPELINE, LABEL = "DLIO", "DLIO"
 
@@ -148,7 +155,8 @@ class Dlio(_Evalio):
         self.settings = {**self.defaults, **settings}
         self.pipeline.set_params(self.settings)
         self.pipeline.set_imu_params(types.ImuParams(gravity=np.array([0.0, 0.0, 9.81])))
-        self.pipeline.set_imu_T_lidar(types.SE3.identity())
+        self.extrinsic = np.asarray(lidar["extrinsic"], dtype=np.float64)
+        self.pipeline.set_imu_T_lidar(_se3(types, Rotation.from_matrix(self.extrinsic[:3, :3]), self.extrinsic[:3, 3]))
         self.pipeline.initialize()
         self.first_imu = None
 
@@ -168,6 +176,7 @@ class Dlio(_Evalio):
         _, se3 = estimates[-1]
         pose = np.eye(4)
         pose[:3, :3], pose[:3, 3] = se3.rot.to_mat(), se3.trans
+        pose = pose @ self.extrinsic
         # DLIO takes the IMU for still while it calibrates (imu_calib_time s from its first sample).
         calibrating = self.first_imu is None or median < self.first_imu + self.settings["imu_calib_time"]
         return [(pose, median, "initializing" if calibrating else "ok")]
@@ -204,10 +213,12 @@ class LioSam(_Evalio):
 
     Its initialisation divides by |e_z x a| (the still accelerometer's tilt from the
     vertical), NaN for an exactly level IMU, which a noise-free replay on flat ground
-    gives: lf3pm declares the IMU mounted TILT about x from the LiDAR, rotates the
-    samples into that frame (exact) and turns the estimated IMU poses back into the
-    LiDAR's. Gravity points down (evalio's ``ImuParams.down``): with it up, LIO-SAM took
-    the still accelerometer for a 2 g bias and reset its preintegration every scan."""
+    or a hover gives: lf3pm declares the IMU turned TILT about x from where it is (the
+    LiDAR's frame, or a flight's body at the extrinsic), rotates the samples into that
+    declared frame (exact) and turns the estimated declared-IMU poses back into the
+    LiDAR's (the gyro's turn over a scan too, by the extrinsic). Gravity points down
+    (evalio's ``ImuParams.down``): with it up, LIO-SAM took the still accelerometer for a
+    2 g bias and reset its preintegration every scan."""
 
     PIPELINE, LABEL, EXTRA = "LioSAM", "LIO-SAM", ("imu_densities",)
     _DTYPE = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("t", "<u4"), ("ring", "u1")])
@@ -230,10 +241,14 @@ class LioSam(_Evalio):
                 max_range=sensor_range[1],
             )
         )
-        mounting = Rotation.from_rotvec([self.TILT, 0.0, 0.0])  # the IMU's axes in the LiDAR's
-        self.lidar_R_imu = mounting.as_matrix()
-        qx, qy, qz, qw = mounting.inv().as_quat()  # imu_T_lidar
-        self.pipeline.set_imu_T_lidar(types.SE3(types.SO3(qx=qx, qy=qy, qz=qz, qw=qw), np.zeros(3)))
+        extrinsic = np.asarray(lidar["extrinsic"], dtype=np.float64)
+        tilt = Rotation.from_rotvec([self.TILT, 0.0, 0.0])  # the declared IMU's axes in the IMU's
+        self.imu_R_declared = tilt.as_matrix()
+        # The LiDAR in the declared IMU's frame: rotation and translation.
+        self.lidar_in_declared = (self.imu_R_declared.T @ extrinsic[:3, :3], self.imu_R_declared.T @ extrinsic[:3, 3])
+        self.lidar_R_imu = extrinsic[:3, :3].T
+        declared = tilt.inv() * Rotation.from_matrix(extrinsic[:3, :3])
+        self.pipeline.set_imu_T_lidar(_se3(types, declared, self.lidar_in_declared[1]))
         self.pipeline.initialize()
         self.beams = np.asarray(lidar["beams"], float)
         self.queue = []  # _Queued, in scan order
@@ -258,7 +273,8 @@ class LioSam(_Evalio):
             if self.imu_span is not None and self.imu_span[0] <= begin
             else "skipped: no IMU samples before the scan"
         )
-        self.queue.append(_Queued(median, status, True, begin + offsets[-1], _turn(imu, begin, median)))
+        turn = self.lidar_R_imu @ _turn(imu, begin, median) @ self.lidar_R_imu.T  # the IMU's turn, in the LiDAR's frame
+        self.queue.append(_Queued(median, status, True, begin + offsets[-1], turn))
         return self._report()
 
     def finish(self, imu):
@@ -281,7 +297,7 @@ class LioSam(_Evalio):
         first = imu[0, 0] if self.imu_span is None else self.imu_span[0]
         self.imu_span = (first, imu[-1, 0])
         rotated = imu.copy()
-        rotated[:, 1:7] = (imu[:, 1:7].reshape(-1, 2, 3) @ self.lidar_R_imu).reshape(-1, 6)  # R^T v per row
+        rotated[:, 1:7] = (imu[:, 1:7].reshape(-1, 2, 3) @ self.imu_R_declared).reshape(-1, 6)  # R^T v per row
         _add_imu(self.pipeline, self.types, rotated)
 
     def _report(self, flush=False):
@@ -306,11 +322,19 @@ class LioSam(_Evalio):
         return results
 
     def _estimate(self):
-        """LIO-SAM's LiDAR pose (4, 4) after the scan it processed last."""
+        """LIO-SAM's LiDAR pose (4, 4) after the scan it processed last (evalio reports
+        the declared IMU's)."""
         _, se3 = self.pipeline.saved_estimates()[-1]
+        rotation, translation = self.lidar_in_declared
         pose = np.eye(4)
-        pose[:3, :3], pose[:3, 3] = se3.rot.to_mat() @ self.lidar_R_imu.T, se3.trans
+        pose[:3, :3], pose[:3, 3] = se3.rot.to_mat() @ rotation, se3.rot.to_mat() @ translation + se3.trans
         return pose
+
+
+def _se3(types, rotation, translation):
+    """evalio's SE3 of a scipy Rotation and a translation (3,)."""
+    qx, qy, qz, qw = rotation.as_quat()
+    return types.SE3(types.SO3(qx=qx, qy=qy, qz=qz, qw=qw), np.array(translation, dtype=np.float64))
 
 
 def _turn(imu, begin, end):

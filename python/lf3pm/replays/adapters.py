@@ -11,7 +11,8 @@ party's (the entry-point group ``lf3pm.odometries``: registry.py, docs/api.md) a
 registered the same way.
 
 The worker-side class (``worker``: "module:Class") is constructed in the child as
-``Class(sensor_range, threads, settings, lidar)`` and called ``scan(points, begin, end,
+``Class(sensor_range, threads, settings, lidar)`` (``lidar``: the sensor's rings and the
+LiDAR's pose in the IMU's frame) and called ``scan(points, begin, end,
 offsets, imu)`` per scan and ``finish(imu)`` once (_lio_worker.py says what each gets
 and returns). Only the child imports it: GenZ-LIO is GPL-2.0-only and lf3pm (BSD) runs
 it in that separate process only.
@@ -57,6 +58,10 @@ class Odometry:
     loses: ClassVar[dict] = {}
     #: The sensors ``auto`` picks it for, by whether they spin (lf3pm's own only).
     auto_for: ClassVar[tuple] = ()
+    #: Whether its worker places the LiDAR where ``lidar["extrinsic"]`` says (the LiDAR's
+    #: pose in the IMU's frame): without it, run_lio refuses IMU samples that are not in
+    #: the LiDAR's frame (a flight's, from the body).
+    takes_extrinsic: ClassVar[bool] = False
 
     @classmethod
     def install_hint(cls) -> str:

@@ -42,6 +42,7 @@ class Dlio(EvalioOdometry):
     worker = f"{WORKER_MODULE}:Dlio"
     Settings = DlioSettings
     auto_for = (True,)
+    takes_extrinsic = True
     loses = {
         False: "DLIO loses track of a non-repetitive (Livox) sensor, whose 0.1 s scans cover a "
         "part of its pattern (Mid-70: 0.1-3 m APE where GenZ-LIO holds 0.4-4 cm; docs/lio.md, "

@@ -8,9 +8,11 @@ be set. docs/lio.md has the measurements behind each setting.
 Conventions (GenZ-LIO 0.1.1, read from its source): IMU rows t, ax, ay, az, gx, gy, gz in
 s, m/s^2 and rad/s, each scan given the samples with t in (previous scan end, scan end];
 per-point times are float32 offsets in seconds from the earliest return (absolute times
-in float32 would lose milliseconds); the pose is the IMU's at the scan end in the
-odometry's frame, which is the IMU's while GenZ-LIO initialises on its first 20+ IMU
-samples (it takes the sensor to be still then). LiDAR-IMU extrinsic: identity.
+in float32 would lose milliseconds); the pose (``lidar_pose``) is the LiDAR's at the scan
+end in the odometry's frame, which is the IMU's while GenZ-LIO initialises on its first
+20+ IMU samples (it takes the sensor to be still then). LiDAR-IMU extrinsic: the IMU
+samples' (identity for a ground robot's, a flight's mount), as its extrinsic_r and
+extrinsic_t (the LiDAR in the IMU's frame), not estimated online.
 """
 
 from __future__ import annotations
@@ -72,6 +74,7 @@ class GenZ(Odometry):
     install = "pip install 'lf3pm[lio]' (wheels for Python 3.8-3.12)"
     Settings = GenzSettings
     auto_for = (False,)
+    takes_extrinsic = True
     #: The version lf3pm's build of GenZ-LIO reports (third_party/genz_lio); PyPI's wheel
     #: reports :attr:`version` and runs at GenZ-LIO's own initial covariance, with a warning.
     build = "0.1.1+lf3pm.1"

@@ -2,15 +2,19 @@
 and bias random walk from a datasheet-like preset (docs/lio.md).
 
 Gravity: g_world = (0, 0, -GRAVITY), GRAVITY = 9.81 m/s^2 (also the g that
-converts a datasheet's micro-g). The IMU frame is the sensor frame, whose
-orientation R (sensor to world) is the motion's pose. At sample time t_k the
-IMU reads
+converts a datasheet's micro-g, and the flatness map's). At sample time t_k the IMU,
+of orientation R (IMU to world), reads
 
     accel_k = R^T (a_world - g_world) + b_a(t_k) + n_a,k    (specific force, m/s^2)
-    gyro_k  = R^T omega_world       + b_g(t_k) + n_g,k    (rad/s)
+    gyro_k  = omega_imu               + b_g(t_k) + n_g,k    (rad/s)
 
-so a level IMU at rest reads accel (0, 0, +9.81). omega_world = (0, 0,
-yaw_rate): the robot is level (interfaces: roll = pitch = 0).
+so a level IMU at rest reads accel (0, 0, +9.81). On a ground robot the IMU frame
+is the sensor frame: R is the motion's pose, a_world the sensor's acceleration and
+omega_imu = R^T (0, 0, yaw_rate) (the robot is level: roll = pitch = 0). In a
+flight (flight_motion.py) the IMU is the body's, at its origin: R, a_world and
+omega_imu are the flatness map's exact attitude, acceleration and body rates, and
+the LiDAR sits in its frame at the mount (ImuSamples.extrinsic, which the LIOs are
+given).
 
 Noise, per axis, from a continuous-time model sampled at ``rate`` f = 1/dt
 (the conventions of Kalibr and of the IMU noise model in most VIO/LIO work):
@@ -123,10 +127,12 @@ class ImuSamples:
     """IMU samples on the motion's clock.
 
     ``t`` (K,) s, increasing; ``accel`` (K, 3) specific force in m/s^2 in the
-    IMU (= sensor) frame, (0, 0, +9.81) when level at rest; ``gyro`` (K, 3)
-    rad/s in the IMU frame. ``accel_bias`` and ``gyro_bias`` (K, 3): the biases
-    the samples carry (zero without noise); ``preset`` (the noise model),
-    ``seed``, ``rate``, ``noise``: how they were made.
+    IMU frame, (0, 0, +9.81) when level at rest; ``gyro`` (K, 3) rad/s in the IMU
+    frame. ``accel_bias`` and ``gyro_bias`` (K, 3): the biases the samples carry
+    (zero without noise); ``preset`` (the noise model), ``seed``, ``rate``,
+    ``noise``: how they were made. ``extrinsic`` (4, 4): the LiDAR's pose in the
+    IMU frame (identity on a ground robot, whose IMU frame is the sensor's; a
+    flight's mount).
     """
 
     t: np.ndarray = field(repr=False)
@@ -138,6 +144,7 @@ class ImuSamples:
     seed: int
     rate: float
     noise: bool
+    extrinsic: np.ndarray = field(default_factory=lambda: np.eye(4), repr=False)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -160,8 +167,9 @@ def simulate_imu(
     noise: bool = DEFAULTS.replay.imu_noise,
 ) -> ImuSamples:
     """IMU samples every 1/``rate`` s over [motion.t0, motion.t1] (module
-    docstring for the model). ``motion`` needs t0, t1, acceleration(t),
-    yaw_rate(t) and pose(t) (lf3pm.validation's Motion). ``noise`` False:
+    docstring for the model). ``motion`` needs t0, t1 and either
+    imu_states(t) and extrinsic (a flight: FlightMotion) or acceleration(t),
+    yaw_rate(t) and pose(t) (a ground robot: Motion). ``noise`` False:
     the exact specific force and angular rate. Raises Lf3pmError for a bad
     rate, preset or seed, a motion shorter than one sample interval or one
     that returns malformed or non-finite values.
@@ -175,20 +183,10 @@ def simulate_imu(
     if not (math.isfinite(t0) and math.isfinite(t1) and t1 - t0 >= 1.0 / rate):
         raise Lf3pmError(f"the motion spans [{t0:g}, {t1:g}] s: shorter than one IMU interval (1/{rate:g} s)")
     t = sample_times(t0, t1, rate)
-    accel_world = np.asarray(motion.acceleration(t), dtype=np.float64)
-    yaw_rate = np.asarray(motion.yaw_rate(t), dtype=np.float64)
-    rotation = np.asarray(motion.pose(t), dtype=np.float64)[..., :3, :3]
-    if accel_world.shape != (len(t), 3) or yaw_rate.shape != (len(t),) or rotation.shape != (len(t), 3, 3):
-        raise Lf3pmError("the motion returned arrays of the wrong shape for the IMU sample times")
-    if not (np.all(np.isfinite(accel_world)) and np.all(np.isfinite(yaw_rate)) and np.all(np.isfinite(rotation))):
-        raise Lf3pmError("the motion returned non-finite accelerations, yaw rates or poses")
-
+    rotation, accel_world, gyro, extrinsic = _imu_motion(motion, t)
     gravity_world = np.array([0.0, 0.0, -GRAVITY])
-    omega_world = np.zeros((len(t), 3))
-    omega_world[:, 2] = yaw_rate
     # R^T v for each sample: v @ R (row vectors).
     accel = np.einsum("kij,ki->kj", rotation, accel_world - gravity_world)
-    gyro = np.einsum("kij,ki->kj", rotation, omega_world)
     accel_bias = np.zeros_like(accel)
     gyro_bias = np.zeros_like(gyro)
     if noise:
@@ -208,7 +206,37 @@ def simulate_imu(
         seed=int(seed),
         rate=rate,
         noise=bool(noise),
+        extrinsic=extrinsic,
     )
+
+
+def _imu_motion(motion, t: np.ndarray) -> tuple:
+    """The IMU's orientation (K, 3, 3), its acceleration (K, 3, world) and rates (K, 3,
+    IMU frame) at ``t``, and the LiDAR's pose in its frame (4, 4), checked: a flight's
+    from its imu_states, a ground robot's from its sensor's pose and yaw rate."""
+    k = len(t)
+    states = getattr(motion, "imu_states", None)
+    if states is not None:
+        rotation, accel_world, gyro = (np.asarray(a, dtype=np.float64) for a in states(t))
+        extrinsic = np.array(motion.extrinsic, dtype=np.float64)
+    else:
+        accel_world = np.asarray(motion.acceleration(t), dtype=np.float64)
+        yaw_rate = np.asarray(motion.yaw_rate(t), dtype=np.float64)
+        if yaw_rate.shape != (k,):
+            raise Lf3pmError("the motion returned arrays of the wrong shape for the IMU sample times")
+        gyro = np.zeros((k, 3))
+        gyro[:, 2] = yaw_rate  # in the world frame until checked
+        rotation = np.asarray(motion.pose(t), dtype=np.float64)[..., :3, :3]
+        extrinsic = np.eye(4)
+    if accel_world.shape != (k, 3) or gyro.shape != (k, 3) or rotation.shape != (k, 3, 3):
+        raise Lf3pmError("the motion returned arrays of the wrong shape for the IMU sample times")
+    if not (np.all(np.isfinite(accel_world)) and np.all(np.isfinite(gyro)) and np.all(np.isfinite(rotation))):
+        raise Lf3pmError("the motion returned non-finite accelerations, rates or poses")
+    if extrinsic.shape != (4, 4) or not np.all(np.isfinite(extrinsic)):
+        raise Lf3pmError(f"the motion's extrinsic must be a finite 4 x 4 matrix, got shape {extrinsic.shape}")
+    if states is None:
+        gyro = np.einsum("kij,ki->kj", rotation, gyro)  # R^T (0, 0, yaw rate): into the sensor frame
+    return rotation, accel_world, gyro, extrinsic
 
 
 def _random_walk(rng: np.random.Generator, count: int, step: float) -> np.ndarray:

@@ -112,9 +112,12 @@ def run_lio(
     sensor frame at their firing times and ``stamps`` (H,) absolute firing times,
     non-decreasing, <= end; ends increasing) and ``imu`` (ImuSamples: t, accel, gyro on
     the same clock, covering the first scan's end; or an iterable of such chunks in time
-    order). Both are streamed: a scan is taken when the odometry is ready for it and the
-    IMU samples up to its end with it, so memory stays at a few scans (ends checked as
-    they come). ``sensor`` gives the range limits.
+    order, in the LiDAR's frame). Where the IMU is not at the LiDAR (a flight's, in the
+    body), ``imu.extrinsic`` (ImuSamples') gives the LiDAR's pose in the IMU's frame, and
+    the odometry is told it (Odometry.takes_extrinsic). Both are streamed: a scan is
+    taken when the odometry is ready for it and the IMU samples up to its end with it, so
+    memory stays at a few scans (ends checked as they come). ``sensor`` gives the range
+    limits.
     ``initial_pose`` (a pose lf3pm.pose accepts): the true pose at the first scan; the
     sensor must be still while the odometry initialises (Odometry.still_for).
     ``threads``: the odometry's OpenMP threads (1: deterministic). ``params``: the
@@ -129,6 +132,12 @@ def run_lio(
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise Lf3pmError(f"threads must be an integer >= 1, got {threads!r}")
     samples = _ImuRows(imu)
+    extrinsic = _imu_extrinsic(imu)
+    if not adapter.takes_extrinsic and not np.array_equal(extrinsic, np.eye(4)):
+        raise Lf3pmError(
+            f"{adapter.name} takes no LiDAR-IMU extrinsic, and these IMU samples are not in the LiDAR's "
+            "frame (a flight's IMU is the body's): run one that does (genz, dlio, liosam)"
+        )
     scans = iter(scans)
     first = next(scans, None)
     if first is None:
@@ -153,8 +162,9 @@ def run_lio(
         finally:
             os.close(reply_write)
         with os.fdopen(reply_read, "rb") as replies:
+            lidar = {**lidar_geometry(sensor), "extrinsic": extrinsic.tolist()}
             times, poses, status, seconds, version = _drive(
-                child, replies, log, itertools.chain([first], scans), samples, sensor, threads, adapter, settings
+                child, replies, log, itertools.chain([first], scans), samples, sensor, lidar, threads, adapter, settings
             )
         log.seek(0)
         messages += [line for line in log.read().decode(errors="replace").splitlines() if line.strip()]
@@ -162,6 +172,8 @@ def run_lio(
     estimate = origin @ np.linalg.inv(poses[0]) @ poses
     lost = [k for k, s in enumerate(status) if s not in TRACKING + ("initializing",)]
     used = {"threads": threads, "blind_min": sensor.min_range, "blind_max": sensor.max_range}
+    if not np.array_equal(extrinsic, np.eye(4)):
+        used["extrinsic"] = extrinsic.tolist()
     used |= adapter.recorded(settings, version, messages)
     return LioEstimate(
         times=times,
@@ -177,9 +189,10 @@ def run_lio(
     )
 
 
-def _drive(child, replies, log, scans, samples, sensor, threads, spec: type[Odometry], settings):
+def _drive(child, replies, log, scans, samples, sensor, lidar, threads, spec: type[Odometry], settings):
     """Streams the scans, each with the IMU samples (``samples``: _ImuRows) after the
-    previous scan's end up to its own, to the worker and collects its poses and their times."""
+    previous scan's end up to its own, to the worker (``lidar``: what it is told of the
+    LiDAR) and collects its poses and their times."""
 
     def request(message):
         try:
@@ -211,7 +224,7 @@ def _drive(child, replies, log, scans, samples, sensor, threads, spec: type[Odom
                 (float(sensor.min_range), float(sensor.max_range)),
                 threads,
                 settings,
-                lidar_geometry(sensor),
+                lidar,
                 list(sys.path),
                 spec.install_hint(),
             )
@@ -260,6 +273,29 @@ def lidar_geometry(sensor: Sensor) -> dict:
     _, elevation = sensor.angles()
     beams = int(rings.max()) + 1
     return {"beams": np.sort(elevation[:beams]).tolist(), "columns": sensor.num_rays // beams}
+
+
+def _imu_extrinsic(imu) -> np.ndarray:
+    """The LiDAR's pose in the IMU's frame (4, 4) that ``imu`` carries (ImuSamples'
+    ``extrinsic``), else the identity (IMU data in the LiDAR's frame, as run_lio's chunks
+    are). Raises Lf3pmError for one that is not a rigid transform."""
+    value = getattr(imu, "extrinsic", None)
+    if value is None:
+        return np.eye(4)
+    try:
+        matrix = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        matrix = np.empty(0)
+    rigid = (
+        matrix.shape == (4, 4)
+        and np.all(np.isfinite(matrix))
+        and np.allclose(matrix[:3, :3].T @ matrix[:3, :3], np.eye(3), atol=1e-9)
+        and np.linalg.det(matrix[:3, :3]) > 0
+        and np.array_equal(matrix[3], [0.0, 0.0, 0.0, 1.0])
+    )
+    if not rigid:
+        raise Lf3pmError("the IMU's extrinsic must be a 4 x 4 rigid transform (the LiDAR's pose in the IMU's frame)")
+    return matrix
 
 
 class _ImuRows:

@@ -38,6 +38,7 @@ class LioSam(EvalioOdometry):
     worker = f"{WORKER_MODULE}:LioSam"
     Settings = LiosamSettings
     needs_rings = True
+    takes_extrinsic = True
 
     @classmethod
     def worker_settings(cls, settings: LiosamSettings, sensor, imu) -> dict:

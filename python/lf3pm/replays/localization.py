@@ -35,6 +35,13 @@ Per scan k (scans.py; scan k ends at t_k, its rays fire over the period before):
    With ``remap=False`` the registration is taken as it is (and the
    degeneracy still reported).
 
+**In flight** (a motion that moves in 6 DOF, ``spatial``: flight_motion.py) steps 1
+and 2 are spatial: the odometry's increment is the true SE(3) increment T_{k-1}^-1 T_k
+with its translation scaled by (1 + ``scale_error``) and its rotation turned about the
+vertical by the same heading noise (an odometry such as a visual-inertial one, whose
+scale and heading drift), and each return is deskewed by that increment's constant
+twist: exp((f - 1) xi) for the firing fraction f. Steps 3 and 4 are 6 DOF for either.
+
 A scan with fewer than ``min_points`` points after downsampling, or whose
 registration keeps fewer inliers, is skipped: the estimate is the prior.
 Registration runs on ``registration_threads`` threads (1: small_gicp reduces in
@@ -94,6 +101,21 @@ class WheelOdometry:
         noise = rng.normal(size=len(turn)) * self.yaw_noise * math.sqrt(period)
         return np.column_stack([local * (1.0 + self.scale_error), turn + noise])
 
+    def spatial_increments(self, truth: np.ndarray, period: float, seed: int) -> np.ndarray:
+        """Measured SE(3) increments (M - 1, 4, 4) between consecutive true poses ``truth``
+        (M, 4, 4) of a flight (module docstring): T_{k-1}^-1 T_k, its translation scaled by
+        (1 + scale_error), its rotation turned about the world's vertical by the heading
+        noise :meth:`increments` draws (the same stream)."""
+        from scipy.spatial.transform import Rotation
+
+        rng = np.random.default_rng(np.random.SeedSequence([int(seed), _NOISE_TAG]))
+        steps = np.linalg.inv(truth[:-1]) @ truth[1:]
+        noise = rng.normal(size=len(steps)) * self.yaw_noise * math.sqrt(period)
+        up = truth[:-1, 2, :3]  # R^T e3: the vertical in the earlier pose's frame
+        steps[:, :3, :3] = Rotation.from_rotvec(up * noise[:, None]).as_matrix() @ steps[:, :3, :3]
+        steps[:, :3, 3] *= 1.0 + self.scale_error
+        return steps
+
 
 def planar_exp(twist, s) -> tuple[np.ndarray, np.ndarray]:
     """exp(s xi) in SE(2) for the twist xi = (ux, uy, theta) and fractions s (n,):
@@ -125,6 +147,28 @@ def deskew(points: np.ndarray, fractions: np.ndarray, twist) -> np.ndarray:
     c, s = np.cos(phi), np.sin(phi)
     x, y = points[:, 0], points[:, 1]
     return np.column_stack([c * x - s * y + t[:, 0], s * x + c * y + t[:, 1], points[:, 2]])
+
+
+def spatial_deskew(points: np.ndarray, fractions: np.ndarray, increment: np.ndarray) -> np.ndarray:
+    """Returns (H, 3) in the frame of the scan's end, each point having been reported in
+    the frame of its firing at ``fractions`` (H,) of a period over which the sensor moved
+    by the SE(3) ``increment`` (4, 4) at a constant twist xi: exp((f - 1) xi) p."""
+    from scipy.spatial.transform import Rotation
+
+    xi = se3_log(increment)
+    rho, phi = xi[:3], xi[3:]
+    s = np.asarray(fractions, dtype=np.float64) - 1.0
+    # exp(s xi) = (R(s phi), V(s phi) s rho), V = I + a K + b K^2 with K = hat(s phi):
+    # a = (1 - cos th) / th^2 and b = (th - sin th) / th^3, by their series where th is small.
+    theta = np.abs(s) * np.linalg.norm(phi)
+    small = theta < 1e-4
+    safe = np.where(small, 1.0, theta)
+    a = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    b = np.where(small, 1.0 / 6.0 - theta**2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    k_rho = np.cross(phi, rho)
+    kk_rho = np.cross(phi, k_rho)
+    t = s[:, None] * rho + (a * s**2)[:, None] * k_rho + (b * s**3)[:, None] * kk_rho
+    return Rotation.from_rotvec(s[:, None] * phi).apply(points) + t
 
 
 def planar_matrix(dx: float, dy: float, dyaw: float) -> np.ndarray:
@@ -228,14 +272,16 @@ def localize(
     progress=None,
 ) -> Estimate:
     """Localizes along ``scans`` (a ScanStream: its ``truth`` gives the start and
-    the wheel odometry's true increments) on the prepared map ``target``
+    the wheel odometry's true increments, planar, or spatial where its motion is a
+    flight's) on the prepared map ``target``
     (module docstring) with ``settings``. ``progress``, if given, is called as
     progress(done, total). Returns the Estimate with per-scan degenerate directions and
     a report of the registrations (converged count, the largest deviation per scan)."""
     odometry = WheelOdometry(settings.scale_error, settings.yaw_noise)
     count = len(scans)
     truth = scans.truth
-    steps = odometry.increments(truth, scans.period, seed)
+    spatial = bool(getattr(scans.motion, "spatial", False))
+    steps = (odometry.spatial_increments if spatial else odometry.increments)(truth, scans.period, seed)
     sigma = sensor.range_noise_sigma
     estimate = np.empty((count, 4, 4))
     hits = np.zeros(count, dtype=np.int64)
@@ -245,9 +291,14 @@ def localize(
     for k, scan in enumerate(scans):
         hits[k] = len(scan.points)
         start = time.perf_counter()
-        step = (0.0, 0.0, 0.0) if k == 0 else tuple(steps[k - 1])
-        prior = truth[0] if k == 0 else estimate[k - 1] @ planar_matrix(*step)
-        points = deskew(scan.points, scan.timestamps, planar_log(*step))
+        if spatial:
+            step = np.eye(4) if k == 0 else steps[k - 1]
+            prior = truth[0] if k == 0 else estimate[k - 1] @ step
+            points = spatial_deskew(scan.points, scan.timestamps, step)
+        else:
+            step = (0.0, 0.0, 0.0) if k == 0 else tuple(steps[k - 1])
+            prior = truth[0] if k == 0 else estimate[k - 1] @ planar_matrix(*step)
+            points = deskew(scan.points, scan.timestamps, planar_log(*step))
         found = register_to_map(points, prior, target, sigma, settings)
         estimate[k] = found.pose
         if found.skipped:

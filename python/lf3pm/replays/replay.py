@@ -1,8 +1,9 @@
 """``replay``: a planned trajectory replayed with simulated sensors through a state
 estimator (a replay method: methods.py), scored against the truth (docs/replay.md).
 
-One scan stream (scans.py) along one motion (motion.py) feeds the method, which starts at
-the true first pose; every method's run becomes a :class:`ReplayResult`.
+One scan stream (scans.py) along one motion (a ground robot's, motion.py, or a
+quadrotor's flight, flight_motion.py) feeds the method, which starts at the true first
+pose; every method's run becomes a :class:`ReplayResult`.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import os
 from lf3pm.config import DEFAULTS, ReplayConfig, ScanConfig, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.map import Map, as_map
+from lf3pm.replays.flight_motion import FlightMotion
 from lf3pm.replays.lio import Lio
 from lf3pm.replays.methods import METHODS as _METHODS
 from lf3pm.replays.methods import ReplayMethod, replay_method
@@ -59,7 +61,7 @@ def replay(
     already (e.g. ``METHODS[name].from_config(config)``, ``Localization(section)``).
     ``map``: a Map or a map file. ``motion_or_csv``: a :class:`Motion`, the
     CSV ``lf3pm plan`` writes, or a planner Trajectory or Plan (the sensor
-    ``height`` m above the smooth ground).
+    ``height`` m above the smooth ground), or a quadrotor's :class:`FlightMotion`.
     ``sensor``: a preset name, YAML file or Sensor. ``seed``: the scans' range
     noise (scan k: stream k), the wheel odometry's and the IMU's noise.
     ``rate``: scans per second. ``noise``: range noise sigma (m; default the
@@ -78,12 +80,7 @@ def replay(
         "seed": int(seed),
         "noise": scans.noise,
         "noise_stream": "scan index",
-        "height": motion.height,
-        "ground": {
-            "cell": motion.ground.cell,
-            "smoothing": motion.ground.smoothing,
-            "max_step": motion.ground.max_step,
-        },
+        **_motion_params(motion),
         "span_s": [motion.t0, motion.t1],
     }
     prepared = chosen.prepare(map, threads, target)
@@ -170,22 +167,42 @@ def replay_bag(
 
     map = as_map(map, threads)
     motion = _motion(motion_or_csv, map, height)
+    if isinstance(motion, FlightMotion):  # the bag's truth and frames are a level robot's
+        raise Lf3pmError("replay_bag writes ground robots' replays only, not a flight's")
     scans = ScanStream(map, motion, resolve_sensor(sensor, rate), rate=rate, seed=seed, noise=noise, threads=threads)
     imu = (lio or Lio()).imu(motion, seed)
     return write_bag(path, scans, imu, progress=progress)
 
 
-def _motion(source, map: Map, height: float) -> Motion:
-    """The Motion of a Motion, a trajectory CSV, a planner Trajectory or a Plan (its
-    trajectory sampled at 100 Hz, as `lf3pm plan` writes its CSV)."""
-    if isinstance(source, Motion):
+def _motion_params(motion) -> dict:
+    """What a replay records of its motion: a flight's quadrotor (its mount too), or a
+    ground robot's sensor height and smooth ground."""
+    quadrotor = getattr(motion, "quadrotor", None)
+    if quadrotor is not None:
+        return {"flight": {"quadrotor": quadrotor.model_dump()}}
+    return {
+        "height": motion.height,
+        "ground": {
+            "cell": motion.ground.cell,
+            "smoothing": motion.ground.smoothing,
+            "max_step": motion.ground.max_step,
+        },
+    }
+
+
+def _motion(source, map: Map, height: float) -> Motion | FlightMotion:
+    """The motion of a Motion or a FlightMotion (itself), a trajectory CSV, a planner
+    Trajectory or a Plan (its trajectory sampled at 100 Hz, as `lf3pm plan` writes its
+    CSV)."""
+    if isinstance(source, (Motion, FlightMotion)):
         return source
     if isinstance(source, (str, os.PathLike)):
         return Motion.from_csv(source, map, height=height)
     trajectory = getattr(source, "trajectory", source)  # a Plan carries its Trajectory
     if not callable(getattr(trajectory, "sample", None)):
         raise Lf3pmError(
-            f"replay takes a Motion, a trajectory CSV, a Trajectory or a Plan, got {type(source).__name__}"
+            "replay takes a Motion, a FlightMotion, a trajectory CSV, a Trajectory or a Plan, "
+            f"got {type(source).__name__}"
         )
     s = trajectory.sample()  # at the CSV's rate (planner.trajectory.CSV_RATE)
     return Motion.from_arrays(s["t"], s["x"], s["y"], s["yaw"], s["vx"], s["vy"], s["omega"], map=map, height=height)
