@@ -63,7 +63,7 @@ SOLM = ["solm", "build", "{map}", "-o", "{tmp}/x.zarr"]
         (SOLM, ["--space", "r3", "--res", "1e-6"], "raise --max-cells"),
         (SOLM, ["--space", "se2", "--yaw-bins", "100000"], "--yaw-bins must be less than or equal to 3600"),
         (SOLM, ["--space", "se2", "--yaw-bins", "3600", "--res", "0.05"], "x 3600), more than 10,000,000"),
-        (SOLM, ["--space", "x2"], "--space must be 'r2', 'se2' or 'r3'"),
+        (SOLM, ["--space", "x2"], "--space must be 'r2', 'se2', 'r3' or 'r3yaw'"),
         (SOLM, ["--robot-radius", "nan"], "--robot-radius must be finite"),
         (SOLM, ["--ray-stride", "0"], "--ray-stride must be greater than or equal to 1"),
     ],

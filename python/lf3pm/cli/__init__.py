@@ -3,7 +3,19 @@ lines over the library (lf3pm.__main__ runs :func:`main` behind the core check).
 
 import sys
 
-from lf3pm.cli import audit, evaluate, experiment, info, plan, replay, run, sensors, solm, view  # noqa: F401  (they register their commands)
+from lf3pm.cli import (  # noqa: F401  (they register their commands)
+    audit,
+    evaluate,
+    experiment,
+    experiment_flight,
+    info,
+    plan,
+    replay,
+    run,
+    sensors,
+    solm,
+    view,
+)
 from lf3pm.cli._common import app, print_error
 
 
