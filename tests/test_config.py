@@ -121,7 +121,7 @@ def test_robot_and_guidance_from_a_file():
         ("scan: {seed: -1}\n", "c.yaml: scan.seed must be greater than or equal to 0, got -1"),
         ("scan: {bogus: 1}\n", "c.yaml: scan.bogus is not a parameter lf3pm knows"),
         ("bogus: {a: 1}\n", "c.yaml: bogus is not a parameter lf3pm knows"),
-        ("solm: {space: r4}\n", "c.yaml: solm.space must be 'r2', 'se2' or 'r3', got 'r4'"),
+        ("solm: {space: r4}\n", "c.yaml: solm.space must be 'r2', 'se2', 'r3' or 'r3yaw', got 'r4'"),
         ("metric: {dof: 2.5}\n", "c.yaml: metric.dof must be 3 or 6"),
         ("robot: {vmax_lon: 0}\n", "c.yaml: robot.vmax_lon must be greater than or equal to 0.001"),
         ("robot: {wheels: 4}\n", "c.yaml: robot.wheels is not a parameter lf3pm knows"),

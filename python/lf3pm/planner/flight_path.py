@@ -4,7 +4,7 @@ guidance cost at each cell's best yaw, then the yaw along that path by dynamic
 programming over the yaw bins, as fast as the quadrotor may turn.
 
 Given the map's ESDF (lf3pm.planner.flight_plan.flight_esdf), a move is also allowed only
-where its segment between the cell centres keeps ``clearance`` from the map's points
+where its segment between the cell centres keeps ``move_clearance`` from the map's points
 (sampled every ESDF voxel or finer): a thin wall between two free cell centres (the corner
 of a room, 1 m cells) is in neither cell.
 
@@ -128,13 +128,13 @@ def plan_flight_path(
     guidance: GuidanceConfig = DEFAULTS.guidance,
     quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
     esdf=None,
-    clearance: float = 0.0,
+    move_clearance: float | None = None,
     move_free: np.ndarray | None = None,
 ) -> FlightPath:
     """The front-end path on ``solm`` (an r3yaw Solm) from ``start`` (x, y, z, yaw) to
     ``goal`` (x, y, z[, yaw]) with the guidance section (metric, weight, power,
     turn_radius) and the quadrotor's limits (vmax, omega_max); ``esdf`` (a VolumeField,
-    None: no check) and ``clearance`` (m) for the moves' segments, or their flags
+    None: no check) and ``move_clearance`` (m; None: 0) for the moves' segments, or their flags
     ``move_free`` computed once (:func:`clear_moves`; a replanner's). A start or goal outside
     the grid, in an obstacle cell, or with no path between them is an Lf3pmError in one line."""
     g = solm.grid_spec
@@ -171,7 +171,7 @@ def plan_flight_path(
         cells.append((iz * g.ny + int(iy)) * g.nx + int(ix))
     dz = level_spacing(g)
     if move_free is None and esdf is not None:
-        move_free = clear_moves(solm, esdf, clearance)
+        move_free = clear_moves(solm, esdf, move_clearance or 0.0)
     params = _core.SearchParams()
     params.weight = float(guidance.weight)
     result = _core.volume_search(

@@ -25,6 +25,7 @@ from lf3pm.errors import Lf3pmError
 from lf3pm.flight import Quadrotor
 from lf3pm.planner.cost_map import cost_from_values
 from lf3pm.planner.flight_path import FlightPath, clear_moves, plan_flight_path
+from lf3pm.trajectory.trajectory import CSV_RATE
 
 #: Samples a second on which the limits are checked (as for ground robots).
 CHECK_RATE = 1000.0
@@ -50,7 +51,7 @@ class FlightTrajectory:
     def duration(self) -> float:
         return float(self.durations.sum())
 
-    def sample(self, rate: float = 100.0) -> dict:
+    def sample(self, rate: float = CSV_RATE) -> dict:
         """Samples every 1 / rate s and at the end: t, position (n, 3), velocity,
         acceleration, jerk (n, 3), yaw and yaw_rate (n)."""
         ends = np.concatenate([[0.0], np.cumsum(self.durations)])
@@ -77,7 +78,7 @@ class FlightTrajectory:
         powers = factor ** -np.arange(6)
         return FlightTrajectory(self.coefficients * powers[None, :, None], self.durations * factor)
 
-    def csv_bytes(self, quad: Quadrotor, rate: float = 100.0) -> bytes:
+    def csv_bytes(self, quad: Quadrotor, rate: float = CSV_RATE) -> bytes:
         """Samples at ``rate`` Hz as CSV: t, x, y, z, yaw, vx, vy, vz, yaw_rate, the body's
         attitude quaternion qw, qx, qy, qz (body to world) and thrust (N)."""
         import io
@@ -117,7 +118,7 @@ class FlightPlan:
 
     def summary(self) -> dict:
         """JSON-ready figures of the plan."""
-        samples = self.trajectory.sample(100.0)
+        samples = self.trajectory.sample(CSV_RATE)
         return {
             "duration_s": self.trajectory.duration,
             "trajectory_length_m": float(np.linalg.norm(np.diff(samples["position"], axis=0), axis=1).sum()),
