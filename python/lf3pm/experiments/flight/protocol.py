@@ -52,7 +52,7 @@ class FlightProtocol(Section):
     mount: str = Field("down20", description="Where it sits on the body (quadrotor.mount).")
     yaw_bins: int = Field(8, ge=1, le=360)
     ray_stride: int = Field(2, ge=1, le=100, description="SOLM builds cast every K-th column (docs/solm.md).")
-    odometries: list[str] = Field(default_factory=lambda: ["dlio", "liosam"], min_length=1)
+    odometries: list[str] = Field(default_factory=lambda: ["genz", "dlio"], min_length=1)
     seeds: int = Field(3, ge=1, le=100)
     pair_seed: int = Field(0, ge=0)
     risk: RiskRule = RiskRule()
@@ -65,7 +65,7 @@ class FlightProtocol(Section):
         return cls(
             name="flight-quick",
             maps=[FlightMap(scene="atrium", pairs=2, res=1.5, z_min=1.5, z_max=15.0, level_step=1.5, margin=1.5)],
-            odometries=["dlio"],
+            odometries=["genz"],
             seeds=1,
             ray_stride=4,
         )
