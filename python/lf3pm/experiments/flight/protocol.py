@@ -45,7 +45,7 @@ class FlightProtocol(Section):
             FlightMap(scene="drift", bounds=(-40.0, -6.0, 40.0, 20.0), z_max=3.0),
             FlightMap(scene="forest", bounds=(-25.0, -16.0, 25.0, 16.0), z_max=4.0),
             FlightMap(scene="bridge", bounds=(-30.0, -8.0, 30.0, 8.0), z_min=2.0, z_max=5.0),
-            FlightMap(scene="open_field", bounds=(-42.0, -8.0, 42.0, 16.0), z_max=4.0),
+            FlightMap(scene="open_field", bounds=(-42.0, -8.0, 42.0, 16.0), z_max=9.0),
         ]
     )
     sensor: str = Field("vlp16", description="The LiDAR (a preset or YAML).")
