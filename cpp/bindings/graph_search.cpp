@@ -15,6 +15,22 @@
 namespace nb = nanobind;
 using namespace nb::literals;
 
+namespace {
+
+// A search's result as the dict both searches return.
+nb::dict search_dict(lf3pm::SearchResult&& r) {
+  nb::dict out;
+  out["found"] = r.found;
+  out["cost"] = r.cost;
+  out["path"] = lf3pm::bindings::to_numpy(std::move(r.path));
+  out["expanded"] = r.expanded;
+  out["pushed"] = r.pushed;
+  out["heap_peak"] = r.heap_peak;
+  return out;
+}
+
+}  // namespace
+
 void bind_graph_search(nb::module_& m) {
   nb::class_<lf3pm::SearchParams>(m, "SearchParams", "Grid search parameters (the defaults).")
       .def(nb::init<>())
@@ -39,14 +55,9 @@ void bind_graph_search(nb::module_& m) {
           nb::gil_scoped_release release;
           r = lf3pm::grid_search(cost.data(), traversable.data(), grid, start, goal, params);
         }
-        nb::dict out;
-        out["found"] = r.found;
-        out["cost"] = r.cost;
-        out["path"] = lf3pm::bindings::to_numpy(std::move(r.path));
-        out["expanded"] = r.expanded;
-        out["pushed"] = r.pushed;
-        out["heap_peak"] = r.heap_peak;
-        out["relaxed_expanded"] = r.relaxed_expanded;
+        const auto relaxed = r.relaxed_expanded;
+        nb::dict out = search_dict(std::move(r));
+        out["relaxed_expanded"] = relaxed;
         return out;
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "layers"_a, "res"_a, "start"_a, "goal"_a,
@@ -72,14 +83,7 @@ void bind_graph_search(nb::module_& m) {
           r = lf3pm::volume_search(cost.data(), traversable.data(), grid, start, goal, params,
                                    move_free ? move_free->data() : nullptr);
         }
-        nb::dict out;
-        out["found"] = r.found;
-        out["cost"] = r.cost;
-        out["path"] = lf3pm::bindings::to_numpy(std::move(r.path));
-        out["expanded"] = r.expanded;
-        out["pushed"] = r.pushed;
-        out["heap_peak"] = r.heap_peak;
-        return out;
+        return search_dict(std::move(r));
       },
       "cost"_a.noconvert(), "traversable"_a.noconvert(), "nx"_a, "ny"_a, "nz"_a, "res"_a, "dz"_a, "start"_a, "goal"_a,
       "params"_a = lf3pm::SearchParams(), "move_free"_a = nb::none(),

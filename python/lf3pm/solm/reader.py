@@ -119,12 +119,7 @@ class Solm:
             k0 = k1 = np.zeros(np.broadcast(x, y).shape, dtype=np.int64)
             tk, step, fk = 0.0, 1.0, 0.0
         elif g.space is Space.SE2:
-            step = 2 * math.pi / g.yaw_bins
-            f = np.mod(yaw, 2 * math.pi) / step
-            ik = np.floor(f).astype(int)
-            tk = f - ik
-            k0, k1 = ik % g.yaw_bins, (ik + 1) % g.yaw_bins
-            fk = 1.0 if g.yaw_bins > 1 else 0.0
+            fk, k0, k1, tk, step = _yaw_weights(yaw, g.yaw_bins)
         else:
             levels = np.asarray(g.z_levels)
             zz = z[0] if z else np.float64(levels[0])
@@ -142,18 +137,22 @@ class Solm:
         return value, (grad[..., :2] if g.space is Space.R2 else grad)
 
 
+def _yaw_weights(yaw, bins: int):
+    """Linear interpolation between periodic yaw bins centred on k 2 pi / bins, as
+    axis_weights gives it along an axis: (1 or 0 with one bin, k0, k1, t, the bin width)."""
+    step = 2 * math.pi / bins
+    f = np.mod(yaw, 2 * math.pi) / step
+    k = np.floor(f).astype(int)
+    return (1.0 if bins > 1 else 0.0), k % bins, (k + 1) % bins, f - k, step
+
+
 def _query_r3yaw(g, data, x, y, yaw, z):
     """Solm.query on an r3yaw grid: bilinear in (x, y) on the four layers around (z,
     yaw), linear between them in z and periodic yaw."""
     levels = np.asarray(g.z_levels)
     dz = levels[1] - levels[0] if len(levels) > 1 else 1.0
     fz, z0, z1, tz = axis_weights(z, levels[0] - 0.5 * dz, dz, len(levels))
-    step = 2 * math.pi / g.yaw_bins
-    f = np.mod(yaw, 2 * math.pi) / step
-    ib = np.floor(f).astype(int)
-    tb = f - ib
-    b0, b1 = ib % g.yaw_bins, (ib + 1) % g.yaw_bins
-    fb = 1.0 if g.yaw_bins > 1 else 0.0
+    fb, b0, b1, tb, step = _yaw_weights(yaw, g.yaw_bins)
 
     def plane(iz, b):
         return bilinear(data, x, y, g.x0, g.y0, g.res, layer=iz * g.yaw_bins + b)
