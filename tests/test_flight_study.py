@@ -55,6 +55,7 @@ def test_the_analysis_compares_the_joint_plans_with_each_baseline_on_each_risk_g
     assert risky["time_overhead_c_over_a"] == pytest.approx(0.1)
     assert summary["maps"]["m"]["o"]["no_risk"]["c_vs_a"]["median_ratio"] == pytest.approx(1.0)
     assert summary["maps"]["all"] == summary["maps"]["m"] and summary["worst_limit_ratio"] == pytest.approx(0.9)
+    assert summary["maps"]["m"]["o"]["all"]["pairs"] == 5
     assert len(summary["failures"]) == 1  # apart from accuracy
 
 
