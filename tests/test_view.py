@@ -269,7 +269,7 @@ def test_an_r3_solm_is_shown_and_inspected_level_by_level(site, tmp_path):
     assert len(layer["centres"]) > 0 and np.all(layer["centres"][:, 2] == np.float32(1.5))
     viewer = serve(load_view_inputs(d / "map.npy", tmp_path / "r3.zarr"), port=free_port())
     try:
-        viewer.layer.value = 1
+        viewer.height.value = 1.5
         assert viewer.inspect(np.array([0.0, 0.0]))["pose"][2] == 1.5
     finally:
         viewer.stop()

@@ -1,5 +1,5 @@
-"""The page: a viser scene of the map, its SOLM, plans, replays and a recorded run, with the
-controls that query lf3pm (a cell's evaluation, plans between clicked poses, a recorded
+"""The page: a viser scene of the map, its SOLM, plans, flights, replays and a recorded run,
+with the controls that query lf3pm (a cell's evaluation, plans between clicked poses, a recorded
 scan over the map beside its simulation). Every action goes through
 lf3pm's public API and the arrays of lf3pm.view.layers; an error is shown in the page,
 never raised into viser's threads."""
@@ -42,6 +42,10 @@ FOOTPRINT_EVERY_S = 2.0
 #: other; plans given together are nested, each PLAN_STEP narrower than the one before
 #: and a little above it, so that where they share a path each keeps a rim.
 PLAN_WIDTH, PLAN_STEP, TRUTH_WIDTH, ESTIMATE_WIDTH = 9.0, 3.0, 1.5, 3.0
+#: A flight's tube is see-through, so that a replay's lines along it stay visible inside.
+FLIGHT_OPACITY = 0.55
+#: Length and radius (m) of the body's axes drawn along a flight (x red, y green, z blue).
+AXES_LENGTH, AXES_RADIUS = 0.5, 0.025
 #: Where the page is served unless told otherwise (this machine only).
 DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8080
 
@@ -50,7 +54,8 @@ class ViewApp:
     """A running viewer (:func:`serve` starts it): ``server`` is its viser server, ``port``
     the port it serves on, ``stop()`` ends it. ``status`` holds the last message shown
     (for tests); an error met while serving stays in the panel until the action that met
-    it succeeds."""
+    it succeeds. ``solm_node`` is the SOLM's layer drawn, ``flight_nodes`` each flight's
+    (tube, body axes) (None for a hover's tube) and ``flight_text`` their figures."""
 
     def __init__(
         self,
@@ -62,6 +67,7 @@ class ViewApp:
         guidance: GuidanceConfig | None = None,
         sensor: str | None = None,
         planner: PlannerConfig | None = None,
+        z: float | None = None,
     ):
         import viser
 
@@ -98,8 +104,9 @@ class ViewApp:
             self.error_text = self.server.gui.add_html("", visible=False)
             self._add_map()
             if solm is not None:
-                self._add_solm_controls()
+                self._add_solm_controls(z)
             self._add_given_plans()
+            self._add_flights()
             self._add_replays()
             self._add_run()
             self._add_click_controls()
@@ -143,16 +150,21 @@ class ViewApp:
                 point_shading="flat",
             )
 
-    def _add_solm_controls(self) -> None:
+    def _add_solm_controls(self, z: float | None = None) -> None:
         solm, gui = self.inputs.solm, self.server.gui
         g = solm.grid_spec
         with gui.add_folder("SOLM"):
-            gui.add_markdown(
-                f"{g.space.upper()} grid, {g.nx} × {g.ny} cells of {g.res:g} m, sensor {solm.attrs.get('sensor')}"
-            )
+            text = f"{g.space.upper()} grid, {g.nx} × {g.ny} cells of {g.res:g} m"
+            if not g.space.ground:
+                text += f", {len(g.z_levels)} levels from {min(g.z_levels):.2f} to {max(g.z_levels):.2f} m"
+            if g.space.yawed:
+                text += f", {g.yaw_bins} yaw bins"
+            mount = solm.attrs.get("mount")
+            text += f", sensor {solm.attrs.get('sensor')}" + (f" on its mount {mount['name']}" if mount else "")
+            gui.add_markdown(text)
             self.channel = gui.add_dropdown("channel", tuple(layers.CHANNELS), initial_value="q_n")
-            self.min_yaw = self.layer = None
-            if g.space is Space.SE2:
+            self.min_yaw = self.layer = self.height = self.level_text = None
+            if g.space.yawed:
                 self.min_yaw = gui.add_checkbox("min over yaw", initial_value=True)
                 self.layer = gui.add_slider(
                     "yaw (deg)",
@@ -163,34 +175,70 @@ class ViewApp:
                     disabled=True,
                 )
                 self.min_yaw.on_update(lambda event: self._guarded(self._solm_changed, event.client))
-            elif g.space is Space.R3:
-                self.layer = gui.add_slider("height level", min=0, max=len(g.z_levels) - 1, step=1, initial_value=0)
+                self.layer.on_update(lambda event: self._guarded(self._solm_changed, event.client))
+            if not g.space.ground:
+                # The slider in centimetres (levels lie further apart): its box shows 1.0, not 0.996558.
+                levels = np.round(np.asarray(g.z_levels, dtype=np.float64), 2)
+                shown = layers.nearest_level(g, z) if z is not None else 0
+                if len(levels) > 1:  # a slider needs two ends: one level is only read out
+                    self.height = gui.add_slider(
+                        "height (m)",
+                        min=float(levels.min()),
+                        max=float(levels.max()),
+                        step=max(0.01, float(np.diff(np.sort(levels)).min())),
+                        initial_value=float(levels[shown]),
+                        marks=tuple(float(v) for v in levels) if len(levels) <= 8 else None,
+                    )
+                    self.height.on_update(lambda event: self._guarded(self._solm_changed, event.client))
+                self.level_text = gui.add_markdown("")
             self.colorbar = gui.add_image(np.zeros(layers.COLORBAR_PIXELS[::-1] + (3,), np.uint8), label="colour bar")
         self.channel.on_update(lambda event: self._guarded(self._solm_changed, event.client))
-        if self.layer is not None:
-            self.layer.on_update(lambda event: self._guarded(self._solm_changed, event.client))
         self._guarded(self._solm_changed)
 
-    def _solm_index(self) -> int | None:
-        """The layer the controls select: None for the minimum over yaw."""
+    def _yaw_bin(self) -> int | None:
+        """The yaw bin the controls select (se2, r3yaw): None for the minimum over yaw."""
         g = self.inputs.solm.grid_spec
-        if g.space is Space.SE2:
-            self.layer.disabled = bool(self.min_yaw.value)
-            return None if self.min_yaw.value else round(self.layer.value / (360 / g.yaw_bins)) % g.yaw_bins
-        return int(self.layer.value) if self.layer is not None else None
+        if not g.space.yawed:
+            return None
+        self.layer.disabled = bool(self.min_yaw.value)
+        return None if self.min_yaw.value else round(self.layer.value / (360 / g.yaw_bins)) % g.yaw_bins
+
+    def _level(self) -> int | None:
+        """The height level the controls select (r3, r3yaw: the one nearest the height
+        slider); None for a ground robot's SOLM."""
+        g = self.inputs.solm.grid_spec
+        if g.space.ground:
+            return None
+        return layers.nearest_level(g, float(self.height.value)) if self.height is not None else 0
 
     def _solm_changed(self, client=None) -> None:
+        g = self.inputs.solm.grid_spec
+        level, yaw_bin = self._level(), self._yaw_bin()
         with self._busy(client, "drawing the SOLM", self.channel.value):
-            layer = layers.solm_layer(self.inputs.solm, self.channel.value, self._solm_index())
-            self.server.scene.add_point_cloud(
-                "/solm",
-                layer["centres"],
-                layer["colors"],
-                point_size=layer["res"],
-                point_shape="square",
-                point_shading="flat",
+            if g.space is Space.SE2:
+                layer = layers.solm_layer(self.inputs.solm, self.channel.value, yaw_bin)
+            else:
+                layer = layers.solm_layer(self.inputs.solm, self.channel.value, level, yaw_bin=yaw_bin)
+            if g.space.ground:
+                points, colors, size = layer["centres"], layer["colors"], layer["res"]
+            else:  # a slice through the volume: small squares a cell, which a flight crossing it shows between
+                points, colors, size = layers.slice_points(layer)
+            self.solm_node = self.server.scene.add_point_cloud(
+                "/solm", points, colors, point_size=size, point_shape="square", point_shading="flat"
             )
             self.colorbar.image = layers.colorbar_image(layer["lo"], layer["hi"], layers.CHANNELS[self.channel.value])
+        if self.level_text is not None:
+            which = ""
+            if g.space is Space.R3YAW:
+                which = (
+                    ", the minimum over yaw"
+                    if yaw_bin is None
+                    else f", yaw bin {yaw_bin} ({math.degrees(g.yaws()[yaw_bin]):.0f}°)"
+                )
+            self.level_text.content = (
+                f"Level {level + 1} of {len(g.z_levels)}: z = {g.z_levels[level]:.2f} m{which}, "
+                f"{len(layer['values']):,} cells shown"
+            )
 
     def _add_given_plans(self) -> None:
         gui = self.server.gui
@@ -225,6 +273,48 @@ class ViewApp:
             lines.append(f"- {layers.replay_caption(name, tracks)}")
         self.server.gui.add_markdown("**Replays**\n\n" + "\n".join(lines))
 
+    def _add_flights(self) -> None:
+        """Each flight as a tube along its path with the body's axes every FRAME_EVERY_M
+        metres (``flight_nodes``: {name: (tube, axes)}), and its figures in the panel."""
+        self.flight_nodes = {}
+        if not self.inputs.flights:
+            return
+        solm = self.inputs.solm
+        fit = None
+        if solm is not None:
+            from lf3pm.prediction import solm_fit
+
+            fit = solm_fit(solm)
+        lines = []
+        for k, (name, samples) in enumerate(self.inputs.flights.items()):
+            color = PLAN_COLORS[k % len(PLAN_COLORS)]
+            vertices, faces = layers.tube(layers.flight_positions(samples))
+            tube = None
+            if len(faces):  # a hover has no path to draw a tube along: its axes show it
+                tube = self.server.scene.add_mesh_simple(
+                    f"/flights/{k}/tube", vertices, faces, color=color, opacity=FLIGHT_OPACITY
+                )
+            at = layers.frame_samples(samples)
+            axes = self.server.scene.add_batched_axes(
+                f"/flights/{k}/body",
+                samples["wxyz"][at].astype(np.float32),
+                layers.flight_positions(samples)[at].astype(np.float32),
+                axes_length=AXES_LENGTH,
+                axes_radius=AXES_RADIUS,
+            )
+            self.flight_nodes[name] = (tube, axes)
+            summary = layers.flight_summary(samples)
+            error = (None, None) if solm is None else layers.flight_predicted_error(solm, samples, fit)
+            lines.append(
+                f"- <span style='color:rgb{color}'>■</span> {html.escape(name)}: {summary['length_m']:.1f} m, "
+                f"{summary['duration_s']:.1f} s, top speed {summary['top_speed_mps']:.1f} m/s, "
+                f"largest tilt {summary['largest_tilt_deg']:.0f}°" + self._error_text(*error)
+            )
+        self.flight_text = self.server.gui.add_markdown(
+            "**Flights** (the body's axes every "
+            f"{layers.FRAME_EVERY_M:g} m: x red, y green, z blue, the thrust)\n\n" + "\n".join(lines)
+        )
+
     def _set_camera(self) -> None:
         """The first view: from the south and above, on what was given to look at (the
         plans and replays; else the SOLM's grid; else the whole map), a little left of the
@@ -241,8 +331,8 @@ class ViewApp:
 
     def focus_bounds(self) -> tuple:
         """((xmin, ymin), (xmax, ymax)) of what the first view shows: the given plans,
-        replays and recorded run; without them the SOLM's grid, without it the map."""
-        xy = [np.c_[s["x"], s["y"]] for s in self.inputs.plans.values()]
+        flights, replays and recorded run; without them the SOLM's grid, without it the map."""
+        xy = [np.c_[s["x"], s["y"]] for s in (*self.inputs.plans.values(), *self.inputs.flights.values())]
         xy += [t["truth"].reshape(-1, 3)[:, :2] for t in self.inputs.replays.values()]
         if self.inputs.run is not None:
             xy.append(self.inputs.run.path_xyz[:, :2])
@@ -393,8 +483,10 @@ class ViewApp:
 
     def _add_click_controls(self) -> None:
         gui = self.server.gui
+        solm = self.inputs.solm
+        planning = solm is not None and solm.grid_spec.space.ground  # lf3pm.Planner plans ground robots
         with gui.add_folder("Click on the ground to"):
-            actions = ("inspect a cell", "set the start", "set the goal")
+            actions = ("inspect a cell", "set the start", "set the goal") if planning else ("inspect a cell",)
             audited = self.inputs.run is not None and bool(self.inputs.run.records)
             self.mode = gui.add_dropdown(
                 "action",
@@ -404,7 +496,7 @@ class ViewApp:
             self.cell_text = gui.add_markdown(
                 "Click a cell: its metric, its simulated scan and its least observable directions."
             )
-        if self.inputs.solm is not None:
+        if planning:
             with gui.add_folder("Plan"):
                 # Or drag the ring that appears at a clicked start or goal.
                 self.start_yaw = gui.add_slider("start yaw (deg)", min=-180, max=180, step=5, initial_value=0)
@@ -422,9 +514,15 @@ class ViewApp:
         if self.mode.value == CHOOSE_SCAN:
             self._scan_clicked(event)
             return
-        xy = self.ground_point(np.asarray(event.ray_origin), np.asarray(event.ray_direction))
+        origin, direction = np.asarray(event.ray_origin), np.asarray(event.ray_direction)
+        solm = self.inputs.solm
+        aerial = solm is not None and not solm.grid_spec.space.ground
+        if aerial:  # the slice shown, not the ground under it
+            xy = plane_point(origin, direction, float(solm.grid_spec.z_levels[self._level()]))
+        else:
+            xy = self.ground_point(origin, direction)
         if xy is None:
-            raise Lf3pmError("that click does not meet the ground")
+            raise Lf3pmError(f"that click does not meet {'the slice shown' if aerial else 'the ground'}")
         if self.mode.value == "inspect a cell":
             self.inspect(xy, event.client)
         elif self.mode.value == "set the start":
@@ -491,37 +589,42 @@ class ViewApp:
 
     def inspect(self, xy, client=None) -> dict:
         """Evaluates the cell at ``xy``: its SOLM values, lf3pm.evaluate at the SOLM's sensor
-        height (yaw: the yaw slider, or the cell's best yaw with min over yaw), the scan drawn
+        height (r3, r3yaw: the level shown; yaw: the yaw slider, or the cell's best yaw with
+        min over yaw; r3yaw: the sensor on the SOLM's mount of the level body), the scan drawn
         as points and the least observable translations as arrows. Returns the evaluation's
-        numbers."""
+        numbers and the body's ``pose`` (x, y, z, yaw)."""
         import lf3pm
 
         solm = self.inputs.solm
-        height = solm.grid_spec.height if solm is not None else 1.0
+        g = solm.grid_spec if solm is not None else None
+        if g is not None and not g.space.ground:
+            z = float(g.z_levels[self._level()])  # the level shown, in the map's frame
+        else:
+            z = self.ground_height(*xy) + (g.height if g is not None else 1.0)
+        height = {} if g is None or g.space.ground else {"z": z}
         yaw = 0.0
-        if solm is not None and solm.grid_spec.space is Space.SE2:
-            index = self._solm_index()
+        if g is not None and g.space.yawed:
+            index = self._yaw_bin()
             if index is None:  # the best yaw at this cell
+                n = g.yaw_bins
                 values = solm.query(
-                    np.full(solm.grid_spec.yaw_bins, xy[0]),
-                    np.full(solm.grid_spec.yaw_bins, xy[1]),
-                    yaw=solm.grid_spec.yaws(),
+                    np.full(n, xy[0]), np.full(n, xy[1]), yaw=g.yaws(), **{k: np.full(n, v) for k, v in height.items()}
                 )[0]
                 index = int(np.nanargmin(values)) if np.isfinite(values).any() else 0
-            yaw = float(solm.grid_spec.yaws()[index])
-        z = self.ground_height(*xy) + height
-        if solm is not None and solm.grid_spec.space is Space.R3:  # the level shown, in the map's frame
-            z = float(solm.grid_spec.z_levels[self._solm_index() or 0])
+            yaw = float(g.yaws()[index])
         pose = (xy[0], xy[1], z, yaw)
+        mount = (solm.attrs.get("mount") or {}) if solm is not None else {}
+        sensor_pose = np.asarray(pose_matrix(pose)) @ np.asarray(mount.get("matrix", np.eye(4)), dtype=np.float64)
         with self._busy(client, "evaluating", f"cell ({xy[0]:.1f}, {xy[1]:.1f})"):
-            result = lf3pm.evaluate(self.inputs.world, pose, self.sensor, observations=True)
+            result = lf3pm.evaluate(self.inputs.world, sensor_pose, self.sensor, observations=True)
         hits = result.observations["points"].astype(np.float32)
         self.server.scene.add_point_cloud("/cell/scan", hits, SCAN, point_size=0.08, point_shape="circle")
-        position = np.asarray(pose_matrix(pose))[:3, 3]
+        position = sensor_pose[:3, 3]
+        on = f" on its mount {mount['name']}, the body" if mount else ""
         text = [
             (
-                f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor} "
-                f"at z = {z:.2f} m"
+                f"**Cell** ({xy[0]:.2f}, {xy[1]:.2f}), yaw {math.degrees(yaw):.0f}°, sensor {self.sensor}"
+                f"{on} at z = {z:.2f} m"
             ),
             f"- q_min {result.q_min:.4g}, q_n {result.q_n:.4g}, q_max {result.q_max:.4g}",
             f"- {result.hits:,} hits of {result.rays:,} rays (red points)",
@@ -535,7 +638,7 @@ class ViewApp:
         elif result.predicted_localization_error_withheld is not None:
             text.append(f"- predicted localization error withheld: {result.predicted_localization_error_withheld}")
         if solm is not None:
-            stored = float(solm.query(xy[0], xy[1], yaw=yaw, z=z if solm.grid_spec.space is Space.R3 else None)[0])
+            stored = float(solm.query(xy[0], xy[1], yaw=yaw, **height)[0])
             text.append(
                 f"- SOLM q_n here {stored:.4g} (interpolated)"
                 if math.isfinite(stored)
@@ -711,6 +814,15 @@ class ViewApp:
         self.server.stop()
 
 
+def plane_point(origin: np.ndarray, direction: np.ndarray, z: float) -> np.ndarray | None:
+    """Where a click's ray meets the horizontal plane at height ``z`` (x, y), or None when
+    it does not (parallel to it, or pointing away)."""
+    if abs(direction[2]) < 1e-12:
+        return None
+    t = (z - origin[2]) / direction[2]
+    return None if t <= 0 else np.asarray(origin[:2] + t * direction[:2], dtype=np.float64)
+
+
 def _yaw_quaternion(yaw: float) -> tuple:
     """(w, x, y, z) of a rotation by ``yaw`` about the vertical."""
     return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
@@ -730,6 +842,7 @@ def serve(
     guidance: GuidanceConfig | None = None,
     sensor: str | None = None,
     planner: PlannerConfig | None = None,
+    z: float | None = None,
 ) -> ViewApp:
     """Starts the viewer of ``inputs`` (lf3pm.view.load_view_inputs) on ``host``:``port``
     and returns it (its server runs in a thread; ``stop()`` ends it). ``port`` 0 serves on
@@ -737,7 +850,9 @@ def serve(
     is an Lf3pmError, never another port silently. ``host`` and ``port`` are checked as
     ``lf3pm view`` checks them (check_host, check_port). ``robot``, ``guidance`` and the
     ``planner`` section plan the clicked start and goal (default: the configuration's); ``sensor`` evaluates
-    clicked cells (default: the SOLM's)."""
+    clicked cells (default: the SOLM's). ``z``: the height (m) of the r3 or r3yaw SOLM's
+    slice shown first, its nearest level (default the lowest); one outside the SOLM's
+    levels, or without such a SOLM, is an Lf3pmError."""
     from lf3pm.sensors import as_sensor
     from lf3pm.trajectory.robots import Robot
 
@@ -755,4 +870,10 @@ def serve(
         raise Lf3pmError(f"planner must be an lf3pm.config.PlannerConfig, got {type(planner).__name__}")
     if sensor is not None:
         as_sensor(sensor)  # an unknown sensor fails here, not at the first click
-    return ViewApp(inputs, host=host, port=int(port), robot=robot, guidance=guidance, sensor=sensor, planner=planner)
+    if z is not None:
+        if inputs.solm is None:
+            raise Lf3pmError("a height picks a level of an r3 or r3yaw SOLM: give one (--solm)")
+        layers.nearest_level(inputs.solm.grid_spec, z)
+    return ViewApp(
+        inputs, host=host, port=int(port), robot=robot, guidance=guidance, sensor=sensor, planner=planner, z=z
+    )

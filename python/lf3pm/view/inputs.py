@@ -1,6 +1,6 @@
 """What ``lf3pm view`` is given, read and checked before anything is served: the map, a
-SOLM of that map, planned trajectories, replays, a recorded run and its audit, and a free
-port. Every problem is one Lf3pmError line. A recorded run's scans are read later, one at
+SOLM of that map, planned trajectories, flights, replays, a recorded run and its audit,
+and a free port. Every problem is one Lf3pmError line. A recorded run's scans are read later, one at
 a time, when the page shows one (:func:`read_scan`)."""
 
 from __future__ import annotations
@@ -19,11 +19,12 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS, RunConfig
 from lf3pm.errors import Lf3pmError, RunError
+from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
 from lf3pm.map import Map, load_map
 from lf3pm.runs import Run, Scan
 from lf3pm.solm import Solm
 from lf3pm.trajectory.trajectory import read_csv
-from lf3pm.view.layers import replay_tracks
+from lf3pm.view.layers import flight_samples, replay_tracks
 
 #: The largest replay JSON read (bytes): a long LIO replay with its per-scan positions is
 #: a few MB; a device or a runaway file is refused before it is read.
@@ -47,6 +48,11 @@ AUDIT_NUMBERS = (
 )
 #: The fields of a scan record that say, in one line, why a part was not computed.
 AUDIT_REASONS = ("predicted_error_withheld", "registration_error", "sim_error")
+#: The columns of a flight CSV the viewer reads (`lf3pm plan --robot quadrotor` writes
+#: them among others): time, the body's position and yaw, its attitude (body to world).
+FLIGHT_COLUMNS = ("t", "x", "y", "z", "yaw", "qw", "qx", "qy", "qz")
+#: How far from 1 a flight CSV's quaternion's norm may be (its 9 written digits are far nearer).
+QUATERNION_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -77,13 +83,15 @@ class RunInputs:
 @dataclass
 class ViewInputs:
     """The map (indexed), its SOLM or None, plans as {name: trajectory samples (read_csv's
-    columns)} and replays as {name: replay_tracks(...)}."""
+    columns)}, replays as {name: replay_tracks(...)}, a recorded run and flights as {name:
+    samples (:func:`read_flight_csv`'s)}."""
 
     world: Map
     solm: Solm | None = None
     plans: dict = field(default_factory=dict)
     replays: dict = field(default_factory=dict)
     run: RunInputs | None = None
+    flights: dict = field(default_factory=dict)
 
 
 def load_view_inputs(
@@ -96,17 +104,23 @@ def load_view_inputs(
     run_path=None,
     audit_path=None,
     run_config: RunConfig = DEFAULTS.run,
+    flights=(),
+    quadrotor=None,
 ) -> ViewInputs:
     """Reads and checks everything the viewer shows: a missing or unreadable file, a SOLM
     built on another map (its recorded map hash differs from this map's), a malformed
-    trajectory CSV or a replay JSON that is not what ``lf3pm replay --json`` writes (a
-    field missing or not numbers: the message names the file and the field) raise
-    Lf3pmError. ``plan_paths`` and ``replay_paths`` are lists of paths, or one path.
-    ``run_path`` and ``audit_path``: a recorded run and its audit (:func:`load_run_inputs`,
-    read before the map, which takes longer)."""
+    trajectory or flight CSV, a replay JSON that is not what ``lf3pm replay --json`` writes
+    (a field missing or not numbers: the message names the file and the field) or flights
+    over a ground robot's SOLM raise Lf3pmError. ``plan_paths`` and ``replay_paths`` are
+    lists of paths, or one path. ``run_path`` and ``audit_path``: a recorded run and its
+    audit (:func:`load_run_inputs`, read before the map, which takes longer). ``flights``:
+    flight CSVs (:func:`read_flight_csv`), planned flights (FlightPlan, FlightTrajectory:
+    their attitudes from ``quadrotor``, an lf3pm.flight.Quadrotor, default its defaults),
+    or one of them."""
     if isinstance(map_path, (str, os.PathLike)) and not Path(map_path).exists():
         raise Lf3pmError(f"{map_path}: no such map file")
     plan_paths, replay_paths = _paths(plan_paths, "plan"), _paths(replay_paths, "replay")
+    flights = _flights(flights, quadrotor)
     run = None
     if run_path is not None or audit_path is not None:
         run = load_run_inputs(run_path, audit_path, run_config)
@@ -119,6 +133,11 @@ def load_view_inputs(
             raise Lf3pmError(
                 f"{solm_path} was built on another map than {map_path} "
                 f"(map hash {built_on[:12]}…, this map's {world.sha256[:12]}…)"
+            )
+        if flights and solm.grid_spec.space.ground:
+            raise Lf3pmError(
+                f"{solm_path} is an {solm.grid_spec.space} SOLM (ground robots): a flight is shown over an r3yaw "
+                "SOLM (`lf3pm solm build --space r3yaw`) or an r3 one, or without one"
             )
     plans = {_name(p, "plan"): read_csv(p) for p in plan_paths}
     replays = {}
@@ -135,11 +154,81 @@ def load_view_inputs(
             replays[_name(path, "replay")] = replay_tracks(replay)
         except Lf3pmError as err:
             raise Lf3pmError(f"{path}: {err}") from None
-    return ViewInputs(world, solm, plans, replays, run)
+    return ViewInputs(world, solm, plans, replays, run, flights)
 
 
 def _name(path, kind: str) -> str:
     return f"{kind} {Path(path).stem}"
+
+
+def _flights(given, quadrotor) -> dict:
+    """{name: samples} of flight CSVs' paths and planned flights (load_view_inputs)."""
+    if isinstance(given, (str, os.PathLike)) or not isinstance(given, (list, tuple)):
+        given = [given]
+    out = {}
+    for k, flight in enumerate(given):
+        if isinstance(flight, (str, os.PathLike)):
+            out[_name(flight, "flight")] = read_flight_csv(flight)
+        else:
+            out[f"flight {k + 1}"] = flight_samples(flight, quadrotor)
+    return out
+
+
+def read_flight_csv(path) -> dict:
+    """A flight CSV as `lf3pm plan --robot quadrotor` writes it: a header naming at least
+    FLIGHT_COLUMNS (any order, others ignored), then one row of numbers per sample. Returns
+    t, x, y, z, yaw (n,) and the body's attitude ``wxyz`` (n, 4, body to world, normalised).
+    Lf3pmError, naming the line: not a regular file of at most
+    lf3pm.limits.MAX_TRAJECTORY_BYTES, a missing column, a row of the wrong length, a field
+    that is not a finite number, fewer than 2 rows, times that do not increase strictly, a
+    quaternion whose norm is not 1."""
+    check_file(path, "flight", limit=MAX_TRAJECTORY_BYTES)
+    try:
+        with open(path, encoding="utf-8") as fp:
+            lines = [(n, line) for n, line in enumerate(fp.read().splitlines(), start=1) if line.strip()]
+    except (OSError, UnicodeDecodeError) as err:
+        raise Lf3pmError(f"{path}: cannot read the flight ({getattr(err, 'strerror', None) or err})") from None
+    expected = f"(`lf3pm plan --robot quadrotor` writes {','.join(FLIGHT_COLUMNS)} among others)"
+    if not lines:
+        raise Lf3pmError(f"{path}: empty file, expected a header {expected}")
+    header = [name.strip() for name in lines[0][1].split(",")]
+    missing = [c for c in FLIGHT_COLUMNS if c not in header]
+    if missing:
+        raise Lf3pmError(f"{path}: the header lacks the column(s) {', '.join(missing)} {expected}")
+    used = [header.index(c) for c in FLIGHT_COLUMNS]
+    rows = []
+    for n, line in lines[1:]:
+        fields = line.split(",")
+        if len(fields) != len(header):
+            raise Lf3pmError(f"{path}:{n}: {len(fields)} fields, the header has {len(header)}")
+        try:
+            row = [float(fields[i]) for i in used]
+        except ValueError:
+            raise Lf3pmError(f"{path}:{n}: a field is not a number: {line.strip()[:80]!r}") from None
+        bad = next((c for c, v in zip(FLIGHT_COLUMNS, row) if not math.isfinite(v)), None)
+        if bad is not None:
+            raise Lf3pmError(f"{path}:{n}: {bad} is not finite")
+        rows.append(row)
+    if len(rows) < 2:
+        raise Lf3pmError(f"{path}: {len(rows)} sample(s); a flight needs at least 2")
+    table = np.asarray(rows, dtype=np.float64)
+    t = table[:, 0]
+    late = np.flatnonzero(np.diff(t) <= 0)
+    if late.size:
+        r = late[0] + 1
+        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: time {t[r]:g} does not follow {t[r - 1]:g}: times must increase")
+    wxyz = table[:, 5:9]
+    norm = np.linalg.norm(wxyz, axis=1)
+    off = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_TOLERANCE)
+    if off.size:
+        r = off[0]
+        raise Lf3pmError(
+            f"{path}:{lines[1 + r][0]}: qw, qx, qy, qz is no rotation (norm {norm[r]:.4g}, a rotation's is 1)"
+        )
+    return {
+        **{c: table[:, k].copy() for k, c in enumerate(FLIGHT_COLUMNS[:5])},
+        "wxyz": wxyz / norm[:, None],
+    }
 
 
 def _paths(given, kind: str) -> list:

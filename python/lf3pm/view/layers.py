@@ -1,16 +1,17 @@
 """What the viewer draws, as plain arrays computed from lf3pm's public objects (a Map, a
-Solm, a trajectory's samples, a replay's JSON, an Evaluation, a recorded run's scans and
-their audit): the tests check them without a browser, and the page only hands them to
-viser."""
+Solm, a trajectory's samples, a flight, a replay's JSON, an Evaluation, a recorded run's
+scans and their audit): the tests check them without a browser, and the page only hands
+them to viser."""
 
 from __future__ import annotations
 
 import html
 import math
+import numbers
 
 import numpy as np
 
-from lf3pm.calibration import predict
+from lf3pm.calibration import FIT_CONDITIONS, predict, withheld_reason
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid import Space
 from lf3pm.prediction import solm_fit
@@ -27,6 +28,10 @@ CHANNELS = {
 MAX_MAP_POINTS = 1_000_000
 #: Seed of the map's subsample: the same points on every start.
 SUBSAMPLE_SEED = 0
+#: An r3 or r3yaw slice's cells are drawn as up to SLICE_SUBDIVISION² small squares each
+#: (squares face the camera: a cell-wide one seen from the side would stand like a wall),
+#: MAX_SLICE_POINTS at most in all.
+SLICE_SUBDIVISION, MAX_SLICE_POINTS = 4, 500_000
 #: Pixels (width, height) of the colour bar, and the values it labels.
 COLORBAR_PIXELS = (360, 90)
 COLORBAR_TICKS = 4
@@ -42,6 +47,10 @@ RUN_QUANTITIES = {
 }
 #: The colour map of the audited scans: the replays' errors' (plasma), not the SOLM's.
 RUN_COLORMAP = "plasma"
+#: A flight's tube: its radius (m), the vertices of each ring and the metres between rings.
+TUBE_RADIUS, TUBE_SIDES, TUBE_STEP_M = 0.08, 12, 0.1
+#: Metres along a flight between two of the body's frames drawn on its tube.
+FRAME_EVERY_M = 1.0
 
 
 def colormap(values: np.ndarray, lo: float, hi: float, *, log: bool = True, name: str = "viridis") -> np.ndarray:
@@ -70,17 +79,28 @@ def map_cloud(points: np.ndarray, max_points: int = MAX_MAP_POINTS) -> tuple[np.
     return points.astype(np.float32), colormap(z, lo, max(hi, lo + 1e-6), log=False, name="turbo")
 
 
-def solm_values(solm: Solm, channel: str, layer: int | None = None) -> np.ndarray:
+def solm_values(solm: Solm, channel: str, layer: int | None = None, *, yaw_bin: int | None = None) -> np.ndarray:
     """One (ny, nx) layer of ``channel`` (CHANNELS): an R² SOLM as stored; SE(2) at yaw bin
     ``layer``, or its minimum over yaw when ``layer`` is None (the best heading at each
     cell: what an omni robot that may turn can have); R3 at height level ``layer`` (0 when
-    None). ``predicted_error`` is the localization error predicted from q_n by the SOLM's
-    fit (lf3pm.prediction.solm_fit: the one it was built with, else the packaged one)."""
+    None); R3 x yaw at height level ``layer`` (0 when None), its minimum over yaw
+    (Solm.over_yaw) or, given ``yaw_bin``, that bin. ``predicted_error`` is the
+    localization error predicted from q_n by the SOLM's fit (lf3pm.prediction.solm_fit: the
+    one it was built with, else the packaged one)."""
     if channel not in CHANNELS:
         raise Lf3pmError(f"unknown channel {channel!r}; the viewer shows {', '.join(CHANNELS)}")
-    data = solm.channel("q_n" if channel == "predicted_error" else channel).astype(np.float64)
+    source = "q_n" if channel == "predicted_error" else channel
+    g = solm.grid_spec
+    if g.space is Space.R3YAW:
+        level = int(layer or 0)
+        if yaw_bin is None:
+            data = solm.over_yaw(source)[0][level].astype(np.float64)
+        else:
+            data = solm.channel(source)[level * g.yaw_bins + int(yaw_bin)].astype(np.float64)
+        return predicted_error(data, solm_fit(solm)) if channel == "predicted_error" else data
+    data = solm.channel(source).astype(np.float64)
     if data.ndim == 3:
-        if layer is None and solm.grid_spec.space is Space.SE2:
+        if layer is None and g.space is Space.SE2:
             with np.errstate(all="ignore"):
                 finite = np.where(np.isfinite(data), data, np.inf)
                 data = np.min(finite, axis=0)
@@ -88,6 +108,27 @@ def solm_values(solm: Solm, channel: str, layer: int | None = None) -> np.ndarra
         else:
             data = data[int(layer or 0)]
     return predicted_error(data, solm_fit(solm)) if channel == "predicted_error" else data
+
+
+def nearest_level(grid, z) -> int:
+    """The index of the height level of ``grid`` (an r3 or r3yaw SOLM's) nearest ``z`` (m,
+    the map's frame). Lf3pmError when ``z`` is not a finite number, lies outside the levels'
+    cells (half a spacing beyond the lowest and the highest level; one level alone: half
+    the cell edge) or the grid has no levels (a ground robot's)."""
+    if grid.space.ground:
+        raise Lf3pmError(f"a height picks a level of an r3 or r3yaw SOLM; this one is {grid.space} (ground robots)")
+    if not (isinstance(z, numbers.Real) and not isinstance(z, bool) and math.isfinite(z)):
+        raise Lf3pmError(f"the height must be a finite number (m), got {z!r}")
+    levels = np.asarray(grid.z_levels, dtype=np.float64)
+    ordered = np.sort(levels)
+    below = 0.5 * (ordered[1] - ordered[0]) if len(ordered) > 1 else 0.5 * grid.res
+    above = 0.5 * (ordered[-1] - ordered[-2]) if len(ordered) > 1 else 0.5 * grid.res
+    if not ordered[0] - below <= z <= ordered[-1] + above:
+        raise Lf3pmError(
+            f"height {z:g} m is outside the SOLM's {len(levels)} level(s), {ordered[0]:.2f} to {ordered[-1]:.2f} m: "
+            f"choose one from {ordered[0] - below:.2f} to {ordered[-1] + above:.2f} m"
+        )
+    return int(np.argmin(np.abs(levels - z)))
 
 
 def predicted_error(q_n: np.ndarray, fit: dict | None) -> np.ndarray:
@@ -99,14 +140,16 @@ def predicted_error(q_n: np.ndarray, fit: dict | None) -> np.ndarray:
     return centre(np.asarray(q_n, dtype=np.float64))
 
 
-def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
-    """The SOLM as coloured squares over the ground: ``centres`` (K, 3) float32 just above
-    each evaluated cell's ground, ``colors`` (K, 3) uint8, ``values`` (K,), the colour
-    range ``lo``, ``hi`` (the 2nd and 98th percentiles) and the cell edge ``res``."""
-    values = solm_values(solm, channel, layer)
+def solm_layer(solm: Solm, channel: str, layer: int | None = None, *, yaw_bin: int | None = None) -> dict:
+    """The SOLM as coloured squares (``layer``, ``yaw_bin``: :func:`solm_values`), over the
+    ground or, for r3 and r3yaw, at the level's height: ``centres`` (K, 3) float32 just above
+    each evaluated cell's ground or at the level, ``colors`` (K, 3) uint8, ``values`` (K,),
+    the colour range ``lo``, ``hi`` (the 2nd and 98th percentiles) and the cell edge
+    ``res``."""
+    values = solm_values(solm, channel, layer, yaw_bin=yaw_bin)
     g = solm.grid_spec
     ys, xs = np.meshgrid(g.ys(), g.xs(), indexing="ij")
-    if g.space is Space.R3:  # its levels are heights in the map's frame
+    if not g.space.ground:  # its levels are heights in the map's frame
         z = np.full(values.shape, g.z_levels[int(layer or 0)])
     else:
         ground = solm.channel("ground_z").astype(np.float64)
@@ -123,6 +166,21 @@ def solm_layer(solm: Solm, channel: str, layer: int | None = None) -> dict:
         "hi": float(hi),
         "res": g.res,
     }
+
+
+def slice_points(layer: dict) -> tuple[np.ndarray, np.ndarray, float]:
+    """A level's squares (:func:`solm_layer`'s ``layer``) as k x k points a cell (k up to
+    SLICE_SUBDIVISION, fewer where more than MAX_SLICE_POINTS would be drawn), so that the
+    slice lies flat seen from any side: (points (K k², 3) float32, their colours, the
+    points' edge res / k)."""
+    cells = max(len(layer["centres"]), 1)
+    k = max(1, min(SLICE_SUBDIVISION, math.isqrt(MAX_SLICE_POINTS // cells)))
+    edge = layer["res"] / k
+    offsets = (np.arange(k) + 0.5) * edge - 0.5 * layer["res"]
+    dx, dy = np.meshgrid(offsets, offsets)
+    shift = np.c_[dx.ravel(), dy.ravel(), np.zeros(k * k)].astype(np.float32)
+    points = (layer["centres"][:, None] + shift[None]).reshape(-1, 3)
+    return points, np.repeat(layer["colors"], k * k, axis=0), float(edge)
 
 
 def colorbar_image(
@@ -180,6 +238,127 @@ def footprints(samples: dict, radius: float, every_s: float = 1.0, sides: int = 
 
 def path_length(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.hypot(np.diff(x), np.diff(y)).sum())
+
+
+# -- flights ---------------------------------------------------------------------------
+
+
+def flight_samples(flight, quadrotor=None, rate: float | None = None) -> dict:
+    """A planned flight (lf3pm.planner.flight_plan's FlightPlan or FlightTrajectory) as the
+    viewer draws it, the columns of its CSV: t, x, y, z, yaw (n,) at ``rate`` Hz (default
+    its CSV's, lf3pm.trajectory.trajectory.CSV_RATE) and the
+    body's attitude ``wxyz`` (n, 4; body to world) from the flatness map
+    (lf3pm.flight.Quadrotor.attitudes of ``quadrotor``, default Quadrotor())."""
+    from scipy.spatial.transform import Rotation
+
+    from lf3pm.flight import Quadrotor
+    from lf3pm.planner.flight_plan import FlightPlan, FlightTrajectory
+    from lf3pm.trajectory.trajectory import CSV_RATE
+
+    trajectory = flight.trajectory if isinstance(flight, FlightPlan) else flight
+    if not isinstance(trajectory, FlightTrajectory):
+        raise Lf3pmError(f"a flight is a FlightPlan, a FlightTrajectory or a CSV's path, got {type(flight).__name__}")
+    s = trajectory.sample(CSV_RATE if rate is None else rate)
+    quad = quadrotor if quadrotor is not None else Quadrotor()
+    attitudes = quad.attitudes(s["velocity"], s["acceleration"], s["jerk"], s["yaw"], s["yaw_rate"])
+    xyzw = Rotation.from_matrix(attitudes.rotation).as_quat()
+    x, y, z = s["position"].T
+    return {"t": s["t"], "x": x, "y": y, "z": z, "yaw": s["yaw"], "wxyz": np.c_[xyzw[:, 3], xyzw[:, :3]]}
+
+
+def flight_positions(samples: dict) -> np.ndarray:
+    """(n, 3) float64 positions of a flight's samples."""
+    return np.c_[samples["x"], samples["y"], samples["z"]]
+
+
+def _along(points: np.ndarray) -> np.ndarray:
+    """Metres along the polyline ``points`` (n, 3) at each point."""
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+
+
+def tube(points, radius: float = TUBE_RADIUS, sides: int = TUBE_SIDES, step: float = TUBE_STEP_M) -> tuple:
+    """A tube of ``radius`` along the polyline ``points`` (n, 3) as a triangle mesh:
+    ``vertices`` (k sides, 3) float32, a ring of ``sides`` every ``step`` metres along it
+    (k rings, both ends included), and ``faces`` (2 (k - 1) sides, 3) uint32, wound
+    outwards. Each ring is carried from the last by parallel transport, so that the tube
+    does not twist where the path turns. Empty arrays when the polyline is shorter than
+    ``step`` (a hover)."""
+    p = np.asarray(points, dtype=np.float64)
+    along = _along(p)
+    if along[-1] < step:
+        return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32)
+    at = np.linspace(0.0, along[-1], math.ceil(along[-1] / step) + 1)
+    centres = np.column_stack([np.interp(at, along, p[:, d]) for d in range(3)])
+    tangents = np.gradient(centres, axis=0)
+    tangents /= np.linalg.norm(tangents, axis=1, keepdims=True)
+    normals = np.empty_like(centres)
+    first = np.eye(3)[np.argmin(np.abs(tangents[0]))]  # the axis least along the path
+    normals[0] = np.cross(tangents[0], first)
+    normals[0] /= np.linalg.norm(normals[0])
+    for k in range(1, len(centres)):
+        n = normals[k - 1] - (normals[k - 1] @ tangents[k]) * tangents[k]
+        normals[k] = n / np.linalg.norm(n)
+    binormals = np.cross(tangents, normals)
+    angle = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
+    rings = centres[:, None] + radius * (
+        np.cos(angle)[None, :, None] * normals[:, None] + np.sin(angle)[None, :, None] * binormals[:, None]
+    )
+    i, j = np.meshgrid(np.arange(len(centres) - 1), np.arange(sides), indexing="ij")
+    a, b = i * sides + j, i * sides + (j + 1) % sides
+    c, d = a + sides, b + sides
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([b, d, c], -1).reshape(-1, 3)])
+    return rings.reshape(-1, 3).astype(np.float32), faces.astype(np.uint32)
+
+
+def frame_samples(samples: dict, every_m: float = FRAME_EVERY_M) -> np.ndarray:
+    """The indices of a flight's samples at which its body's axes are drawn: the first
+    sample, the first to reach each further ``every_m`` metres along the path, and the
+    last."""
+    along = _along(flight_positions(samples))
+    marks = np.arange(0.0, along[-1], every_m)
+    return np.unique(np.r_[0, np.searchsorted(along, marks), len(along) - 1])
+
+
+def tilts(wxyz: np.ndarray) -> np.ndarray:
+    """The angle (rad) between the body's z axis (the thrust) and the vertical at each
+    attitude ``wxyz`` (n, 4, unit quaternions body to world)."""
+    q = np.asarray(wxyz, dtype=np.float64)
+    return np.arccos(np.clip(1.0 - 2.0 * (q[:, 1] ** 2 + q[:, 2] ** 2), -1.0, 1.0))
+
+
+def flight_summary(samples: dict) -> dict:
+    """A flight's ``length_m`` (along its path), ``duration_s``, ``top_speed_mps`` (from its
+    positions) and ``largest_tilt_deg`` (from its attitudes)."""
+    p = flight_positions(samples)
+    step = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    return {
+        "length_m": float(step.sum()),
+        "duration_s": float(samples["t"][-1] - samples["t"][0]),
+        "top_speed_mps": float(np.max(step / np.diff(samples["t"]))),
+        "largest_tilt_deg": float(np.degrees(tilts(samples["wxyz"]).max())),
+    }
+
+
+def flight_predicted_error(solm: Solm, samples: dict, fit: dict | None) -> tuple[float | None, str | None]:
+    """(error, withheld): as lf3pm.prediction.predicted_error_along, along a flight at its
+    own heights: the localization error (m) ``fit`` predicts from the time mean of an r3
+    or r3yaw ``solm``'s q_n at the flight's samples (x, y, z, yaw) where known; or None and
+    why, in one line. (None, None) without a fit."""
+    if fit is None:
+        return None, None
+    q_n = solm.query(samples["x"], samples["y"], samples["yaw"], z=samples["z"])[0]
+    if np.isinf(q_n).any():
+        return None, "the flight passes a degenerate pose (q_n infinite): localization follows the odometry there"
+    known = q_n[np.isfinite(q_n)]
+    if not known.size:
+        return None, "the SOLM has no q_n along the flight"
+    mean = float(np.mean(known))
+    attrs = solm.attrs
+    conditions = {**FIT_CONDITIONS, "sensor": attrs["sensor"], "association": attrs["association"], "w1": attrs["w1"]}
+    withheld = withheld_reason(fit, mean, **conditions)
+    if withheld is not None:
+        return None, withheld
+    return predict(fit, mean)[0], None
 
 
 def replay_tracks(replay: dict) -> dict:
