@@ -23,11 +23,11 @@ def solm_fit(solm, path: str | None = None) -> dict | None:
 
 def predicted_error_along(solm, samples: dict, fit: dict | None) -> tuple[float | None, str | None]:
     """(error, withheld): the localization error (m) ``fit`` predicts along a trajectory's
-    ``samples`` (x, y, yaw arrays evenly spaced in time) from the time mean of ``solm``'s
-    q_n over the samples where it is known; or None and why, in one line. A fit made for
-    another sensor, association or w1 than the SOLM's is withheld as `lf3pm evaluate`
-    withholds it."""
-    q_n = solm.query(samples["x"], samples["y"], yaw=samples["yaw"])[0]
+    ``samples`` (x, y, yaw arrays evenly spaced in time, and z on an r3 or r3yaw SOLM: a
+    flight's heights) from the time mean of ``solm``'s q_n over the samples where it is
+    known; or None and why, in one line. A fit made for another sensor, association or w1
+    than the SOLM's is withheld as `lf3pm evaluate` withholds it."""
+    q_n = solm.query(samples["x"], samples["y"], yaw=samples["yaw"], z=samples.get("z"))[0]
     if np.isinf(q_n).any():
         return None, "the plan passes a degenerate pose (q_n infinite): localization follows the odometry there"
     known = q_n[np.isfinite(q_n)]

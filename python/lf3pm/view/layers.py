@@ -11,10 +11,10 @@ import numbers
 
 import numpy as np
 
-from lf3pm.calibration import FIT_CONDITIONS, predict, withheld_reason
+from lf3pm.calibration import predict
 from lf3pm.errors import Lf3pmError
 from lf3pm.grid import Space
-from lf3pm.prediction import solm_fit
+from lf3pm.prediction import predicted_error_along, solm_fit
 from lf3pm.solm import Solm
 
 #: The SOLM channels the page offers, with what the colour bar says of each.
@@ -340,25 +340,9 @@ def flight_summary(samples: dict) -> dict:
 
 
 def flight_predicted_error(solm: Solm, samples: dict, fit: dict | None) -> tuple[float | None, str | None]:
-    """(error, withheld): as lf3pm.prediction.predicted_error_along, along a flight at its
-    own heights: the localization error (m) ``fit`` predicts from the time mean of an r3
-    or r3yaw ``solm``'s q_n at the flight's samples (x, y, z, yaw) where known; or None and
-    why, in one line. (None, None) without a fit."""
-    if fit is None:
-        return None, None
-    q_n = solm.query(samples["x"], samples["y"], samples["yaw"], z=samples["z"])[0]
-    if np.isinf(q_n).any():
-        return None, "the flight passes a degenerate pose (q_n infinite): localization follows the odometry there"
-    known = q_n[np.isfinite(q_n)]
-    if not known.size:
-        return None, "the SOLM has no q_n along the flight"
-    mean = float(np.mean(known))
-    attrs = solm.attrs
-    conditions = {**FIT_CONDITIONS, "sensor": attrs["sensor"], "association": attrs["association"], "w1": attrs["w1"]}
-    withheld = withheld_reason(fit, mean, **conditions)
-    if withheld is not None:
-        return None, withheld
-    return predict(fit, mean)[0], None
+    """(error, withheld): lf3pm.prediction.predicted_error_along along a flight at its own
+    heights and yaws (``samples`` with x, y, z and yaw); (None, None) without a fit."""
+    return (None, None) if fit is None else predicted_error_along(solm, samples, fit)
 
 
 def replay_tracks(replay: dict) -> dict:
