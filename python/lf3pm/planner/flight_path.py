@@ -156,7 +156,7 @@ def plan_flight_path(
     # Where the SOLM evaluated the pose (not an obstacle), whatever the guidance channel.
     evaluated = np.isfinite(solm.channel("q_n")).reshape(nz, bins, g.ny, g.nx)
     per_bin = np.where(evaluated, layer.cost.reshape(nz, bins, g.ny, g.nx), np.inf)
-    traversable = free_volume(solm)
+    traversable = evaluated.any(axis=1)  # free_volume, from the channel read once
     volume = np.where(traversable, np.min(per_bin, axis=1), 0.0)
     cells = []
     for name, point in (("start", start), ("goal", goal)):
