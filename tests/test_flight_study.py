@@ -84,5 +84,14 @@ def test_the_quick_study_runs_end_to_end_and_resumes(tmp_path):
     assert len(replays) == 2 * 3
     assert all(np.isfinite(json.loads(line).get("ape_m", np.nan)) for line in replays)
     assert "| atrium | genz |" in (out / "report.md").read_text()
+    assert (out / "scatter.png").read_bytes()[:4] == b"\x89PNG" and len(summary["pairs"]) == 2
+    plans = [json.loads(line) for line in (out / "plans.jsonl").read_text().splitlines()]
+    assert all(r["attitude_rounds"] == [] for r in plans)  # the protocol's default: level guidance
     again = CliRunner().invoke(app, ["experiment", "flight", "--quick", "-o", str(out)])
     assert again.exit_code == 0 and (out / "replays.jsonl").read_text().splitlines() == replays
+    report = (out / "report.md").read_text()
+    (out / "report.md").unlink()
+    rewritten = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "-o", str(out)])
+    assert rewritten.exit_code == 0 and (out / "report.md").read_text() == report
+    empty = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "-o", str(tmp_path)])
+    assert empty.exit_code != 0 and "no protocol.json" in empty.output

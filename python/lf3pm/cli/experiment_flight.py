@@ -22,11 +22,19 @@ def experiment_flight(
         "default: the package's.",
     ),
     write_protocol: Path | None = typer.Option(None, metavar="FILE.yaml", help="Write the protocol and stop."),
+    report_only: bool = typer.Option(
+        False, help="Analyse the study in --out again from its frozen protocol and records; plan and replay nothing."
+    ),
 ):
     """Quadrotor flights by three planners on the same SOLMs and pairs, judged by LIO replays:
     velocity_yaw (a), yaw_only (b) and joint (c) (docs/flight.md)."""
     with user_errors():
-        from lf3pm.experiments.flight import FlightProtocol, load_protocol, run_study, write_report
+        from lf3pm.experiments.flight import FlightProtocol, load_protocol, report_folder, run_study, write_report
+
+        if report_only:
+            summary, paths = report_folder(out)
+            console.print(f"{out}: {', '.join(p.name for p in paths)} written again from its records")
+            return
 
         if quick and protocol_path is not None:
             from lf3pm.errors import Lf3pmError

@@ -19,6 +19,7 @@ from lf3pm.cli._common import (
     user_errors,
 )
 from lf3pm.errors import Lf3pmError
+from lf3pm.planner.flight_attitude import ATTITUDE_ROUNDS
 
 #: Where each option of plan lives in the config.
 PLAN_PATHS = {
@@ -76,6 +77,11 @@ def plan(
         help="Quadrotor: joint (position and yaw on the SOLM), velocity_yaw (minimum time, yaw along the "
         "velocity, no perception) or yaw_only (that flight, its yaw alone on the SOLM); docs/flight.md.",
     ),
+    attitude_rounds: int = typer.Option(
+        ATTITUDE_ROUNDS,
+        help="Quadrotor, joint: rounds of the guidance at the planned attitude (the SOLM cast level, corrected "
+        "along the flight and optimised again; 0: level only).",
+    ),
     metric: str | None = option("guidance.metric"),
     weight: float | None = option("guidance.weight"),
     power: float | None = option("guidance.power"),
@@ -108,7 +114,8 @@ def plan(
         check_output(out)
         check_output(png)
         if flying:
-            _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json, flight_planner)
+            flight = (start_z, goal_z, flight_planner, attitude_rounds)
+            _plan_flight(cfg, solm_path, start, goal, flight, out, map_path, as_json)
             return
         if start_z is not None or goal_z is not None:
             raise Lf3pmError("--start-z and --goal-z are a quadrotor's (--robot quadrotor)")
@@ -163,14 +170,16 @@ def plan(
             )
 
 
-def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as_json, planner) -> None:
-    """`lf3pm plan --robot quadrotor`: a flight on an r3yaw SOLM (lf3pm.planner.flight_plan)."""
+def _plan_flight(cfg, solm_path, start, goal, flight, out, map_path, as_json) -> None:
+    """`lf3pm plan --robot quadrotor`: a flight on an r3yaw SOLM (lf3pm.planner.flight_plan);
+    ``flight``: (start height, goal height, planner, attitude rounds)."""
     from lf3pm.atomic import atomic_write
     from lf3pm.flight import Quadrotor
     from lf3pm.map import load_map
     from lf3pm.planner.flight_plan import plan_flight
     from lf3pm.solm import Solm
 
+    start_z, goal_z, planner, attitude_rounds = flight
     if start_z is None or goal_z is None:
         raise Lf3pmError("a quadrotor's plan needs --start-z and --goal-z (m)")
     solm = Solm.open(solm_path)
@@ -178,16 +187,17 @@ def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as
     if not source or not Path(str(source)).exists():
         raise Lf3pmError(f"the flight's clearance needs the map: give --map (the SOLM names {source!r})")
     with map_loading() as progress:
-        points = load_map(source, progress=progress).points
+        world = load_map(source, progress=progress)
     quad = Quadrotor.from_config(cfg.quadrotor)
     flight = plan_flight(
         solm,
-        points,
+        world,
         (start[0], start[1], start_z, start[2]),
         (goal[0], goal[1], goal_z, goal[2]),
         planner=planner,
         guidance=cfg.guidance,
         quadrotor=quad,
+        attitude_rounds=attitude_rounds,
     )
     with atomic_write(out) as fp:
         fp.write(flight.trajectory.csv_bytes(quad))
@@ -203,3 +213,9 @@ def _plan_flight(cfg, solm_path, start, goal, start_z, goal_z, out, map_path, as
         f"{summary['limits'][worst]:.0%}",
         highlight=False,
     )
+    for k, r in enumerate(summary["attitude_rounds"], 1):
+        console.print(
+            f"attitude round {k}: the guidance at the flown attitude over level, median {r['ratio_median']:.3f} "
+            f"over {r['samples']} samples; {r['changed_over_10_percent']:.0%} changed by more than 10 %",
+            highlight=False,
+        )

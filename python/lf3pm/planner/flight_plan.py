@@ -23,7 +23,8 @@ from lf3pm import _core
 from lf3pm.config import DEFAULTS, GuidanceConfig, QuadrotorConfig
 from lf3pm.errors import Lf3pmError
 from lf3pm.flight import Quadrotor
-from lf3pm.planner.cost_map import cost_from_values
+from lf3pm.planner.cost_map import CostLayer, cost_from_values
+from lf3pm.planner.flight_attitude import ATTITUDE_ROUNDS, AttitudeGuidance, sample_rate
 from lf3pm.planner.flight_path import FlightPath, clear_moves, plan_flight_path
 from lf3pm.trajectory.trajectory import CSV_RATE
 
@@ -35,6 +36,8 @@ ESDF_RES = 0.2
 SCALE_TOLERANCE = 1e-3
 #: Samples a second of the time scaling's bisection (the result is then checked at CHECK_RATE).
 SEARCH_RATE = 100.0
+#: Most rounds of the guidance at the planned attitude a plan may ask for.
+MAX_ATTITUDE_ROUNDS = 10
 #: Weight of the yaw's jerk against the position's in the energy.
 YAW_ENERGY = 0.1
 
@@ -102,7 +105,9 @@ class FlightPlan:
     (``limits``; clearance: r_safe over the least distance to the map), the objective's
     sampled ``terms``, the optimiser's iterations, status and reason, the ``objective`` at
     its optimum (before time scaling), the ``planner``
-    (:data:`PLANNERS`) and the seconds each stage took."""
+    (:data:`PLANNERS`), the seconds each stage took and, per round of the guidance at the
+    planned attitude, what the attitude changed (``attitude``:
+    lf3pm.planner.flight_attitude.AttitudeGuidance.correct's summaries)."""
 
     path: FlightPath
     trajectory: FlightTrajectory
@@ -115,6 +120,7 @@ class FlightPlan:
     objective: float = math.nan
     planner: str = "joint"
     seconds: dict = field(default_factory=dict)
+    attitude: list = field(default_factory=list)
 
     def summary(self) -> dict:
         """JSON-ready figures of the plan."""
@@ -131,6 +137,7 @@ class FlightPlan:
             "reason": self.reason,
             "objective": self.objective,
             "planner": self.planner,
+            "attitude_rounds": self.attitude,
             **{f"{name}_s": value for name, value in self.seconds.items()},
         }
 
@@ -162,18 +169,24 @@ def flight_esdf(points: np.ndarray, lower, upper, res: float = ESDF_RES) -> _cor
     )
 
 
-def guidance_field(solm, guidance: GuidanceConfig) -> _core.VolumeField:
+def guidance_layer(solm, guidance: GuidanceConfig) -> CostLayer:
     """The r3yaw SOLM's cost layer as the back end reads it: the guidance channel over its
     median, to its power, capped (lf3pm.planner.cost_map), unevaluated cells at the cap."""
-    g = solm.grid_spec
     metric = guidance.metric
-    values = np.zeros(g.shape) if metric == "none" else solm.channel(metric)
+    values = np.zeros(solm.grid_spec.shape) if metric == "none" else solm.channel(metric)
     degenerate = np.asarray(solm.channel("degenerate")).astype(bool)
-    layer = cost_from_values(values, metric, degenerate=degenerate, power=guidance.power)
+    return cost_from_values(values, metric, degenerate=degenerate, power=guidance.power)
+
+
+def guidance_field(solm, guidance: GuidanceConfig, cost: np.ndarray | None = None) -> _core.VolumeField:
+    """The guidance layer (:func:`guidance_layer`, or ``cost`` of its shape in its place) as
+    the VolumeField the back end interpolates."""
+    g = solm.grid_spec
+    cost = guidance_layer(solm, guidance).filled if cost is None else cost
     levels = np.asarray(g.z_levels, dtype=np.float64)
     dz = float(np.diff(levels).mean()) if len(levels) > 1 else g.res
     return _core.VolumeField(
-        np.ascontiguousarray(layer.filled.ravel()),
+        np.ascontiguousarray(cost.ravel(), dtype=np.float64),
         g.nx,
         g.ny,
         len(levels),
@@ -252,17 +265,23 @@ W_HEADING = 10.0
 class FlightPlanner:
     """Flights on one r3yaw SOLM over its map: the ESDF and the guidance field are built
     once, so that replanning from a new start costs only the search and the optimisation.
-    ``world_points``: the map (N x 3); the guidance and quadrotor sections as in
-    :func:`plan_flight`."""
+    ``world_points``: the map (N x 3), or the Map itself (lf3pm.load_map; its index serves
+    the casts of the guidance at the planned attitude, else the points are indexed when a
+    plan first needs them); the guidance and quadrotor sections as in :func:`plan_flight`."""
 
     def __init__(
         self,
         solm,
-        world_points: np.ndarray,
+        world_points,
         *,
         guidance: GuidanceConfig = DEFAULTS.guidance,
         quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
     ):
+        from lf3pm.map import Map
+
+        self.world = world_points if isinstance(world_points, Map) else None
+        world_points = world_points.points if self.world is not None else world_points
+        self._points = world_points
         self.solm, self.guidance = solm, guidance
         self.quad = quadrotor if isinstance(quadrotor, Quadrotor) else Quadrotor.from_config(quadrotor)
         began = time.perf_counter()
@@ -275,7 +294,8 @@ class FlightPlanner:
             (x0 - margin, y0 - margin, levels.min() - margin),
             (x1 + margin, y1 + margin, levels.max() + margin),
         )
-        self.field = guidance_field(solm, guidance)
+        self.layer = guidance_layer(solm, guidance)
+        self.field = guidance_field(solm, guidance, self.layer.filled)
         self.r_safe = float(solm.attrs.get("robot_radius", _core.FlightWeights().r_safe))
         # The ESDF is conservative by half a voxel diagonal (flight_esdf); the front end's
         # cells are checked exactly by the SOLM, so its moves ask the voxels' own distance:
@@ -284,17 +304,18 @@ class FlightPlanner:
         self.move_free = clear_moves(solm, self.esdf, self.front_clearance)
         self.setup_s = time.perf_counter() - began
 
-    def problem(self, w_q: float, w_heading: float, head, tail, q, T, rho_T: float, w_energy: float):
+    def problem(self, w_q: float, w_heading: float, head, tail, q, T, rho_T: float, w_energy: float, field=None):
         """The back end's objective (a C++ FlightProblem) with guidance weight ``w_q``,
         heading weight ``w_heading``, head and tail states (4 x 3), initial waypoints (4 x
-        (N - 1)) and durations (N) on this planner's fields."""
+        (N - 1)) and durations (N) on this planner's fields (``field``: another guidance
+        field in place of the level one)."""
         weights = _core.FlightWeights()
         weights.w_q, weights.w_heading, weights.r_safe = w_q, w_heading, self.r_safe
         return _core.FlightProblem(
             self.quad.params(),
             self.quad.limits(),
             weights,
-            self.field,
+            self.field if field is None else field,
             self.esdf,
             rho_T,
             w_energy,
@@ -315,11 +336,16 @@ class FlightPlanner:
         w_energy: float = 1e-2,
         piece_length: float = 2.0,
         check_rate: float = CHECK_RATE,
+        attitude_rounds: int = ATTITUDE_ROUNDS,
     ) -> FlightPlan:
         """A flight from ``start`` (x, y, z, yaw) to ``goal`` (x, y, z[, yaw]) by
         ``planner`` (:func:`plan_flight`)."""
         if planner not in PLANNERS:
             raise Lf3pmError(f"unknown flight planner {planner!r}; use one of {', '.join(PLANNERS)}")
+        if not (isinstance(attitude_rounds, int) and 0 <= attitude_rounds <= MAX_ATTITUDE_ROUNDS):
+            raise Lf3pmError(
+                f"attitude_rounds must be an integer in [0, {MAX_ATTITUDE_ROUNDS}], got {attitude_rounds!r}"
+            )
         began = time.perf_counter()
         guidance, quad = self.guidance, self.quad
         perceptive = planner == "joint"
@@ -333,8 +359,8 @@ class FlightPlanner:
         head[:, 0] = [*path.positions[0], path.yaws[0]]
         tail[:, 0] = [*path.positions[-1], path.yaws[-1]]
 
-        def problem(w_q, w_heading, q, T):
-            return self.problem(w_q, w_heading, head, tail, q, T, rho_T, w_energy)
+        def problem(w_q, w_heading, q, T, field=None):
+            return self.problem(w_q, w_heading, head, tail, q, T, rho_T, w_energy, field)
 
         w_q = guidance.weight * rho_T if guidance.metric != "none" else 0.0
         flight = problem(w_q if perceptive else 0.0, 0.0 if perceptive else W_HEADING, waypoints, durations)
@@ -342,9 +368,20 @@ class FlightPlanner:
         x = np.asarray(out["x"])
         if planner == "yaw_only":
             flight, x, out = _yaw_only(problem, w_q, flight, x)
-        coefficients, durations = flight.trajectory(x)
-        trajectory = FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
+        trajectory = _trajectory(flight, x)
         optimized = time.perf_counter()
+        rounds = []
+        if perceptive and w_q > 0 and attitude_rounds:
+            attitude = self.attitude_guidance()
+            for _ in range(attitude_rounds):
+                cost, summary = attitude.correct(trajectory.sample(sample_rate(self.solm.grid_spec, quad.vmax)), quad)
+                q, T = _waypoints(flight, x)
+                flight = problem(w_q, 0.0, q, T, guidance_field(self.solm, guidance, cost))
+                out = flight.optimize(_core.trajectory_lbfgs())
+                x = np.asarray(out["x"])
+                trajectory = _trajectory(flight, x)
+                rounds.append(summary)
+        corrected = time.perf_counter()
         trajectory, factor, limits = within_limits(trajectory, quad, self.esdf, self.r_safe, check_rate)
         return FlightPlan(
             path=path,
@@ -357,8 +394,18 @@ class FlightPlanner:
             reason=str(out["reason"]),
             objective=float(out["f"]),
             planner=planner,
-            seconds={"search": searched - began, "optimize": optimized - searched},
+            seconds={"search": searched - began, "optimize": optimized - searched, "attitude": corrected - optimized},
+            attitude=rounds,
         )
+
+    def attitude_guidance(self) -> AttitudeGuidance:
+        """A fresh correction of this planner's guidance layer at the planned attitude (the
+        map indexed on first use)."""
+        from lf3pm.map import load_map
+
+        if self.world is None:
+            self.world = load_map(self._points)
+        return AttitudeGuidance(self.solm, self.world, self.layer, self.guidance.power)
 
 
 def plan_flight(
@@ -374,20 +421,43 @@ def plan_flight(
     w_energy: float = 1e-2,
     piece_length: float = 2.0,
     check_rate: float = CHECK_RATE,
+    attitude_rounds: int = ATTITUDE_ROUNDS,
 ) -> FlightPlan:
-    """A flight on ``solm`` (r3yaw) over the map ``world_points`` (N x 3, for the ESDF) from
+    """A flight on ``solm`` (r3yaw) over the map ``world_points`` (N x 3, for the ESDF, or
+    the Map) from
     ``start`` (x, y, z, yaw) to ``goal`` (x, y, z[, yaw]), at rest at both ends, with the
     guidance and quadrotor sections (module docstring), by ``planner`` (:data:`PLANNERS`):
     ``joint`` optimises position and yaw on the guidance; ``velocity_yaw`` takes the
     shortest front-end path and no guidance, the yaw held along the velocity; ``yaw_only``
     is that flight with its yaw waypoints alone then optimised on the guidance (positions
-    and durations kept, then time-scaled to the limits). Single-threaded. Replanning on
-    one SOLM: :class:`FlightPlanner`."""
+    and durations kept, then time-scaled to the limits). ``attitude_rounds``: the joint
+    flight is then corrected for the attitude it flies at and optimised again, so many
+    times (lf3pm.planner.flight_attitude; 0: the level SOLM only). Single-threaded but for
+    those casts (the scan section's threads). Replanning on one SOLM: :class:`FlightPlanner`."""
     planner_ = FlightPlanner(solm, world_points, guidance=guidance, quadrotor=quadrotor)
     plan = planner_.plan(
-        start, goal, planner=planner, rho_T=rho_T, w_energy=w_energy, piece_length=piece_length, check_rate=check_rate
+        start,
+        goal,
+        planner=planner,
+        rho_T=rho_T,
+        w_energy=w_energy,
+        piece_length=piece_length,
+        check_rate=check_rate,
+        attitude_rounds=attitude_rounds,
     )
     return FlightPlan(**{**plan.__dict__, "seconds": {"setup": planner_.setup_s, **plan.seconds}})
+
+
+def _trajectory(flight, x: np.ndarray) -> FlightTrajectory:
+    coefficients, durations = flight.trajectory(x)
+    return FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
+
+
+def _waypoints(flight, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The inner waypoints (4 x (N - 1)) and durations (N) of the flight at ``x``."""
+    _, durations = flight.trajectory(x)
+    n = len(durations)
+    return x[: 4 * (n - 1)].reshape(n - 1, 4).T.copy(), np.asarray(durations)
 
 
 def _heading_yaws(path: FlightPath, waypoints: np.ndarray) -> np.ndarray:
@@ -406,10 +476,9 @@ def _yaw_only(problem, w_q: float, flight, x: np.ndarray):
     (problem, x, outcome)."""
     from scipy.optimize import minimize
 
-    coefficients, durations = flight.trajectory(x)
+    q, durations = _waypoints(flight, x)
     n = len(durations)
-    q = x[: 4 * (n - 1)].reshape(n - 1, 4).T.copy()
-    yawing = problem(w_q, 0.0, q, np.asarray(durations))
+    yawing = problem(w_q, 0.0, q, durations)
     free = np.arange(3, 4 * (n - 1), 4)  # each waypoint's yaw (x holds them column by column)
     base = np.asarray(yawing.initial).copy()
 

@@ -4,6 +4,6 @@ attitude (docs/flight.md)."""
 
 from lf3pm.experiments.flight.analysis import analyse, write_report
 from lf3pm.experiments.flight.protocol import FlightMap, FlightProtocol, load_protocol
-from lf3pm.experiments.flight.study import run_study
+from lf3pm.experiments.flight.study import report_folder, run_study
 
-__all__ = ["FlightMap", "FlightProtocol", "analyse", "load_protocol", "run_study", "write_report"]
+__all__ = ["FlightMap", "FlightProtocol", "analyse", "load_protocol", "report_folder", "run_study", "write_report"]

@@ -3,7 +3,8 @@ joint planner (c) against the velocity-yaw (a) and yaw-only (b) baselines on at-
 no-risk pairs (lf3pm.experiments.paired_stats.compare: median ratio with its bootstrap
 interval over pairs, Wilcoxon p), the flight time's overhead, the limits on every plan,
 and failures (a planner or replay error, lost scans) counted apart from accuracy; also over
-all pairs whatever their risk, a view that does not depend on the risk rule. A plan's
+all pairs whatever their risk, a view that does not depend on the risk rule; and each
+pair's errors (``pairs``, for the scatter figure). A plan's
 error is the median over seeds of its replays' APE (RMSE). Issue 43's goals are checked
 and said as they come out."""
 
@@ -44,7 +45,7 @@ def analyse(plans: list[dict], replays: list[dict], protocol) -> dict:
         errors[(r["map"], r["pair"], r["planner"], r["odometry"])].append(r["ape_m"])
     maps = [case.scene for case in protocol.maps]
     groups = {m: [m] for m in maps} | {"all": maps}
-    out = {"protocol": protocol.name, "maps": {}, "failures": failures, "goals": GOALS}
+    out = {"protocol": protocol.name, "maps": {}, "failures": failures, "goals": GOALS, "pairs": []}
     planning_errors = [r for r in plans if "error" in r]
     out["planning_failures"] = [{k: r[k] for k in ("map", "pair", "planner", "error")} for r in planning_errors]
     limits = [max(r["limits"].values()) for r in plans if "limits" in r]
@@ -69,6 +70,11 @@ def analyse(plans: list[dict], replays: list[dict], protocol) -> dict:
                     )
                     rows[risk].append(row)
                     rows["all"].append(row)
+                    if group == m:
+                        out["pairs"].append(
+                            {"map": m, "pair": k, "odometry": odometry, "risk": risk}
+                            | {"a_m": row[1], "b_m": row[2], "c_m": row[0]}
+                        )
             # The goals are judged on the at-risk and no-risk groups; "all" pairs is a view
             # that does not depend on the risk rule.
             section[odometry] = {risk: _compare(np.array(rows[risk])) for risk in ("at_risk", "no_risk", "all")}
@@ -91,8 +97,9 @@ def _compare(rows: np.ndarray) -> dict:
 
 def write_report(summary: dict, out) -> list[Path]:
     """summary.json, report.md (tables per map and odometry, the goals as they came out)
-    in ``out``; returns the paths."""
+    and scatter.png (lf3pm.experiments.flight.figures) in ``out``; returns the paths."""
     from lf3pm.atomic import atomic_write
+    from lf3pm.experiments.flight.figures import scatter_figure
 
     out = Path(out)
     lines = [f"# Flight study `{summary['protocol']}`", ""]
@@ -123,6 +130,9 @@ def write_report(summary: dict, out) -> list[Path]:
         fp.write(json.dumps(summary, indent=1).encode())
     with atomic_write(paths[1]) as fp:
         fp.write(("\n".join(lines) + "\n").encode())
+    if summary["pairs"]:
+        paths.append(out / "scatter.png")
+        scatter_figure(summary, paths[-1])
     return paths
 
 

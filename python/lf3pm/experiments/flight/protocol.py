@@ -6,6 +6,9 @@ Three planners on the same r3yaw SOLM and pairs (lf3pm.planner.flight_plan.PLANN
 (a) velocity_yaw, (b) yaw_only, (c) joint. A pair is at risk when plan (a) crosses poor
 views on its SOLM (lf3pm.experiments.risk's rule on the SOLM's q_n at the plan's poses,
 level, against the map's median over each cell's best yaw), decided before any replay.
+The joint planner corrects its guidance for the attitude it flies at in
+``attitude_rounds`` rounds (lf3pm.planner.flight_attitude; by default none: level
+guidance, as the protocols frozen before that correction existed flew).
 Every plan is replayed by each odometry with each seed; a plan's error is the median over
 seeds of the replay's APE (RMSE, m)."""
 
@@ -19,6 +22,8 @@ from lf3pm.config import Section, validated
 from lf3pm.errors import Lf3pmError
 from lf3pm.experiments.risk import RiskRule
 from lf3pm.limits import load_yaml, read_text_file
+from lf3pm.planner.flight_attitude import ATTITUDE_ROUNDS
+from lf3pm.planner.flight_plan import MAX_ATTITUDE_ROUNDS
 
 
 class FlightMap(Section):
@@ -56,6 +61,12 @@ class FlightProtocol(Section):
     seeds: int = Field(3, ge=1, le=100)
     pair_seed: int = Field(0, ge=0)
     risk: RiskRule = RiskRule()
+    attitude_rounds: int = Field(
+        ATTITUDE_ROUNDS,
+        ge=0,
+        le=MAX_ATTITUDE_ROUNDS,
+        description="Rounds of the joint planner's guidance at the planned attitude (0: the level SOLM only).",
+    )
     threads: int = Field(2, ge=1, le=256)
 
     @classmethod

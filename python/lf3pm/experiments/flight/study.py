@@ -75,6 +75,21 @@ def at_risk(solm, trajectory: FlightTrajectory, rule) -> tuple[bool, float]:
     return share >= rule.share, share
 
 
+def report_folder(out) -> tuple[dict, list[Path]]:
+    """Analyses a study folder again from its frozen protocol and records alone (what
+    `lf3pm experiment flight --report-only` does) and writes its report; returns the
+    summary and the paths written."""
+    from lf3pm.experiments.flight.analysis import analyse, write_report
+
+    out = Path(out)
+    frozen = out / "protocol.json"
+    if not frozen.is_file():
+        raise Lf3pmError(f"{out} holds no flight study (no protocol.json)")
+    protocol = FlightProtocol.model_validate(json.loads(frozen.read_text()))
+    summary = analyse(_records(out / "plans.jsonl"), _records(out / "replays.jsonl"), protocol)
+    return summary, write_report(summary, out)
+
+
 def _records(path: Path) -> list[dict]:
     if not path.exists():
         return []
@@ -123,14 +138,14 @@ def run_study(out, protocol: FlightProtocol, *, progress=None) -> dict:
             progress=(lambda d, t, c=case.scene: progress(f"SOLM {c}", d, t)) if progress else None,
         )
         solm = Solm.open(store)
-        planner = FlightPlanner(solm, world.points, quadrotor=quad)
+        planner = FlightPlanner(solm, world, quadrotor=quad)
         for k, (start, goal) in enumerate(pairs_of(case, protocol.pair_seed)):
             for name in LETTERS:
                 key = (case.scene, k, name)
                 if key not in plans:
                     record = {"map": case.scene, "pair": k, "planner": name, "start": start, "goal": goal}
                     try:
-                        plan = planner.plan(start, goal, planner=name)
+                        plan = planner.plan(start, goal, planner=name, attitude_rounds=protocol.attitude_rounds)
                     except Lf3pmError as err:
                         record["error"] = str(err)
                     else:

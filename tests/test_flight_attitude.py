@@ -1,0 +1,130 @@
+"""The guidance at the planned attitude (issue 43, item 2; lf3pm.planner.flight_attitude):
+its casts against lf3pm.evaluate at the same sensor poses, the corrected layer against its
+definition, and plans that use it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import lf3pm
+from lf3pm.errors import Lf3pmError
+from lf3pm.flight import Quadrotor
+from lf3pm.planner.flight_attitude import AttitudeGuidance
+from lf3pm.planner.flight_plan import FlightPlanner, guidance_layer
+from lf3pm.scenes import build_scene
+from lf3pm.solm import Solm, build_solm, make_grid
+
+
+@pytest.fixture(scope="module")
+def tilted_room(tmp_path_factory):
+    """The boxes room's r3yaw SOLM for a VLP-16 pitched 20 degrees down, noise-free."""
+    world = lf3pm.load_map(build_scene("boxes").points)
+    grid = make_grid(world, "r3yaw", 1.0, bounds=(-6.0, -6.0, 6.0, 6.0), yaw_bins=4, z_levels=(1.0, 2.5))
+    path = tmp_path_factory.mktemp("attitude") / "boxes.zarr"
+    build_solm(world, "vlp16", grid, path, noise=0.0, mount="down20", tile=6)
+    solm = Solm.open(path)
+    return world, solm, AttitudeGuidance(solm, world, guidance_layer(solm, lf3pm.config.DEFAULTS.guidance), 1.0), path
+
+
+def banked(yaw: float, roll: float) -> np.ndarray:
+    """Body to world: yaw about z, then a roll about the body's x axis."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    r = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    cr, sr = math.cos(roll), math.sin(roll)
+    return r @ np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+
+
+def test_the_attitude_ratio_is_the_metric_tilted_over_level_as_evaluate_gives_them(tilted_room):
+    """At three poses: the ratio equals q_n of lf3pm.evaluate at the tilted sensor pose over
+    q_n at the level one (the SOLM's sensor and mount, no noise),
+    to 1e-9; a level body gives exactly 1."""
+    from lf3pm.flight.mounts import MOUNTS
+
+    world, _, attitude, _ = tilted_room
+    positions = np.array([[-2.0, -1.5, 1.5], [1.0, 2.0, 2.0], [3.0, -3.0, 2.4]])
+    yaws = np.array([0.3, 2.0, -1.2])
+    rotations = np.stack([banked(y, 0.4) for y in yaws])
+    got = attitude.ratios(positions, rotations, yaws)
+    mount = MOUNTS["down20"].matrix()
+    for p, r, yaw, ratio in zip(positions, rotations, yaws, got):
+        q = []
+        for rotation in (r, banked(yaw, 0.0)):
+            body = np.eye(4)
+            body[:3, :3], body[:3, 3] = rotation, p
+            q.append(lf3pm.evaluate(world, body @ mount, "vlp16", noise=0.0).q_n)
+        assert ratio == pytest.approx(q[0] / q[1], rel=1e-9)
+        assert abs(ratio - 1.0) > 1e-3  # the tilt does change the view
+    level = np.stack([banked(y, 0.0) for y in yaws])
+    np.testing.assert_array_equal(attitude.ratios(positions, level, yaws), np.ones(3))
+
+
+def test_the_correction_scales_the_nodes_a_flight_passes_and_no_other(tilted_room):
+    """A hovering sample set (level: ratio 1) leaves the layer as it was; a banked sample
+    multiplies its node's cost by its ratio to the guidance power, capped, and nothing else."""
+    world, solm, _, _ = tilted_room
+    layer = guidance_layer(solm, lf3pm.config.DEFAULTS.guidance)
+    attitude = AttitudeGuidance(solm, world, layer, 2.0)
+    quad = Quadrotor(mount="down20")
+    zero = np.zeros((1, 3))
+    hover = {"position": np.array([[1.0, 2.0, 2.5]]), "velocity": zero, "acceleration": zero, "jerk": zero}
+    hover |= {"yaw": np.array([2.0]), "yaw_rate": np.zeros(1)}
+    cost, summary = attitude.correct(hover, quad)
+    np.testing.assert_array_equal(cost, layer.filled)
+    assert summary["samples"] == 1 and summary["ratio_median"] == 1.0
+    sideways = dict(hover, acceleration=np.array([[0.0, 4.0, 0.0]]))
+    cost, summary = attitude.correct(sideways, quad)
+    att = quad.attitudes(zero, sideways["acceleration"], zero, [2.0], [0.0])
+    ratio = attitude.ratios(sideways["position"], att.rotation, np.array([2.0]))[0]
+    node = solm.grid_spec.cell(1.0, 2.0, 2.5, yaw=2.0)
+    changed = cost != layer.filled
+    assert changed.sum() == 1 and changed[node]
+    assert cost[node] == pytest.approx(min(layer.filled[node] * ratio**2, layer.cap), rel=1e-12)
+    assert summary["ratio_median"] == pytest.approx(ratio, rel=1e-12)
+
+
+def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room):
+    """With a round at the planned attitude: one summary per round, limits held on 1 kHz
+    samples, rest at both ends; without: no round and the level plan. Bad rounds: one line."""
+    world, solm, _, _ = tilted_room
+    planner = FlightPlanner(solm, world, quadrotor=Quadrotor(mount="down20"))
+    start, goal = (-5.5, -5.5, 1.0, 0.0), (5.5, 5.5, 2.5)
+    level = planner.plan(start, goal, attitude_rounds=0)
+    corrected = planner.plan(start, goal, attitude_rounds=2)
+    assert level.attitude == [] and len(corrected.attitude) == 2
+    assert corrected.attitude[0]["samples"] > 20
+    for plan in (level, corrected):
+        assert max(plan.limits.values()) <= 1.0 + 1e-9
+        s = plan.trajectory.sample(100.0)
+        np.testing.assert_allclose(s["position"][[0, -1]], [start[:3], goal], atol=1e-9)
+    for bad in (-1, 11, 1.5):
+        with pytest.raises(Lf3pmError, match="attitude_rounds"):
+            planner.plan(start, goal, attitude_rounds=bad)
+
+
+def test_lf3pm_plan_says_what_each_attitude_round_changed(tilted_room, tmp_path):
+    from typer.testing import CliRunner
+
+    from lf3pm.cli import app
+
+    world, _, _, store = tilted_room
+    np.save(tmp_path / "boxes.npy", world.points)
+    args = [
+        "plan",
+        "--robot",
+        "quadrotor",
+        "--mount",
+        "down20",
+        "--solm",
+        str(store),
+        "--map",
+        str(tmp_path / "boxes.npy"),
+    ]
+    args += ["-o", str(tmp_path / "f.csv"), "--start", "-5.5", "-5.5", "0", "--goal", "5.5", "5.5", "0"]
+    done = CliRunner().invoke(app, [*args, "--start-z", "1", "--goal-z", "2.5", "--attitude-rounds", "1"])
+    assert done.exit_code == 0, done.output
+    assert "attitude round 1: the guidance at the flown attitude over level, median" in done.output
+    bad = CliRunner().invoke(app, [*args, "--start-z", "1", "--goal-z", "2.5", "--attitude-rounds", "11"])
+    assert bad.exit_code != 0 and "attitude_rounds" in bad.output and "Traceback" not in bad.output
