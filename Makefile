@@ -53,6 +53,7 @@ bench: build
 	$(PY) bench/bench_solm.py
 	$(PY) bench/bench_solm_yaw_reuse.py
 	$(PY) bench/bench_solm_approximations.py
+	$(PY) bench/bench_flight_solm.py --full
 	$(PY) bench/bench_site_floor.py
 	$(PY) bench/bench_graph_search.py
 	$(PY) bench/bench_esdf.py

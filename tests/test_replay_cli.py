@@ -159,7 +159,7 @@ def test_lio_with_an_evalio_odometry_in_json(files, odometry, name):
 
 
 def test_table_cells_stay_readable_for_failed_runs():
-    from lf3pm.cli.replay import format_figure
+    from lf3pm.cli.replay_table import format_figure
 
     assert format_figure("ape_rmse", 27.4634) == "27463"  # mm; 2.75e+04 would be cut at 80 columns
     assert format_figure("ape_rmse", 0.0123) == "12.3"

@@ -4,12 +4,9 @@ sensors (lf3pm.replay_seeds), its figures per seed, a PNG and a ROS 2 bag."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import typer
-from rich import box
-from rich.table import Table
 
 from lf3pm.cli._common import (
     CONFIG_OPTION,
@@ -19,11 +16,11 @@ from lf3pm.cli._common import (
     console,
     map_loading,
     option,
-    print_warning,
     progress_bar,
     user_errors,
 )
-from lf3pm.config import DEFAULTS, MAX_TRAJECTORY_SECONDS, ReplayConfig
+from lf3pm.cli.replay_table import print_series
+from lf3pm.config import DEFAULTS, MAX_TRAJECTORY_SECONDS
 from lf3pm.errors import Lf3pmError
 
 #: Where each option of replay lives in the config.
@@ -37,6 +34,7 @@ REPLAY_PATHS = {
     "rate": "replay.rate",
     "noise": "scan.noise",
     "threads": "scan.threads",
+    "mount": "quadrotor.mount",
 }
 
 
@@ -54,6 +52,7 @@ def replay_command(
     rate: float | None = option("replay.rate"),
     noise: float | None = option("scan.noise"),
     threads: int | None = option("scan.threads"),
+    mount: str | None = option("quadrotor.mount", help="A flight's LiDAR mount (top, down20, side)."),
     as_json: bool = typer.Option(
         False,
         "--json",
@@ -65,7 +64,8 @@ def replay_command(
         None, metavar="OUT.bag", help="ROS 2 bag (directory) of the first seed's simulated stream."
     ),
 ):
-    """Replay a planned trajectory with simulated sensors through a state estimator; APE / RPE (evo)."""
+    """Replay a planned trajectory (a ground robot's or a quadrotor's flight) with simulated sensors through a
+    state estimator; APE / RPE (evo)."""
     with user_errors():
         cfg = configure(config, locals(), REPLAY_PATHS)
         from lf3pm.map import load_map
@@ -91,14 +91,20 @@ def replay_command(
         elif odometry is not None:
             lio = next(name for name, m in METHODS.items() if m.uses_odometry)
             raise Lf3pmError(f"--odometry applies to --method {lio}, not {run.method}")
-        samples = read_trajectory(trajectory)
+        samples = read_trajectory(trajectory, cfg.quadrotor)
+        if bag is not None and not isinstance(samples, dict):
+            raise Lf3pmError("--bag writes ground robots' replays only, not a flight's")
         with map_loading() as progress:
             world = load_map(map_path, threads=scan.threads, progress=progress)
-        motion = Motion.from_arrays(
-            *(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")),
-            map=world,
-            height=run.height,
-            ground=cfg.ground,
+        motion = (
+            samples
+            if not isinstance(samples, dict)
+            else Motion.from_arrays(
+                *(samples[c] for c in ("t", "x", "y", "yaw", "vx", "vy", "omega")),
+                map=world,
+                height=run.height,
+                ground=cfg.ground,
+            )
         )
         common = {"rate": run.rate, "height": run.height, "noise": scan.noise, "threads": scan.threads}
         with progress_bar() as step:
@@ -164,81 +170,29 @@ def replay_command(
             )
 
 
-def read_trajectory(path: Path) -> dict:
-    """The columns of a trajectory CSV (Motion.from_csv's input; read_csv bounds the file),
-    refused in one line when it lasts longer than MAX_TRAJECTORY_SECONDS, before the map
-    is read (Motion refuses it too, after)."""
+def read_trajectory(path: Path, quadrotor=DEFAULTS.quadrotor):
+    """The columns of a ground robot's trajectory CSV (Motion.from_csv's input; read_csv
+    bounds the file), or the FlightMotion of a flight's (its header names z) flown by
+    ``quadrotor`` (config section), refused in one line when it lasts longer than
+    MAX_TRAJECTORY_SECONDS, before the map is read (Motion refuses it too, after)."""
+    from lf3pm.limits import check_file
+    from lf3pm.replays.flight_motion import FlightMotion
     from lf3pm.trajectory.trajectory import read_csv
 
-    samples = read_csv(path)
-    duration = float(samples["t"][-1] - samples["t"][0])
+    check_file(path, "trajectory")
+    with open(path, "rb") as fp:
+        header = fp.readline(4096).decode("utf-8", "replace").strip().split(",")
+    if "z" in header:
+        from lf3pm.flight import Quadrotor
+
+        samples = FlightMotion.from_csv(path, quadrotor=Quadrotor.from_config(quadrotor))
+        duration = samples.t1 - samples.t0
+    else:
+        samples = read_csv(path)
+        duration = float(samples["t"][-1] - samples["t"][0])
     if duration > MAX_TRAJECTORY_SECONDS:
         raise Lf3pmError(
             f"{path}: the trajectory lasts {duration:g} s, more than {MAX_TRAJECTORY_SECONDS:g} s, the "
             "longest lf3pm replays: replay a part of it (its rows within an hour)"
         )
     return samples
-
-
-def print_series(series, settings: ReplayConfig = DEFAULTS.replay) -> None:
-    """The figures of each seed and their medians, translations in mm (in metres eleven
-    columns of 0.00xxx do not fit 80 characters); the rest judged by the replay section
-    ``settings``."""
-    from lf3pm.replays.replay_result import FIGURES
-
-    first = series.results[0]
-    odometry = first.report.get("odometry")
-    method = f"{first.method} ({odometry})" if odometry else first.method
-    table = Table(
-        title=f"replay: {method}, {first.sensor}, {first.scans} scans at "
-        f"{first.params['rate']:g} Hz (rmse in mm; RPE deg per scan)",
-        box=box.SIMPLE_HEAD,
-        collapse_padding=True,
-        pad_edge=False,
-    )
-    table.add_column("seed")
-    for _, header, _ in FIGURES:
-        table.add_column(header, justify="right")
-
-    for r in series.results:
-        table.add_row(str(r.seed), *(format_figure(key, get(r)) for key, _, get in FIGURES))
-    if len(series.results) > 1:
-        table.add_row("median", *(format_figure(key, series.median[key]) for key, _, _ in FIGURES))
-    console.print(table)
-    print_rest(series.results, settings)
-
-
-def format_figure(key: str, value) -> str:
-    """One cell of the replay table: metres in mm, three significant digits, whole numbers
-    from 1000 up (a failed run's 27463 mm, not 2.75e+04, which the 80-column table cuts)."""
-    from lf3pm.replays.replay_result import METRE_FIGURES
-
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "-"
-    value = value * 1000.0 if key in METRE_FIGURES else value
-    if isinstance(value, int):
-        return str(value)
-    return f"{value:.0f}" if abs(value) >= 1000 else f"{value:.3g}"
-
-
-def print_rest(results, settings: ReplayConfig = DEFAULTS.replay) -> None:
-    """What the LIO did while the sensor stood still before the trajectory, per seed,
-    and a warning for each seed that entered the trajectory moving (faster than the
-    replay section's rest_speed_limit)."""
-    rested = [r for r in results if r.rest]
-    if not rested:
-        return
-    moves = ", ".join(f"seed {r.seed} {1000 * r.rest['drift_m']:.0f} mm" for r in rested)
-    console.print(
-        f"rest ({rested[0].rest['seconds']:g} s still before the trajectory; APE re-anchored after it): "
-        f"the estimate moved at most {moves}",
-        highlight=False,
-    )
-    for r in rested:
-        if not r.rest["steady"]:
-            print_warning(
-                f"seed {r.seed}: the odometry still moved at {r.rest['speed_mps']:.2f} m/s at the end of "
-                f"the rest (> {settings.rest_speed_limit:g} m/s): it entered the trajectory with a velocity "
-                'error, so this APE measures its start, not the trajectory (docs/lio.md, "A still '
-                'sensor")'
-            )

@@ -83,7 +83,7 @@ class FlightTrajectory:
 
     def csv_bytes(self, quad: Quadrotor, rate: float = CSV_RATE) -> bytes:
         """Samples at ``rate`` Hz as CSV: t, x, y, z, yaw, vx, vy, vz, yaw_rate, the body's
-        attitude quaternion qw, qx, qy, qz (body to world) and thrust (N)."""
+        attitude quaternion qw, qx, qy, qz (body to world) and thrust (N), to 17 digits."""
         import io
 
         from scipy.spatial.transform import Rotation
@@ -94,7 +94,9 @@ class FlightTrajectory:
         columns = [s["t"], *s["position"].T, s["yaw"], *s["velocity"].T, s["yaw_rate"], xyzw[:, 3], *xyzw[:, :3].T]
         buf = io.StringIO()
         header = "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust"
-        np.savetxt(buf, np.column_stack([*columns, att.thrust]), delimiter=",", fmt="%.9g", header=header, comments="")
+        # Every digit of a double: a replay's splines through these samples differentiate them
+        # three times (FlightMotion.from_samples), and nine digits give body rates off by 1 rad/s.
+        np.savetxt(buf, np.column_stack([*columns, att.thrust]), delimiter=",", fmt="%.17g", header=header, comments="")
         return buf.getvalue().encode()
 
 

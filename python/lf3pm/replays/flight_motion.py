@@ -28,6 +28,9 @@ from lf3pm.flight import FlightAttitudes, Quadrotor
 
 #: Samples per second at which :meth:`FlightMotion.limit_ratios` checks a flight.
 LIMIT_RATE = 100.0
+#: The columns a flight's CSV needs (lf3pm.planner.flight_plan.FlightTrajectory.csv_bytes
+#: writes these and more): whether a trajectory CSV is a flight is said by its ``z``.
+FLIGHT_CSV_COLUMNS = ("t", "x", "y", "z", "yaw")
 
 
 class FlightMotion:
@@ -71,6 +74,51 @@ class FlightMotion:
         breaks = float(start) + np.concatenate([[0.0], np.cumsum(d)])
         power = np.transpose(c[:, ::-1, :], (1, 0, 2))  # PPoly's rows: highest power first
         return cls(PPoly(power[..., :3], breaks), PPoly(power[..., 3], breaks), quadrotor=quadrotor)
+
+    @classmethod
+    def from_samples(cls, t, position, yaw, *, quadrotor: Quadrotor | None = None):
+        """The flight through samples at times ``t`` (n,) s of ``position`` (n, 3) and ``yaw``
+        (n,), as `lf3pm plan --robot quadrotor` writes them at 100 Hz: quintic splines
+        through every sample (the yaw unwrapped), at rest at both ends (velocity and
+        acceleration zero there, as a planned flight is), so that the attitude, its rates
+        and the IMU follow from the flatness map as for the planned pieces. A planned flight
+        sampled at 100 Hz comes back within 1e-6 m and 1e-3 rad of attitude of its pieces
+        (tests/test_flight_replay.py)."""
+        from scipy.interpolate import PPoly, make_interp_spline
+
+        t = np.asarray(t, dtype=np.float64)
+        p = np.asarray(position, dtype=np.float64)
+        psi = np.asarray(yaw, dtype=np.float64)
+        if t.ndim != 1 or len(t) < 6 or p.shape != (len(t), 3) or psi.shape != (len(t),):
+            raise Lf3pmError(
+                f"a flight's samples are times (n,), positions (n, 3) and yaws (n,) with n >= 6, "
+                f"got shapes {t.shape}, {p.shape} and {psi.shape}"
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p)) and np.all(np.isfinite(psi))):
+            raise Lf3pmError("a flight's samples must be finite")
+        if np.any(np.diff(t) <= 0):
+            raise Lf3pmError("a flight's sample times must increase strictly")
+
+        def spline(values):  # one column: PPoly.from_spline takes scalar splines only
+            ends = [(1, 0.0), (2, 0.0)]
+            return PPoly.from_spline(make_interp_spline(t, values, k=5, bc_type=(ends, ends)))
+
+        columns = [spline(p[:, k]) for k in range(3)]
+        position = PPoly(np.stack([c.c for c in columns], axis=-1), columns[0].x)
+        return cls(position, spline(np.unwrap(psi)), t0=t[0], t1=t[-1], quadrotor=quadrotor)
+
+    @classmethod
+    def from_csv(cls, path, *, quadrotor: Quadrotor | None = None):
+        """The flight in a CSV as `lf3pm plan --robot quadrotor` writes it (the columns
+        :data:`FLIGHT_CSV_COLUMNS` at least; :meth:`from_samples`); Lf3pmError in one line
+        naming the file for a bad one."""
+        from lf3pm.trajectory.trajectory import read_csv
+
+        s = read_csv(path, FLIGHT_CSV_COLUMNS)
+        try:
+            return cls.from_samples(s["t"], np.column_stack([s["x"], s["y"], s["z"]]), s["yaw"], quadrotor=quadrotor)
+        except Lf3pmError as err:
+            raise Lf3pmError(f"{path}: {err}") from None
 
     def _outputs(self, t) -> tuple:
         """p, v, a, j (n, 3) and psi, psi' (n,) at ``t``, clamped to [t0, t1] (hovering outside)."""

@@ -138,9 +138,9 @@ def _powers(c, tau, order: int):
     return 2.0 * c[:, 2] + t * (6.0 * c[:, 3])
 
 
-def read_csv(path) -> dict:
+def read_csv(path, columns: tuple[str, ...] = CSV_COLUMNS) -> dict:
     """Reads a trajectory CSV as :meth:`Trajectory.to_csv` writes it: a header naming
-    at least the columns ``t,x,y,yaw,vx,vy,omega`` (any order, extra columns
+    at least the ``columns`` (default ``t,x,y,yaw,vx,vy,omega``; any order, extra columns
     ignored), then one row of numbers per sample. Returns a dict of float64
     arrays by column name. Raises Lf3pmError, naming the line, for a missing
     or unreadable file, one that is not a regular file of at most
@@ -155,13 +155,11 @@ def read_csv(path) -> dict:
         raise Lf3pmError(f"{path}: cannot read the trajectory ({getattr(err, 'strerror', None) or err})") from None
     lines = [(n, line) for n, line in enumerate(lines, start=1) if line.strip()]
     if not lines:
-        raise Lf3pmError(f"{path}: empty file, expected a header {','.join(CSV_COLUMNS)}")
+        raise Lf3pmError(f"{path}: empty file, expected a header {','.join(columns)}")
     header = [name.strip() for name in lines[0][1].split(",")]
-    missing = [c for c in CSV_COLUMNS if c not in header]
+    missing = [c for c in columns if c not in header]
     if missing:
-        raise Lf3pmError(
-            f"{path}: the header lacks the column(s) {', '.join(missing)} (expected {','.join(CSV_COLUMNS)})"
-        )
+        raise Lf3pmError(f"{path}: the header lacks the column(s) {', '.join(missing)} (expected {','.join(columns)})")
     rows = []
     for n, line in lines[1:]:
         fields = line.split(",")
@@ -174,12 +172,12 @@ def read_csv(path) -> dict:
     if len(rows) < 2:
         raise Lf3pmError(f"{path}: {len(rows)} sample(s); a trajectory needs at least 2")
     table = np.asarray(rows, dtype=np.float64)
-    used = [header.index(c) for c in CSV_COLUMNS]
+    used = [header.index(c) for c in columns]
     bad = ~np.isfinite(table[:, used])
     if bad.any():
         r, c = np.argwhere(bad)[0]
-        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: {CSV_COLUMNS[c]} is not finite ({table[r, used[c]]})")
-    out = {c: table[:, header.index(c)].copy() for c in CSV_COLUMNS}
+        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: {columns[c]} is not finite ({table[r, used[c]]})")
+    out = {c: table[:, header.index(c)].copy() for c in columns}
     step = np.diff(out["t"])
     if np.any(step <= 0):
         r = int(np.argmax(step <= 0)) + 1
