@@ -175,11 +175,11 @@ def read_trajectory(path: Path, quadrotor=DEFAULTS.quadrotor):
     bounds the file), or the FlightMotion of a flight's (its header names z) flown by
     ``quadrotor`` (config section), refused in one line when it lasts longer than
     MAX_TRAJECTORY_SECONDS, before the map is read (Motion refuses it too, after)."""
-    from lf3pm.limits import check_file
+    from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
     from lf3pm.replays.flight_motion import FlightMotion
     from lf3pm.trajectory.trajectory import read_csv
 
-    check_file(path, "trajectory")
+    check_file(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
     with open(path, "rb") as fp:
         header = fp.readline(4096).decode("utf-8", "replace").strip().split(",")
     if "z" in header:
