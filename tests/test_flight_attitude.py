@@ -102,6 +102,10 @@ def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room):
     for bad in (-1, 11, 1.5):
         with pytest.raises(Lf3pmError, match="attitude_rounds"):
             planner.plan(start, goal, attitude_rounds=bad)
+    from lf3pm.planner.plan import Planner
+
+    with pytest.raises(Lf3pmError, match=r"this one is r3yaw \(flights: lf3pm.planner.flight_plan.plan_flight\)"):
+        Planner(solm)
 
 
 def test_lf3pm_plan_says_what_each_attitude_round_changed(tilted_room, tmp_path):

@@ -94,7 +94,9 @@ class Planner:
 
     def __init__(self, solm: Solm, config: PlannerConfig = DEFAULTS.planner, *, unknown_policy: str | None = None):
         if not solm.grid_spec.space.ground:
-            raise Lf3pmError("planning needs an r2 or se2 SOLM (ground robots); this one is r3")
+            space = solm.grid_spec.space.value
+            hint = " (flights: lf3pm.planner.flight_plan.plan_flight)" if space == "r3yaw" else ""
+            raise Lf3pmError(f"planning needs an r2 or se2 SOLM (ground robots); this one is {space}{hint}")
         if not isinstance(config, PlannerConfig):
             raise Lf3pmError(f"a Planner's config is an lf3pm.config.PlannerConfig, got {type(config).__name__}")
         if unknown_policy is not None:
