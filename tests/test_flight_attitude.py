@@ -12,8 +12,9 @@ import pytest
 import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.flight import Quadrotor
-from lf3pm.planner.flight_attitude import AttitudeGuidance
-from lf3pm.planner.flight_plan import FlightPlanner, guidance_layer
+from lf3pm.planner.flight_attitude import AttitudeGuidance, interpolation_nodes
+from lf3pm.planner.flight_plan import FlightPlanner, guidance_field, guidance_layer
+from lf3pm.replays.flight_motion import FlightMotion
 from lf3pm.scenes import build_scene
 from lf3pm.solm import Solm, build_solm, make_grid
 
@@ -61,9 +62,27 @@ def test_the_attitude_ratio_is_the_metric_tilted_over_level_as_evaluate_gives_th
     np.testing.assert_array_equal(attitude.ratios(positions, level, yaws), np.ones(3))
 
 
+def test_the_nodes_are_those_the_back_end_interpolates_from(tilted_room):
+    """interpolation_nodes' nodes and weights reproduce the guidance field's value
+    (VolumeField.sample) at 200 random samples, inside the grid and beyond its edges, to
+    1e-12, on a random layer."""
+    world, solm, _, _ = tilted_room
+    g = solm.grid_spec
+    rng = np.random.default_rng(3)
+    cost = rng.uniform(0.0, 2.0, g.shape)
+    field = guidance_field(solm, lf3pm.config.DEFAULTS.guidance, cost)
+    p = np.column_stack([rng.uniform(-7, 7, 200), rng.uniform(-7, 7, 200), rng.uniform(0.5, 3.0, 200)])
+    yaws = rng.uniform(-7, 7, 200)
+    got, _ = field.sample(p, yaws)
+    nodes, weights = interpolation_nodes(g, p, yaws)
+    np.testing.assert_allclose(np.sum(cost.ravel()[nodes] * weights, axis=1), got, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(weights.sum(axis=1), 1.0, rtol=1e-12)
+
+
 def test_the_correction_scales_the_nodes_a_flight_passes_and_no_other(tilted_room):
-    """A hovering sample set (level: ratio 1) leaves the layer as it was; a banked sample
-    multiplies its node's cost by its ratio to the guidance power, capped, and nothing else."""
+    """A hovering sample (level: ratio 1) leaves the layer as it was, bit for bit; a banked
+    sample multiplies the uncapped cost of each node it is interpolated from by its ratio to
+    the guidance power, capped, and changes no other node."""
     world, solm, _, _ = tilted_room
     layer = guidance_layer(solm, lf3pm.config.DEFAULTS.guidance)
     attitude = AttitudeGuidance(solm, world, layer, 2.0)
@@ -72,20 +91,28 @@ def test_the_correction_scales_the_nodes_a_flight_passes_and_no_other(tilted_roo
     hover = {"position": np.array([[1.0, 2.0, 2.5]]), "velocity": zero, "acceleration": zero, "jerk": zero}
     hover |= {"yaw": np.array([2.0]), "yaw_rate": np.zeros(1)}
     cost, summary = attitude.correct(hover, quad)
-    np.testing.assert_array_equal(cost, layer.filled)
+    np.testing.assert_array_equal(
+        cost, np.where(np.isnan(layer.cost), layer.cap, np.minimum(attitude.uncapped, layer.cap))
+    )
     assert summary["samples"] == 1 and summary["ratio_median"] == 1.0
-    sideways = dict(hover, acceleration=np.array([[0.0, 4.0, 0.0]]))
+    attitude = AttitudeGuidance(solm, world, layer, 2.0)
+    sideways = dict(hover, position=np.array([[1.3, 2.2, 2.1]]), acceleration=np.array([[0.0, 4.0, 0.0]]))
     cost, summary = attitude.correct(sideways, quad)
     att = quad.attitudes(zero, sideways["acceleration"], zero, [2.0], [0.0])
     ratio = attitude.ratios(sideways["position"], att.rotation, np.array([2.0]))[0]
-    node = solm.grid_spec.cell(1.0, 2.0, 2.5, yaw=2.0)
-    changed = cost != layer.filled
-    assert changed.sum() == 1 and changed[node]
-    assert cost[node] == pytest.approx(min(layer.filled[node] * ratio**2, layer.cap), rel=1e-12)
+    nodes, weights = interpolation_nodes(solm.grid_spec, sideways["position"], np.array([2.0]))
+    ours = nodes[0][weights[0] > 0]
+    level = np.where(np.isnan(layer.cost), layer.cap, np.minimum(attitude.uncapped, layer.cap)).ravel()
+    changed = np.flatnonzero(cost.ravel() != level)
+    assert set(changed) <= set(ours) and len(changed) > 0
+    for node in ours:
+        expected = min(attitude.uncapped.flat[node] * ratio**2, layer.cap)
+        if not np.isnan(layer.cost.flat[node]):
+            assert cost.flat[node] == pytest.approx(expected, rel=1e-12)
     assert summary["ratio_median"] == pytest.approx(ratio, rel=1e-12)
 
 
-def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room):
+def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room, tmp_path):
     """With a round at the planned attitude: one summary per round, limits held on 1 kHz
     samples, rest at both ends; without: no round and the level plan. Bad rounds: one line."""
     world, solm, _, _ = tilted_room
@@ -95,6 +122,8 @@ def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room):
     corrected = planner.plan(start, goal, attitude_rounds=2)
     assert level.attitude == [] and len(corrected.attitude) == 2
     assert corrected.attitude[0]["samples"] > 20
+    # The rounds did optimise on the corrected field: another flight.
+    assert np.abs(corrected.trajectory.coefficients - level.trajectory.coefficients).max() > 1e-6
     for plan in (level, corrected):
         assert max(plan.limits.values()) <= 1.0 + 1e-9
         s = plan.trajectory.sample(100.0)
@@ -102,6 +131,23 @@ def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room):
     for bad in (-1, 11, 1.5):
         with pytest.raises(Lf3pmError, match="attitude_rounds"):
             planner.plan(start, goal, attitude_rounds=bad)
+    with pytest.raises(Lf3pmError, match="attitude_rounds apply to the joint planner, not yaw_only"):
+        planner.plan(start, goal, planner="yaw_only", attitude_rounds=1)
+    # Its CSV (17 digits) flies back as the plan: many pieces, time-scaled.
+    path = tmp_path / "flight.csv"
+    path.write_bytes(corrected.trajectory.csv_bytes(planner.quad))
+    read = FlightMotion.from_csv(path, quadrotor=planner.quad)
+    truth = FlightMotion.from_pieces(
+        corrected.trajectory.coefficients, corrected.trajectory.durations, quadrotor=planner.quad
+    )
+    t = np.linspace(0.0, corrected.trajectory.duration, 50001)
+    np.testing.assert_allclose(read.position(t), truth.position(t), atol=1e-6)
+    a, b = read.attitudes(t), truth.attitudes(t)
+    angle = np.arccos(np.clip((np.einsum("nij,nij->n", a.rotation, b.rotation) - 1.0) / 2.0, -1.0, 1.0))
+    assert angle.max() < 1e-3 and np.abs(a.omega - b.omega).max() < 1e-3
+    heavy = Quadrotor(mount="down20", mass=2.0)
+    with pytest.raises(Lf3pmError, match="fly it with the plan's quadrotor section"):
+        FlightMotion.from_csv(path, quadrotor=heavy)
     from lf3pm.planner.plan import Planner
 
     with pytest.raises(Lf3pmError, match=r"this one is r3yaw \(flights: lf3pm.planner.flight_plan.plan_flight\)"):
@@ -132,3 +178,8 @@ def test_lf3pm_plan_says_what_each_attitude_round_changed(tilted_room, tmp_path)
     assert "attitude round 1: the guidance at the flown attitude over level, median" in done.output
     bad = CliRunner().invoke(app, [*args, "--start-z", "1", "--goal-z", "2.5", "--attitude-rounds", "11"])
     assert bad.exit_code != 0 and "attitude_rounds" in bad.output and "Traceback" not in bad.output
+    for other in (["--planner", "velocity_yaw"], ["--robot", "omni"]):
+        done = CliRunner().invoke(app, [*args, "--start-z", "1", "--goal-z", "2.5", "--attitude-rounds", "1", *other])
+        assert (
+            done.exit_code != 0 and "--attitude-rounds applies to --robot quadrotor with --planner joint" in done.output
+        )

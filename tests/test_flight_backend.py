@@ -183,7 +183,7 @@ def test_lf3pm_plan_flies_a_quadrotor_and_refuses_what_it_cannot(boxes_flight, t
     summary = json.loads(done.stdout)
     assert max(summary["limits"].values()) <= 1.0 + 1e-9
     rows = np.loadtxt(out, delimiter=",", skiprows=1)
-    assert out.read_text().splitlines()[0] == "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust"
+    assert out.read_text().splitlines()[0] == "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust,ax,ay,az"
     np.testing.assert_allclose(rows[-1, 1:5], [5.5, 5.5, 2.0, 0.5], atol=1e-6)
     missing = CliRunner().invoke(app, args)
     assert missing.exit_code == 2 and "--start-z and --goal-z" in missing.output

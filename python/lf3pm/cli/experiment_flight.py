@@ -29,16 +29,17 @@ def experiment_flight(
     """Quadrotor flights by three planners on the same SOLMs and pairs, judged by LIO replays:
     velocity_yaw (a), yaw_only (b) and joint (c) (docs/flight.md)."""
     with user_errors():
+        from lf3pm.errors import Lf3pmError
         from lf3pm.experiments.flight import FlightProtocol, load_protocol, report_folder, run_study, write_report
 
         if report_only:
+            if quick or protocol_path is not None or write_protocol is not None:
+                raise Lf3pmError("--report-only reads the protocol frozen in --out: give no other protocol")
             summary, paths = report_folder(out)
             console.print(f"{out}: {', '.join(p.name for p in paths)} written again from its records")
             return
 
         if quick and protocol_path is not None:
-            from lf3pm.errors import Lf3pmError
-
             raise Lf3pmError("--quick and --protocol are two protocols: give one")
         protocol = (
             load_protocol(protocol_path) if protocol_path else (FlightProtocol.quick() if quick else FlightProtocol())

@@ -59,7 +59,7 @@ def plan(
         "--out",
         metavar="TRAJ.csv",
         help="Trajectory at 100 Hz: t,x,y,yaw,vx,vy,omega (world frame); a quadrotor's "
-        "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust.",
+        "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust,ax,ay,az.",
     ),
     config: Path | None = CONFIG_OPTION,
     robot: str | None = typer.Option(
@@ -113,6 +113,8 @@ def plan(
         cfg = configure(config, locals(), {**PLAN_PATHS, "mount": "quadrotor.mount"})
         check_output(out)
         check_output(png)
+        if attitude_rounds and not (flying and flight_planner == "joint"):
+            raise Lf3pmError("--attitude-rounds applies to --robot quadrotor with --planner joint")
         if flying:
             flight = (start_z, goal_z, flight_planner, attitude_rounds)
             _plan_flight(cfg, solm_path, start, goal, flight, out, map_path, as_json)

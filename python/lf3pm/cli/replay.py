@@ -176,13 +176,11 @@ def read_trajectory(path: Path, quadrotor=DEFAULTS.quadrotor):
     ``quadrotor`` (config section), refused in one line when it lasts longer than
     MAX_TRAJECTORY_SECONDS, before the map is read (Motion refuses it too, after)."""
     from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
-    from lf3pm.replays.flight_motion import FlightMotion
+    from lf3pm.replays.flight_motion import FlightMotion, csv_header
     from lf3pm.trajectory.trajectory import read_csv
 
     check_file(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
-    with open(path, "rb") as fp:
-        header = fp.readline(4096).decode("utf-8", "replace").strip().split(",")
-    if "z" in header:
+    if "z" in csv_header(path):
         from lf3pm.flight import Quadrotor
 
         samples = FlightMotion.from_csv(path, quadrotor=Quadrotor.from_config(quadrotor))

@@ -1,20 +1,22 @@
 """The guidance at the planned attitude (issue 43, item 2): an r3yaw SOLM is cast with the
 body level, but a quadrotor flies tilted by its acceleration, and near the tilt limit that
 changes q_n by 4-15 % (median, docs/flight.md "What the level attitude costs"). The back end
-therefore corrects the level SOLM along the flight it plans: it samples the flight every
-half cell, casts the SOLM's sensor there at the flatness attitude and at level (the same
-position, yaw, rays, noise stream and metric), and multiplies the cost of the nodes the
-flight passes by the ratio of the two, raised to the guidance power; then it optimises
-again from that flight. The correction is held fixed during an optimisation (a round), so
-each round's objective stays smooth; nodes the flight no longer passes keep their last
-correction, which is the attitude a flight through them would have had."""
+can therefore correct the level SOLM along the flight it plans: it samples the flight (as
+flown, after time scaling) every half cell, casts the SOLM's sensor there at the flatness
+attitude and at level (the same position, yaw, rays, noise stream and metric), and spreads
+each sample's ratio tilted / level over the 16 nodes the back end interpolates it from,
+with the interpolation's weights (a weighted mean of log ratios per node); each node's
+uncapped cost is multiplied by its ratio to the guidance power, then capped; then it
+optimises again from that flight. The correction is held fixed during an optimisation (a
+round), so each round's objective stays smooth; nodes the flight no longer passes keep
+their last correction, which is the attitude a flight through them would have had."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from lf3pm import _core
-from lf3pm.config import DEFAULTS, Config
+from lf3pm import _core, libm
+from lf3pm.config import DEFAULTS
 from lf3pm.flight import Quadrotor
 from lf3pm.planner.cost_map import CostLayer
 from lf3pm.sensors import as_sensor
@@ -28,29 +30,37 @@ from lf3pm.solm.grid import Space
 ATTITUDE_ROUNDS = 0
 #: Samples per SOLM cell edge along the flight.
 SAMPLES_PER_CELL = 2
+#: A sample's ratio is clipped to [1 / RATIO_LIMIT, RATIO_LIMIT]: a view degenerate only
+#: when tilted (ratio +inf) sends its nodes to the cap without making them infinite.
+RATIO_LIMIT = 100.0
 
 
 class AttitudeGuidance:
     """Casts ``solm``'s sensor (its rays, stride, noise, seed, metric weights and mount, from
     its attributes) at poses along a flight on ``world`` (a Map, the SOLM's) and corrects
-    the cost ``layer`` (the guidance layer the back end reads) by what the attitude
-    changes. ``config``: the scan section's threads and the metric section's other fields."""
+    the cost ``layer`` (the guidance layer the back end reads, of ``power``) by what the
+    attitude changes, casting on ``threads`` workers (0: every core)."""
 
-    def __init__(self, solm, world, layer: CostLayer, power: float, config: Config = DEFAULTS):
+    def __init__(self, solm, world, layer: CostLayer, power: float, threads: int = DEFAULTS.scan.threads):
         from lf3pm.solm.tiles import make_job
 
         attrs, g = solm.attrs, solm.grid_spec
         if g.space is not Space.R3YAW:
             raise ValueError("the guidance at the planned attitude needs an r3yaw SOLM")
-        scan = config.scan.model_copy(update={"noise": attrs["noise"], "seed": attrs["seed"]})
-        metric = config.metric.model_copy(update={"w1": attrs["w1"], "association": attrs["association"]})
-        layout = config.solm.model_copy(update={"ray_stride": attrs["ray_stride"], "yaw_reuse": False})
+        scan = DEFAULTS.scan.model_copy(update={"noise": attrs["noise"], "seed": attrs["seed"]})
+        metric = DEFAULTS.metric.model_copy(update={"w1": attrs["w1"], "association": attrs["association"]})
+        layout = DEFAULTS.solm.model_copy(update={"ray_stride": attrs["ray_stride"], "yaw_reuse": False})
         self.mount = np.asarray(attrs["mount"]["matrix"], dtype=np.float64)
         job = make_job(as_sensor(attrs["sensor"]), g, scan, metric, layout, self.mount)
-        self.rays, self.params = job.rays, job.params(config.scan.threads)
+        self.rays, self.params = job.rays, job.params(threads)
         self.world, self.grid, self.layer, self.power = world, g, layer, power
         self.metric = layer.channel
-        self.correction = np.ones(layer.filled.shape)
+        # The layer before its cap: the channel over its scale to the power (+inf degenerate).
+        values = np.asarray(solm.channel(self.metric), dtype=np.float64)
+        degenerate = np.asarray(solm.channel("degenerate")).astype(bool)
+        self.uncapped = np.where(degenerate, np.inf, libm.power(values / layer.scale, power))
+        self.log_sum = np.zeros(layer.filled.shape)
+        self.weight_sum = np.zeros(layer.filled.shape)
 
     def ratios(self, positions: np.ndarray, rotations: np.ndarray, yaws: np.ndarray) -> np.ndarray:
         """The guidance metric at the sensor on the body at ``positions`` (n x 3) with
@@ -74,32 +84,74 @@ class AttitudeGuidance:
 
     def correct(self, samples: dict, quad: Quadrotor) -> tuple[np.ndarray, dict]:
         """Corrects the layer along the sampled flight (FlightTrajectory.sample at
-        :func:`sample_rate`): each node a sample falls in takes the median of its samples'
-        ratios. Returns the corrected layer (float64, the layer's shape) and a summary:
-        samples, the median ratio and its 5-95 % range, and the share of samples whose
-        metric the attitude changes by more than 10 %."""
+        :func:`sample_rate`, as flown): each node takes the weighted mean of the log ratios
+        of the samples interpolated from it, this round's and earlier rounds' together.
+        Returns the corrected cost (float64, the layer's shape) and a summary: samples, the
+        median ratio and its 5-95 % range, the share of samples whose metric the attitude
+        changes by more than 10 % and those degenerate only when tilted (both counted in the
+        share)."""
         derivatives = (samples[name] for name in ("velocity", "acceleration", "jerk", "yaw", "yaw_rate"))
         att = quad.attitudes(*derivatives)
         p = samples["position"]
         r = self.ratios(p, att.rotation, samples["yaw"])
-        k, iy, ix = self.grid.cell(p[:, 0], p[:, 1], p[:, 2], yaw=samples["yaw"])
-        node = np.ravel_multi_index((k, iy, ix), self.correction.shape)
         known = ~np.isnan(r)
-        for index in np.unique(node[known]):
-            self.correction.flat[index] = np.median(r[known & (node == index)])
+        nodes, weights = interpolation_nodes(self.grid, p[known], samples["yaw"][known])
+        log_ratio = libm.log(np.clip(r[known], 1.0 / RATIO_LIMIT, RATIO_LIMIT))
+        np.add.at(
+            self.log_sum, np.unravel_index(nodes.ravel(), self.log_sum.shape), (weights * log_ratio[:, None]).ravel()
+        )
+        np.add.at(self.weight_sum, np.unravel_index(nodes.ravel(), self.weight_sum.shape), weights.ravel())
+        # Through the C library (lf3pm.libm), so that the plan is the same on every CPU.
+        touched = self.weight_sum > 0
+        factor = libm.power(libm.exp(self.log_sum[touched] / self.weight_sum[touched]), self.power)
         layer = self.layer
-        with np.errstate(invalid="ignore"):  # a node degenerate only when tilted: the cap
-            cost = np.where(np.isinf(self.correction), layer.cap, layer.filled * np.power(self.correction, self.power))
+        cost = self.uncapped.copy()
+        cost[touched] *= factor
         cost = np.minimum(cost, layer.cap)
-        finite = r[known & np.isfinite(r)]
+        cost = np.where(np.isnan(layer.cost), layer.cap, cost)
+        seen = r[known]
         summary = {
             "samples": int(len(r)),
-            "ratio_median": float(np.median(finite)) if len(finite) else float("nan"),
-            "ratio_p5_p95": [float(x) for x in np.percentile(finite, [5, 95])] if len(finite) else [],
-            "changed_over_10_percent": float(np.mean(np.abs(finite - 1.0) > 0.1)) if len(finite) else 0.0,
-            "degenerate_only_tilted": int(np.sum(np.isinf(r))),
+            "ratio_median": float(np.median(seen)) if len(seen) else float("nan"),
+            "ratio_p5_p95": [float(x) for x in np.percentile(seen, [5, 95])] if len(seen) else [],
+            "changed_over_10_percent": float(np.mean(np.abs(seen - 1.0) > 0.1)) if len(seen) else 0.0,
+            "degenerate_only_tilted": int(np.sum(np.isinf(seen))),
         }
-        return np.where(np.isnan(layer.cost), layer.cap, cost), summary
+        return cost, summary
+
+
+def interpolation_nodes(grid, positions: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The 16 nodes (linear indices into the r3yaw channel's shape) and weights from which
+    the back end's guidance field (cpp/lf3pm/flight/volume_field.cpp) interpolates each of
+    the n samples at ``positions`` (n x 3) and ``yaws`` (n): x and y between cell centres,
+    z between levels (uniformly spaced), yaw periodically between bins, clamped at the
+    grid's edges. Returns (n, 16) indices and weights (each row sums to 1)."""
+    levels = np.asarray(grid.z_levels, dtype=np.float64)
+    dz = float(np.diff(levels).mean()) if len(levels) > 1 else grid.res
+
+    def axis(v, origin, step, n):
+        if n < 2:
+            zero = np.zeros(len(v), dtype=np.int64)
+            return zero, zero, np.zeros(len(v))
+        f = np.clip((v - origin) / step, 0.0, n - 1.0)
+        i0 = np.minimum(np.floor(f).astype(np.int64), n - 2)
+        return i0, i0 + 1, f - i0
+
+    ix = axis(positions[:, 0], grid.x0 + 0.5 * grid.res, grid.res, grid.nx)
+    iy = axis(positions[:, 1], grid.y0 + 0.5 * grid.res, grid.res, grid.ny)
+    iz = axis(positions[:, 2], levels[0], dz, len(levels))
+    bins = grid.yaw_bins
+    fb = np.mod(yaws, 2 * np.pi) / (2 * np.pi / bins)
+    b0 = np.floor(fb).astype(np.int64) % bins
+    ib = (b0, (b0 + 1) % bins, fb - np.floor(fb) if bins > 1 else np.zeros(len(yaws)))
+    nodes, weights = [], []
+    for z, wz in ((iz[0], 1 - iz[2]), (iz[1], iz[2])):
+        for b, wb in ((ib[0], 1 - ib[2]), (ib[1], ib[2])):
+            for y, wy in ((iy[0], 1 - iy[2]), (iy[1], iy[2])):
+                for x, wx in ((ix[0], 1 - ix[2]), (ix[1], ix[2])):
+                    nodes.append(((z * bins + b) * grid.ny + y) * grid.nx + x)
+                    weights.append(wz * wb * wy * wx)
+    return np.stack(nodes, axis=1), np.stack(weights, axis=1)
 
 
 def sample_rate(grid, vmax: float) -> float:

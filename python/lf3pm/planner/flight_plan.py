@@ -55,10 +55,13 @@ class FlightTrajectory:
         return float(self.durations.sum())
 
     def sample(self, rate: float = CSV_RATE) -> dict:
-        """Samples every 1 / rate s and at the end: t, position (n, 3), velocity,
-        acceleration, jerk (n, 3), yaw and yaw_rate (n)."""
+        """Samples every 1 / rate s and at the end (none within half a step before it): t,
+        position (n, 3), velocity, acceleration, jerk (n, 3), yaw and yaw_rate (n)."""
         ends = np.concatenate([[0.0], np.cumsum(self.durations)])
-        t = np.append(np.arange(0.0, ends[-1], 1.0 / rate), ends[-1])
+        grid = np.arange(0.0, ends[-1], 1.0 / rate)
+        # No sample within half a step of the end, which is sampled itself: a gap of almost
+        # nothing there would make a spline through the samples ring (FlightMotion.from_samples).
+        t = np.append(grid[grid < ends[-1] - 0.5 / rate], ends[-1])
         piece = np.clip(np.searchsorted(ends, t, side="right") - 1, 0, len(self.durations) - 1)
         tau = t - ends[piece]
         c = self.coefficients[piece]  # (n, 6, 4)
@@ -83,7 +86,8 @@ class FlightTrajectory:
 
     def csv_bytes(self, quad: Quadrotor, rate: float = CSV_RATE) -> bytes:
         """Samples at ``rate`` Hz as CSV: t, x, y, z, yaw, vx, vy, vz, yaw_rate, the body's
-        attitude quaternion qw, qx, qy, qz (body to world) and thrust (N), to 17 digits."""
+        attitude quaternion qw, qx, qy, qz (body to world), thrust (N) and the acceleration
+        ax, ay, az, to 17 digits."""
         import io
 
         from scipy.spatial.transform import Rotation
@@ -93,10 +97,12 @@ class FlightTrajectory:
         xyzw = Rotation.from_matrix(att.rotation).as_quat()
         columns = [s["t"], *s["position"].T, s["yaw"], *s["velocity"].T, s["yaw_rate"], xyzw[:, 3], *xyzw[:, :3].T]
         buf = io.StringIO()
-        header = "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust"
-        # Every digit of a double: a replay's splines through these samples differentiate them
-        # three times (FlightMotion.from_samples), and nine digits give body rates off by 1 rad/s.
-        np.savetxt(buf, np.column_stack([*columns, att.thrust]), delimiter=",", fmt="%.17g", header=header, comments="")
+        header = "t,x,y,z,yaw,vx,vy,vz,yaw_rate,qw,qx,qy,qz,thrust,ax,ay,az"
+        # Every digit of a double, and the acceleration: a replay rebuilds the flight from
+        # position, velocity and acceleration at each sample (FlightMotion.from_samples) and
+        # differentiates it once more for the body rates; nine digits put them 1 rad/s off.
+        table = np.column_stack([*columns, att.thrust, *s["acceleration"].T])
+        np.savetxt(buf, table, delimiter=",", fmt="%.17g", header=header, comments="")
         return buf.getvalue().encode()
 
 
@@ -269,7 +275,8 @@ class FlightPlanner:
     once, so that replanning from a new start costs only the search and the optimisation.
     ``world_points``: the map (N x 3), or the Map itself (lf3pm.load_map; its index serves
     the casts of the guidance at the planned attitude, else the points are indexed when a
-    plan first needs them); the guidance and quadrotor sections as in :func:`plan_flight`."""
+    plan first needs them); the guidance and quadrotor sections as in :func:`plan_flight`;
+    ``threads``: the workers of those casts (0: every core)."""
 
     def __init__(
         self,
@@ -278,9 +285,11 @@ class FlightPlanner:
         *,
         guidance: GuidanceConfig = DEFAULTS.guidance,
         quadrotor: QuadrotorConfig = DEFAULTS.quadrotor,
+        threads: int = DEFAULTS.scan.threads,
     ):
         from lf3pm.map import Map
 
+        self.threads = threads
         self.world = world_points if isinstance(world_points, Map) else None
         world_points = world_points.points if self.world is not None else world_points
         self._points = world_points
@@ -344,6 +353,8 @@ class FlightPlanner:
         ``planner`` (:func:`plan_flight`)."""
         if planner not in PLANNERS:
             raise Lf3pmError(f"unknown flight planner {planner!r}; use one of {', '.join(PLANNERS)}")
+        if attitude_rounds and planner != "joint":
+            raise Lf3pmError(f"attitude_rounds apply to the joint planner, not {planner}")
         if not (isinstance(attitude_rounds, int) and 0 <= attitude_rounds <= MAX_ATTITUDE_ROUNDS):
             raise Lf3pmError(
                 f"attitude_rounds must be an integer in [0, {MAX_ATTITUDE_ROUNDS}], got {attitude_rounds!r}"
@@ -376,7 +387,9 @@ class FlightPlanner:
         if perceptive and w_q > 0 and attitude_rounds:
             attitude = self.attitude_guidance()
             for _ in range(attitude_rounds):
-                cost, summary = attitude.correct(trajectory.sample(sample_rate(self.solm.grid_spec, quad.vmax)), quad)
+                # The attitude as flown: after the time scaling that the limits will ask for.
+                flown, _, _ = within_limits(trajectory, quad, self.esdf, self.r_safe, SEARCH_RATE)
+                cost, summary = attitude.correct(flown.sample(sample_rate(self.solm.grid_spec, quad.vmax)), quad)
                 q, T = _waypoints(flight, x)
                 flight = problem(w_q, 0.0, q, T, guidance_field(self.solm, guidance, cost))
                 out = flight.optimize(_core.trajectory_lbfgs())
@@ -407,7 +420,7 @@ class FlightPlanner:
 
         if self.world is None:
             self.world = load_map(self._points)
-        return AttitudeGuidance(self.solm, self.world, self.layer, self.guidance.power)
+        return AttitudeGuidance(self.solm, self.world, self.layer, self.guidance.power, self.threads)
 
 
 def plan_flight(
@@ -435,7 +448,9 @@ def plan_flight(
     and durations kept, then time-scaled to the limits). ``attitude_rounds``: the joint
     flight is then corrected for the attitude it flies at and optimised again, so many
     times (lf3pm.planner.flight_attitude; 0: the level SOLM only). Single-threaded but for
-    those casts (the scan section's threads). Replanning on one SOLM: :class:`FlightPlanner`."""
+    those casts (every core). After rounds, ``iterations``, ``status`` and ``objective``
+    are the last round's (on the corrected field). Replanning on one SOLM:
+    :class:`FlightPlanner`."""
     planner_ = FlightPlanner(solm, world_points, guidance=guidance, quadrotor=quadrotor)
     plan = planner_.plan(
         start,

@@ -31,6 +31,8 @@ LIMIT_RATE = 100.0
 #: The columns a flight's CSV needs (lf3pm.planner.flight_plan.FlightTrajectory.csv_bytes
 #: writes these and more): whether a trajectory CSV is a flight is said by its ``z``.
 FLIGHT_CSV_COLUMNS = ("t", "x", "y", "z", "yaw")
+#: How far (rad) a flight CSV's attitudes may lie from the flatness map's (FlightMotion.from_csv).
+ATTITUDE_TOLERANCE = 1e-3
 
 
 class FlightMotion:
@@ -76,49 +78,97 @@ class FlightMotion:
         return cls(PPoly(power[..., :3], breaks), PPoly(power[..., 3], breaks), quadrotor=quadrotor)
 
     @classmethod
-    def from_samples(cls, t, position, yaw, *, quadrotor: Quadrotor | None = None):
+    def from_samples(
+        cls, t, position, yaw, *, velocity=None, yaw_rate=None, acceleration=None, quadrotor: Quadrotor | None = None
+    ):
         """The flight through samples at times ``t`` (n,) s of ``position`` (n, 3) and ``yaw``
-        (n,), as `lf3pm plan --robot quadrotor` writes them at 100 Hz: quintic splines
-        through every sample (the yaw unwrapped), at rest at both ends (velocity and
-        acceleration zero there, as a planned flight is), so that the attitude, its rates
-        and the IMU follow from the flatness map as for the planned pieces. A planned flight
-        sampled at 100 Hz comes back within 1e-6 m and 1e-3 rad of attitude of its pieces
-        (tests/test_flight_replay.py)."""
-        from scipy.interpolate import PPoly, make_interp_spline
+        (n,), as `lf3pm plan --robot quadrotor` writes them at 100 Hz, so that the attitude,
+        its rates and the IMU follow from the flatness map as for the planned pieces. With
+        ``velocity`` and ``acceleration`` (n, 3): between two samples the quintic with their
+        position, velocity and acceleration (a planned flight's piece itself, wherever two
+        samples share a piece); the yaw the cubic with its ``yaw_rate`` (n,) at both. Without
+        them: quintic splines through every sample, at rest at both ends (as a planned flight
+        is), whose third derivative is less exact near the ends. A sample closer than a tenth
+        of the median step to the one before it is left out (the end kept): such a gap makes
+        a spline ring. A planned flight's CSV comes back within 1e-6 m, 1e-3 rad of attitude
+        and 1e-3 rad/s of body rate (tests/test_flight_replay.py, test_flight_attitude.py)."""
+        from scipy.interpolate import BPoly, PPoly, make_interp_spline
 
         t = np.asarray(t, dtype=np.float64)
+        n = len(t) if t.ndim == 1 else -1
         p = np.asarray(position, dtype=np.float64)
         psi = np.asarray(yaw, dtype=np.float64)
-        if t.ndim != 1 or len(t) < 6 or p.shape != (len(t), 3) or psi.shape != (len(t),):
+        given = {"velocity": velocity, "acceleration": acceleration, "yaw_rate": yaw_rate}
+        derivatives = {k: np.asarray(v, dtype=np.float64) for k, v in given.items() if v is not None}
+        shapes = {"velocity": (n, 3), "acceleration": (n, 3), "yaw_rate": (n,)}
+        if n < 6 or p.shape != (n, 3) or psi.shape != (n,) or any(v.shape != shapes[k] for k, v in derivatives.items()):
             raise Lf3pmError(
-                f"a flight's samples are times (n,), positions (n, 3) and yaws (n,) with n >= 6, "
-                f"got shapes {t.shape}, {p.shape} and {psi.shape}"
+                f"a flight's samples are times (n,), positions (n, 3) and yaws (n,) with n >= 6 (velocities "
+                f"and accelerations (n, 3), yaw rates (n,) if given), got shapes {t.shape}, {p.shape} and {psi.shape}"
             )
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p)) and np.all(np.isfinite(psi))):
+        if not all(np.all(np.isfinite(a)) for a in (t, p, psi, *derivatives.values())):
             raise Lf3pmError("a flight's samples must be finite")
-        if np.any(np.diff(t) <= 0):
+        step = np.diff(t)
+        if np.any(step <= 0):
             raise Lf3pmError("a flight's sample times must increase strictly")
+        keep = np.append(step >= 0.1 * np.median(step), True)  # sample i kept unless t[i+1] is too near
+        keep[0] = True
+        t, p, psi = t[keep], p[keep], np.unwrap(psi[keep])
+        derivatives = {k: v[keep] for k, v in derivatives.items()}
+        if len(t) < 6:
+            raise Lf3pmError("a flight needs at least 6 samples a tenth of the median step apart")
+        if len(derivatives) == 3:
+            v, a, w = derivatives["velocity"], derivatives["acceleration"], derivatives["yaw_rate"]
+            columns = [BPoly.from_derivatives(t, np.column_stack([p[:, k], v[:, k], a[:, k]])) for k in range(3)]
+            position_ = PPoly.from_bernstein_basis(BPoly(np.stack([c.c for c in columns], axis=-1), columns[0].x))
+            heading = PPoly.from_bernstein_basis(BPoly.from_derivatives(t, np.column_stack([psi, w])))
+            return cls(position_, heading, t0=t[0], t1=t[-1], quadrotor=quadrotor)
 
         def spline(values):  # one column: PPoly.from_spline takes scalar splines only
-            ends = [(1, 0.0), (2, 0.0)]
-            return PPoly.from_spline(make_interp_spline(t, values, k=5, bc_type=(ends, ends)))
+            rest = [(1, 0.0), (2, 0.0)]
+            return PPoly.from_spline(make_interp_spline(t, values, k=5, bc_type=(rest, rest)))
 
         columns = [spline(p[:, k]) for k in range(3)]
-        position = PPoly(np.stack([c.c for c in columns], axis=-1), columns[0].x)
-        return cls(position, spline(np.unwrap(psi)), t0=t[0], t1=t[-1], quadrotor=quadrotor)
+        flat = PPoly(np.stack([c.c for c in columns], axis=-1), columns[0].x)
+        return cls(flat, spline(psi), t0=t[0], t1=t[-1], quadrotor=quadrotor)
 
     @classmethod
     def from_csv(cls, path, *, quadrotor: Quadrotor | None = None):
         """The flight in a CSV as `lf3pm plan --robot quadrotor` writes it (the columns
-        :data:`FLIGHT_CSV_COLUMNS` at least; :meth:`from_samples`); Lf3pmError in one line
-        naming the file for a bad one."""
+        :data:`FLIGHT_CSV_COLUMNS` at least; :meth:`from_samples`, with its velocities,
+        accelerations and yaw rates where the CSV has them all). Where it holds the attitude (qw, qx, qy, qz), the
+        flatness map of ``quadrotor`` must give it back within :data:`ATTITUDE_TOLERANCE`
+        rad: another mass or drag than the plan's is refused. Lf3pmError in one line naming
+        the file for a bad one."""
         from lf3pm.trajectory.trajectory import read_csv
 
         s = read_csv(path, FLIGHT_CSV_COLUMNS)
+        header = csv_header(path)
+        extra = {}
+        derived = ("vx", "vy", "vz", "yaw_rate", "ax", "ay", "az")
+        if set(derived) <= set(header):
+            more = read_csv(path, ("t", *derived))
+            extra = {
+                "velocity": np.column_stack([more["vx"], more["vy"], more["vz"]]),
+                "acceleration": np.column_stack([more["ax"], more["ay"], more["az"]]),
+                "yaw_rate": more["yaw_rate"],
+            }
         try:
-            return cls.from_samples(s["t"], np.column_stack([s["x"], s["y"], s["z"]]), s["yaw"], quadrotor=quadrotor)
+            flight = cls.from_samples(
+                s["t"], np.column_stack([s["x"], s["y"], s["z"]]), s["yaw"], quadrotor=quadrotor, **extra
+            )
         except Lf3pmError as err:
             raise Lf3pmError(f"{path}: {err}") from None
+        if {"qw", "qx", "qy", "qz"} <= set(header):
+            q = read_csv(path, ("t", "qw", "qx", "qy", "qz"))
+            cosine = _quaternion_cosines(flight.attitudes(q["t"]).rotation, q)
+            worst = float(np.degrees(2 * np.arccos(np.clip(cosine.min(), 0.0, 1.0))))
+            if worst > np.degrees(ATTITUDE_TOLERANCE):
+                raise Lf3pmError(
+                    f"{path}: its attitudes differ from this quadrotor's flatness map by up to {worst:.2g} deg: "
+                    "fly it with the plan's quadrotor section (mass, drag_h, drag_v)"
+                )
+        return flight
 
     def _outputs(self, t) -> tuple:
         """p, v, a, j (n, 3) and psi, psi' (n,) at ``t``, clamped to [t0, t1] (hovering outside)."""
@@ -206,3 +256,20 @@ def _values(f, t: np.ndarray, nu: int, shape: tuple, name: str) -> np.ndarray:
     if not np.all(np.isfinite(out)):
         raise Lf3pmError(f"the flight's {name}(t, {nu}) is not finite")
     return out
+
+
+def csv_header(path) -> list[str]:
+    """The column names of a CSV's first line."""
+    with open(path, "rb") as fp:
+        return [name.strip() for name in fp.readline(1 << 16).decode("utf-8", "replace").split(",")]
+
+
+def _quaternion_cosines(rotations: np.ndarray, q: dict) -> np.ndarray:
+    """|<q(R), q>| per sample: the cosine of half the angle between each rotation and the
+    CSV's unit quaternion (qw, qx, qy, qz), up to the quaternion's sign."""
+    from scipy.spatial.transform import Rotation
+
+    xyzw = Rotation.from_matrix(rotations).as_quat()
+    given = np.column_stack([q["qx"], q["qy"], q["qz"], q["qw"]])
+    given /= np.linalg.norm(given, axis=1, keepdims=True)
+    return np.abs(np.sum(xyzw * given, axis=1))

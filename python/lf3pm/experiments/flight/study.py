@@ -85,15 +85,55 @@ def report_folder(out) -> tuple[dict, list[Path]]:
     frozen = out / "protocol.json"
     if not frozen.is_file():
         raise Lf3pmError(f"{out} holds no flight study (no protocol.json)")
-    protocol = FlightProtocol.model_validate(json.loads(frozen.read_text()))
-    summary = analyse(_records(out / "plans.jsonl"), _records(out / "replays.jsonl"), protocol)
+    try:
+        protocol = FlightProtocol.model_validate(json.loads(frozen.read_text()))
+        records = [_records(out / name) for name in ("plans.jsonl", "replays.jsonl")]
+    except ValueError as err:  # JSON or the protocol's validation
+        first = str(err).splitlines()[0]
+        raise Lf3pmError(f"{out}: unreadable study records or protocol ({first})") from None
+    summary = analyse(*records, protocol)
     return summary, write_report(summary, out)
 
 
+def code_version() -> str:
+    """The git commit of the lf3pm checkout that runs (``-dirty`` with uncommitted changes),
+    or the package's version outside a checkout."""
+    import subprocess
+
+    try:
+        done = subprocess.run(
+            ["git", "-C", str(Path(lf3pm.__file__).parent), "describe", "--always", "--dirty", "--abbrev=12"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+        )
+    except (OSError, subprocess.SubprocessError):
+        done = None
+    return done.stdout.strip() if done is not None and done.returncode == 0 else f"lf3pm {lf3pm.__version__}"
+
+
+def _now() -> str:
+    from datetime import datetime, timezone
+
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
 def _records(path: Path) -> list[dict]:
+    """The records of a .jsonl file; a last line without its newline (cut by a crash while
+    it was written) is not a record."""
     if not path.exists():
         return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    lines = path.read_text().split("\n")[:-1]  # the fragment after the last newline dropped
+    return [json.loads(line) for line in lines if line.strip()]
+
+
+def _heal(path: Path) -> None:
+    """Cuts off a line a crash left unfinished, so that records appended after it stay
+    readable."""
+    if path.exists():
+        data = path.read_bytes()
+        if data and not data.endswith(b"\n"):
+            path.write_bytes(data[: data.rfind(b"\n") + 1])
 
 
 def _append(path: Path, record: dict) -> None:
@@ -114,13 +154,25 @@ def run_study(out, protocol: FlightProtocol, *, progress=None) -> dict:
     out = Path(out)
     (out / "solm").mkdir(parents=True, exist_ok=True)
     frozen = out / "protocol.json"
-    if frozen.exists() and json.loads(frozen.read_text()) != protocol.model_dump(mode="json"):
-        raise Lf3pmError(f"{out} holds a run of another protocol ({frozen}); choose another folder")
-    frozen.write_text(json.dumps(protocol.model_dump(mode="json"), indent=1))
+    if frozen.exists():
+        # Read back through the protocol's type: a field added since, at its default, is
+        # the same protocol.
+        try:
+            earlier = FlightProtocol.model_validate(json.loads(frozen.read_text()))
+        except ValueError:
+            raise Lf3pmError(f"{frozen} is not a flight protocol; choose another folder") from None
+        if earlier.model_dump(mode="json") != protocol.model_dump(mode="json"):
+            raise Lf3pmError(f"{out} holds a run of another protocol ({frozen}); choose another folder")
+    else:
+        frozen.write_text(json.dumps(protocol.model_dump(mode="json"), indent=1))
+    # Which code ran (or resumed) the study, one line per start.
+    _append(out / "runs.jsonl", {"started_utc": _now(), "code": code_version()})
     if protocol.mount not in MOUNTS:
         raise Lf3pmError(f"unknown mount {protocol.mount!r}; use one of {', '.join(MOUNTS)}")
     quad = Quadrotor(mount=protocol.mount)
     plans_path, replays_path = out / "plans.jsonl", out / "replays.jsonl"
+    for path in (plans_path, replays_path):
+        _heal(path)
     plans = {(r["map"], r["pair"], r["planner"]): r for r in _records(plans_path)}
     replays = {(r["map"], r["pair"], r["planner"], r["odometry"], r["seed"]) for r in _records(replays_path)}
     for case in protocol.maps:
@@ -138,14 +190,15 @@ def run_study(out, protocol: FlightProtocol, *, progress=None) -> dict:
             progress=(lambda d, t, c=case.scene: progress(f"SOLM {c}", d, t)) if progress else None,
         )
         solm = Solm.open(store)
-        planner = FlightPlanner(solm, world, quadrotor=quad)
+        planner = FlightPlanner(solm, world, quadrotor=quad, threads=protocol.threads)
         for k, (start, goal) in enumerate(pairs_of(case, protocol.pair_seed)):
             for name in LETTERS:
                 key = (case.scene, k, name)
                 if key not in plans:
                     record = {"map": case.scene, "pair": k, "planner": name, "start": start, "goal": goal}
                     try:
-                        plan = planner.plan(start, goal, planner=name, attitude_rounds=protocol.attitude_rounds)
+                        rounds = protocol.attitude_rounds if name == "joint" else 0
+                        plan = planner.plan(start, goal, planner=name, attitude_rounds=rounds)
                     except Lf3pmError as err:
                         record["error"] = str(err)
                     else:
