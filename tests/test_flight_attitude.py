@@ -12,7 +12,7 @@ import pytest
 import lf3pm
 from lf3pm.errors import Lf3pmError
 from lf3pm.flight import Quadrotor
-from lf3pm.planner.flight_attitude import AttitudeGuidance, interpolation_nodes
+from lf3pm.planner.flight_attitude import PRIOR_WEIGHT, AttitudeGuidance, interpolation_nodes
 from lf3pm.planner.flight_plan import FlightPlanner, guidance_field, guidance_layer
 from lf3pm.replays.flight_motion import FlightMotion
 from lf3pm.scenes import build_scene
@@ -79,37 +79,56 @@ def test_the_nodes_are_those_the_back_end_interpolates_from(tilted_room):
     np.testing.assert_allclose(weights.sum(axis=1), 1.0, rtol=1e-12)
 
 
-def test_the_correction_scales_the_nodes_a_flight_passes_and_no_other(tilted_room):
-    """A hovering sample (level: ratio 1) leaves the layer as it was, bit for bit; a banked
-    sample multiplies the uncapped cost of each node it is interpolated from by its ratio to
-    the guidance power, capped, and changes no other node."""
+def test_the_correction_weighs_each_node_s_samples_against_the_flight_s_mean(tilted_room):
+    """A hovering sample (ratio 1) leaves the layer as it was, bit for bit. One banked
+    sample: its ratio is the flight's mean, so every node's uncapped cost is multiplied by
+    it to the guidance power, then capped. Two banked samples far apart: a node interpolated
+    from the first alone with weight w takes exp((w log r1 + PRIOR_WEIGHT m) / (w +
+    PRIOR_WEIGHT)), m the mean log ratio; a node neither touches takes exp(m)."""
     world, solm, _, _ = tilted_room
     layer = guidance_layer(solm, lf3pm.config.DEFAULTS.guidance)
-    attitude = AttitudeGuidance(solm, world, layer, 2.0)
+    level = np.where(
+        np.isnan(layer.cost), layer.cap, np.minimum(AttitudeGuidance(solm, world, layer, 2.0).uncapped, layer.cap)
+    )
     quad = Quadrotor(mount="down20")
     zero = np.zeros((1, 3))
     hover = {"position": np.array([[1.0, 2.0, 2.5]]), "velocity": zero, "acceleration": zero, "jerk": zero}
     hover |= {"yaw": np.array([2.0]), "yaw_rate": np.zeros(1)}
-    cost, summary = attitude.correct(hover, quad)
-    np.testing.assert_array_equal(
-        cost, np.where(np.isnan(layer.cost), layer.cap, np.minimum(attitude.uncapped, layer.cap))
-    )
+    cost, summary = AttitudeGuidance(solm, world, layer, 2.0).correct(hover, quad)
+    np.testing.assert_array_equal(cost, level)
     assert summary["samples"] == 1 and summary["ratio_median"] == 1.0
+
+    def expected(attitude, log_ratio):
+        out = np.minimum(attitude.uncapped * np.exp(2.0 * log_ratio), layer.cap)
+        return np.where(np.isnan(layer.cost), layer.cap, out)
+
     attitude = AttitudeGuidance(solm, world, layer, 2.0)
     sideways = dict(hover, position=np.array([[1.3, 2.2, 2.1]]), acceleration=np.array([[0.0, 4.0, 0.0]]))
     cost, summary = attitude.correct(sideways, quad)
     att = quad.attitudes(zero, sideways["acceleration"], zero, [2.0], [0.0])
-    ratio = attitude.ratios(sideways["position"], att.rotation, np.array([2.0]))[0]
-    nodes, weights = interpolation_nodes(solm.grid_spec, sideways["position"], np.array([2.0]))
-    ours = nodes[0][weights[0] > 0]
-    level = np.where(np.isnan(layer.cost), layer.cap, np.minimum(attitude.uncapped, layer.cap)).ravel()
-    changed = np.flatnonzero(cost.ravel() != level)
-    assert set(changed) <= set(ours) and len(changed) > 0
-    for node in ours:
-        expected = min(attitude.uncapped.flat[node] * ratio**2, layer.cap)
-        if not np.isnan(layer.cost.flat[node]):
-            assert cost.flat[node] == pytest.approx(expected, rel=1e-12)
-    assert summary["ratio_median"] == pytest.approx(ratio, rel=1e-12)
+    r1 = attitude.ratios(sideways["position"], att.rotation, np.array([2.0]))[0]
+    assert abs(r1 - 1.0) > 1e-3 and summary["ratio_median"] == pytest.approx(r1, rel=1e-12)
+    np.testing.assert_allclose(cost, expected(attitude, math.log(r1)), rtol=1e-12)
+
+    attitude = AttitudeGuidance(solm, world, layer, 2.0)
+    two = {k: np.concatenate([v, v]) for k, v in sideways.items()}
+    two["position"] = np.array([[1.3, 2.2, 2.1], [-4.2, -3.1, 1.2]])
+    two["acceleration"] = np.array([[0.0, 4.0, 0.0], [3.0, 0.0, 0.0]])
+    cost, _ = attitude.correct(two, quad)
+    att = quad.attitudes(np.zeros((2, 3)), two["acceleration"], np.zeros((2, 3)), two["yaw"], np.zeros(2))
+    r = attitude.ratios(two["position"], att.rotation, two["yaw"])
+    mean = float(np.mean(np.log(r)))
+    nodes, weights = interpolation_nodes(solm.grid_spec, two["position"], two["yaw"])
+    only_first = [
+        (n, w) for n, w in zip(nodes[0], weights[0]) if w > 0 and n not in nodes[1] and not np.isnan(layer.cost.flat[n])
+    ]
+    node, w = only_first[0]
+    log_node = (w * math.log(r[0]) + PRIOR_WEIGHT * mean) / (w + PRIOR_WEIGHT)
+    assert cost.flat[node] == pytest.approx(
+        min(attitude.uncapped.flat[node] * math.exp(2.0 * log_node), layer.cap), rel=1e-12
+    )
+    untouched = np.setdiff1d(np.flatnonzero(~np.isnan(layer.cost.ravel())), nodes.ravel())
+    np.testing.assert_allclose(cost.ravel()[untouched], expected(attitude, mean).ravel()[untouched], rtol=1e-12)
 
 
 def test_a_plan_corrected_for_its_attitude_still_holds_its_limits(tilted_room, tmp_path):

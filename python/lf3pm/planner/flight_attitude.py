@@ -5,9 +5,9 @@ can therefore correct the level SOLM along the flight it plans: it samples the f
 flown, after time scaling) every half cell, casts the SOLM's sensor there at the flatness
 attitude and at level (the same position, yaw, rays, noise stream and metric), and spreads
 each sample's ratio tilted / level over the 16 nodes the back end interpolates it from,
-with the interpolation's weights (a weighted mean of log ratios per node); each node's
-uncapped cost is multiplied by its ratio to the guidance power, then capped; then it
-optimises again from that flight. The correction is held fixed during an optimisation (a
+with the interpolation's weights (a weighted mean of log ratios per node, shrunk toward the
+flight's mean); each node's uncapped cost is multiplied by its ratio to the guidance power,
+then capped; then it optimises again from that flight. The correction is held fixed during an optimisation (a
 round), so each round's objective stays smooth; nodes the flight no longer passes keep
 their last correction, which is the attitude a flight through them would have had."""
 
@@ -24,12 +24,14 @@ from lf3pm.solm.grid import Space
 
 #: Rounds of correction after the level optimisation by default: none. Measured on the first
 #: flight study's 24 joint flights (docs/investigations/flight_attitude_rounds.py): one round
-#: changes the guidance cost met at the flown attitude by -0.1 % median (-22 % to +7 %) and
-#: takes 1.7 s (median) against 0.2 s, since those flights' attitudes change q_n by 2-4 %
-#: median. Ask for rounds where flights tilt more (near the tilt limit: 4-15 %).
+#: changes the guidance cost met at the flown attitude by -0.3 % median (-8.5 % to +2.9 %)
+#: and takes 1.5 s against 0.1-0.4 s; those flights' attitudes change q_n by 2-4 % median.
+#: Ask for rounds where flights tilt more (near the tilt limit: 4-15 %; docs/flight.md).
 ATTITUDE_ROUNDS = 0
 #: Samples per SOLM cell edge along the flight.
 SAMPLES_PER_CELL = 2
+#: How many samples' weight the flight's mean log ratio counts for at each node.
+PRIOR_WEIGHT = 1.0
 #: A sample's ratio is clipped to [1 / RATIO_LIMIT, RATIO_LIMIT]: a view degenerate only
 #: when tilted (ratio +inf) sends its nodes to the cap without making them infinite.
 RATIO_LIMIT = 100.0
@@ -61,6 +63,7 @@ class AttitudeGuidance:
         self.uncapped = np.where(degenerate, np.inf, libm.power(values / layer.scale, power))
         self.log_sum = np.zeros(layer.filled.shape)
         self.weight_sum = np.zeros(layer.filled.shape)
+        self.flight_log_sum, self.flight_samples = 0.0, 0
 
     def ratios(self, positions: np.ndarray, rotations: np.ndarray, yaws: np.ndarray) -> np.ndarray:
         """The guidance metric at the sensor on the body at ``positions`` (n x 3) with
@@ -101,13 +104,20 @@ class AttitudeGuidance:
             self.log_sum, np.unravel_index(nodes.ravel(), self.log_sum.shape), (weights * log_ratio[:, None]).ravel()
         )
         np.add.at(self.weight_sum, np.unravel_index(nodes.ravel(), self.weight_sum.shape), weights.ravel())
-        # Through the C library (lf3pm.libm), so that the plan is the same on every CPU.
-        touched = self.weight_sum > 0
-        factor = libm.power(libm.exp(self.log_sum[touched] / self.weight_sum[touched]), self.power)
+        self.flight_log_sum += float(np.sum(log_ratio))
+        self.flight_samples += len(log_ratio)
+        # Every node shrinks toward the flight's mean log ratio, as if it held PRIOR_WEIGHT of
+        # a sample at it: a node the flight never passed would tilt as the flight does on
+        # average. Without it the correction only penalises (ratio > 1 is the rule) the nodes
+        # the flight passed, and pushes the next round onto level-valued neighbours
+        # (docs/flight.md). Through the C library (lf3pm.libm): the same plan on every CPU.
+        mean = self.flight_log_sum / max(self.flight_samples, 1)
+        log_correction = (self.log_sum + PRIOR_WEIGHT * mean) / (self.weight_sum + PRIOR_WEIGHT)
         layer = self.layer
-        cost = self.uncapped.copy()
-        cost[touched] *= factor
-        cost = np.minimum(cost, layer.cap)
+        cost = np.minimum(
+            self.uncapped * libm.power(libm.exp(log_correction.ravel()), self.power).reshape(log_correction.shape),
+            layer.cap,
+        )
         cost = np.where(np.isnan(layer.cost), layer.cap, cost)
         seen = r[known]
         summary = {

@@ -138,7 +138,7 @@ def _powers(c, tau, order: int):
     return 2.0 * c[:, 2] + t * (6.0 * c[:, 3])
 
 
-def read_csv(path, columns: tuple[str, ...] = CSV_COLUMNS) -> dict:
+def read_csv(path, columns: tuple[str, ...] = CSV_COLUMNS, what: str = "trajectory") -> dict:
     """Reads a trajectory CSV as :meth:`Trajectory.to_csv` writes it: a header naming
     at least the ``columns`` (default ``t,x,y,yaw,vx,vy,omega``; any order, extra columns
     ignored), then one row of numbers per sample. Returns a dict of float64
@@ -146,13 +146,13 @@ def read_csv(path, columns: tuple[str, ...] = CSV_COLUMNS) -> dict:
     or unreadable file, one that is not a regular file of at most
     limits.MAX_TRAJECTORY_BYTES, a missing column, a row of the wrong length, a field
     that is not a number, a non-finite value, fewer than 2 rows or times that
-    do not increase strictly."""
-    check_file(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
+    do not increase strictly; ``what`` names the file in them."""
+    check_file(path, what, limit=MAX_TRAJECTORY_BYTES)
     try:
         with open(path, encoding="utf-8") as fp:
             lines = fp.read().splitlines()
     except (OSError, UnicodeDecodeError) as err:
-        raise Lf3pmError(f"{path}: cannot read the trajectory ({getattr(err, 'strerror', None) or err})") from None
+        raise Lf3pmError(f"{path}: cannot read the {what} ({getattr(err, 'strerror', None) or err})") from None
     lines = [(n, line) for n, line in enumerate(lines, start=1) if line.strip()]
     if not lines:
         raise Lf3pmError(f"{path}: empty file, expected a header {','.join(columns)}")
@@ -170,7 +170,7 @@ def read_csv(path, columns: tuple[str, ...] = CSV_COLUMNS) -> dict:
         except ValueError:
             raise Lf3pmError(f"{path}:{n}: a field is not a number: {line.strip()[:80]!r}") from None
     if len(rows) < 2:
-        raise Lf3pmError(f"{path}: {len(rows)} sample(s); a trajectory needs at least 2")
+        raise Lf3pmError(f"{path}: {len(rows)} sample(s); a {what} needs at least 2")
     table = np.asarray(rows, dtype=np.float64)
     used = [header.index(c) for c in columns]
     bad = ~np.isfinite(table[:, used])

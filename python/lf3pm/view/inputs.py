@@ -19,7 +19,6 @@ import numpy as np
 
 from lf3pm.config import DEFAULTS, RunConfig
 from lf3pm.errors import Lf3pmError, RunError
-from lf3pm.limits import MAX_TRAJECTORY_BYTES, check_file
 from lf3pm.map import Map, load_map
 from lf3pm.runs import Run, Scan
 from lf3pm.solm import Solm
@@ -182,48 +181,17 @@ def read_flight_csv(path) -> dict:
     lf3pm.limits.MAX_TRAJECTORY_BYTES, a missing column, a row of the wrong length, a field
     that is not a finite number, fewer than 2 rows, times that do not increase strictly, a
     quaternion whose norm is not 1."""
-    check_file(path, "flight", limit=MAX_TRAJECTORY_BYTES)
-    try:
-        with open(path, encoding="utf-8") as fp:
-            lines = [(n, line) for n, line in enumerate(fp.read().splitlines(), start=1) if line.strip()]
-    except (OSError, UnicodeDecodeError) as err:
-        raise Lf3pmError(f"{path}: cannot read the flight ({getattr(err, 'strerror', None) or err})") from None
-    expected = f"(`lf3pm plan --robot quadrotor` writes {','.join(FLIGHT_COLUMNS)} among others)"
-    if not lines:
-        raise Lf3pmError(f"{path}: empty file, expected a header {expected}")
-    header = [name.strip() for name in lines[0][1].split(",")]
-    missing = [c for c in FLIGHT_COLUMNS if c not in header]
-    if missing:
-        raise Lf3pmError(f"{path}: the header lacks the column(s) {', '.join(missing)} {expected}")
-    used = [header.index(c) for c in FLIGHT_COLUMNS]
-    rows = []
-    for n, line in lines[1:]:
-        fields = line.split(",")
-        if len(fields) != len(header):
-            raise Lf3pmError(f"{path}:{n}: {len(fields)} fields, the header has {len(header)}")
-        try:
-            row = [float(fields[i]) for i in used]
-        except ValueError:
-            raise Lf3pmError(f"{path}:{n}: a field is not a number: {line.strip()[:80]!r}") from None
-        bad = next((c for c, v in zip(FLIGHT_COLUMNS, row) if not math.isfinite(v)), None)
-        if bad is not None:
-            raise Lf3pmError(f"{path}:{n}: {bad} is not finite")
-        rows.append(row)
-    if len(rows) < 2:
-        raise Lf3pmError(f"{path}: {len(rows)} sample(s); a flight needs at least 2")
-    table = np.asarray(rows, dtype=np.float64)
-    t = table[:, 0]
-    late = np.flatnonzero(np.diff(t) <= 0)
-    if late.size:
-        r = late[0] + 1
-        raise Lf3pmError(f"{path}:{lines[1 + r][0]}: time {t[r]:g} does not follow {t[r - 1]:g}: times must increase")
+    from lf3pm.trajectory.trajectory import read_csv
+
+    columns = read_csv(path, FLIGHT_COLUMNS, what="flight")
+    table = np.column_stack([columns[c] for c in FLIGHT_COLUMNS])
     wxyz = table[:, 5:9]
     norm = np.linalg.norm(wxyz, axis=1)
     off = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_TOLERANCE)
     if off.size:
         r = off[0]
         raise Lf3pmError(
-            f"{path}:{lines[1 + r][0]}: qw, qx, qy, qz is no rotation (norm {norm[r]:.4g}, a rotation's is 1)"
+            f"{path}: sample {r + 1}: qw, qx, qy, qz is no rotation (norm {norm[r]:.4g}, a rotation's is 1)"
         )
     return {
         **{c: table[:, k].copy() for k, c in enumerate(FLIGHT_COLUMNS[:5])},
