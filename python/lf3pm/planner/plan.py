@@ -20,6 +20,7 @@ import numpy as np
 
 from lf3pm.config import COST_CHANNELS, DEFAULTS, GuidanceConfig, PlannerConfig, validated
 from lf3pm.errors import Lf3pmError
+from lf3pm.grid import Space
 from lf3pm.grid_field import GridField
 from lf3pm.planner.cost_map import CostLayer, cost_from_solm
 from lf3pm.planner.esdf import Esdf
@@ -94,9 +95,9 @@ class Planner:
 
     def __init__(self, solm: Solm, config: PlannerConfig = DEFAULTS.planner, *, unknown_policy: str | None = None):
         if not solm.grid_spec.space.ground:
-            space = solm.grid_spec.space.value
-            hint = " (flights: lf3pm.planner.flight_plan.plan_flight)" if space == "r3yaw" else ""
-            raise Lf3pmError(f"planning needs an r2 or se2 SOLM (ground robots); this one is {space}{hint}")
+            space = solm.grid_spec.space
+            hint = " (flights: lf3pm.planner.flight_plan.plan_flight)" if space is Space.R3YAW else ""
+            raise Lf3pmError(f"planning needs an r2 or se2 SOLM (ground robots); this one is {space.value}{hint}")
         if not isinstance(config, PlannerConfig):
             raise Lf3pmError(f"a Planner's config is an lf3pm.config.PlannerConfig, got {type(config).__name__}")
         if unknown_policy is not None:
