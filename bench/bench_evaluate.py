@@ -34,6 +34,7 @@ from types import SimpleNamespace
 
 import numpy as np
 from bench_maps import MAPS, ground_height
+from common import chosen_maps
 
 import lf3pm
 from lf3pm import _core
@@ -193,10 +194,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=10)
     parser.add_argument("--markdown", type=Path, help="also write the table here")
     args = parser.parse_args()
-    maps = args.maps.split(",")
-    unknown = [m for m in maps if m not in MAPS]
-    if unknown:
-        parser.error(f"unknown map(s) {', '.join(unknown)}; known: {', '.join(MAPS)}")
+    maps = chosen_maps(parser, args.maps, MAPS)
     heights = [float(h) for h in args.heights.split(",")]
     print(HEADER)
     rows = [row for name in maps for row in run_map(name, args.sensors.split(","), heights, args.repeat)]

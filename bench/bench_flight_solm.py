@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from common import chosen_maps
 from scipy.stats import spearmanr
 
 import lf3pm
@@ -150,10 +151,7 @@ def main() -> None:
     parser.add_argument("--full", action="store_true", help="also build each map's study SOLM and time it")
     parser.add_argument("--markdown", type=Path, help="also write the table here")
     args = parser.parse_args()
-    chosen = args.maps.split(",")
-    unknown = [m for m in chosen if m not in names]
-    if unknown:
-        parser.error(f"unknown map(s) {', '.join(unknown)}; known: {', '.join(names)}")
+    chosen = chosen_maps(parser, args.maps, names)
     print(HEADER)
     lines = []
     for case in protocol.maps:

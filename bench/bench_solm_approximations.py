@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 from bench_maps import MAPS, ground_height
+from common import chosen_maps
 from scipy.spatial import cKDTree
 from scipy.stats import spearmanr
 
@@ -125,12 +126,10 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--markdown", type=Path, help="also write the table here")
     args = parser.parse_args()
-    unknown = [m for m in args.maps.split(",") if m not in MAPS]
-    if unknown:
-        parser.error(f"unknown map(s) {', '.join(unknown)}; known: {', '.join(MAPS)}")
+    maps = chosen_maps(parser, args.maps, MAPS)
     print(HEADER)
     rows = []
-    for name in args.maps.split(","):
+    for name in maps:
         rows.append(run_map(name, args.positions, args.threads))
         print(format_row(rows[-1]), flush=True)
     if args.markdown:

@@ -1,4 +1,5 @@
-"""What several benchmarks share: the `boxes` scene's SOLM, built in a folder."""
+"""What several benchmarks share: the `boxes` scene's SOLM, built in a folder; the maps a
+`--maps` option chose."""
 
 from __future__ import annotations
 
@@ -17,3 +18,13 @@ def build_boxes_solm(folder: Path) -> Path:
     ):
         subprocess.run([sys.executable, "-m", "lf3pm.cli", *map(str, args)], check=True, capture_output=True)
     return folder / "boxes.zarr"
+
+
+def chosen_maps(parser, given: str, known) -> list[str]:
+    """The comma-separated map names of ``given``, each one of ``known`` (else the parser's
+    one-line error)."""
+    chosen = given.split(",")
+    unknown = [m for m in chosen if m not in known]
+    if unknown:
+        parser.error(f"unknown map(s) {', '.join(unknown)}; known: {', '.join(known)}")
+    return chosen
