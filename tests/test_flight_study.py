@@ -4,6 +4,7 @@ records whose answer is known, its protocol file, and the quick run end to end."
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -87,11 +88,40 @@ def test_the_quick_study_runs_end_to_end_and_resumes(tmp_path):
     assert (out / "scatter.png").read_bytes()[:4] == b"\x89PNG" and len(summary["pairs"]) == 2
     plans = [json.loads(line) for line in (out / "plans.jsonl").read_text().splitlines()]
     assert all(r["attitude_rounds"] == [] for r in plans)  # the protocol's default: level guidance
+    # A protocol frozen before a field existed is the same protocol at that field's default;
+    # a record cut by a crash is cut off and redone.
+    frozen = json.loads((out / "protocol.json").read_text())
+    del frozen["attitude_rounds"]
+    (out / "protocol.json").write_text(json.dumps(frozen))
+    with open(out / "replays.jsonl", "a") as fp:
+        fp.write('{"map": "atrium", "pair"')
     again = CliRunner().invoke(app, ["experiment", "flight", "--quick", "-o", str(out)])
     assert again.exit_code == 0 and (out / "replays.jsonl").read_text().splitlines() == replays
+    runs = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    assert len(runs) == 2 and all(r["code"] for r in runs)
     report = (out / "report.md").read_text()
     (out / "report.md").unlink()
     rewritten = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "-o", str(out)])
     assert rewritten.exit_code == 0 and (out / "report.md").read_text() == report
     empty = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "-o", str(tmp_path)])
     assert empty.exit_code != 0 and "no protocol.json" in empty.output
+    both = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "--quick", "-o", str(out)])
+    assert both.exit_code != 0 and "give no other protocol" in both.output
+    (out / "plans.jsonl").write_text("{not json\n")
+    broken = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "-o", str(out)])
+    assert broken.exit_code != 0 and "unreadable study records" in broken.output and "Traceback" not in broken.output
+
+
+@pytest.mark.parametrize("run", ["flight_issue43", "flight_issue43_v2"])
+def test_the_published_flight_studies_reanalyse_to_their_reports(run, tmp_path):
+    """results/RUN's report.md and summary.json are what `--report-only` writes from its
+    published records and frozen protocol, byte for byte."""
+    import shutil
+
+    published = Path(__file__).resolve().parents[1] / "results" / run
+    folder = tmp_path / run
+    shutil.copytree(published, folder)
+    done = CliRunner().invoke(app, ["experiment", "flight", "--report-only", "-o", str(folder)])
+    assert done.exit_code == 0, done.output
+    for name in ("report.md", "summary.json"):
+        assert (folder / name).read_bytes() == (published / name).read_bytes(), name
