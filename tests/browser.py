@@ -16,6 +16,7 @@ import urllib.request
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from lf3pm.view import free_port
 
@@ -25,6 +26,14 @@ CANDIDATES = ("chromium", "chromium-browser", "google-chrome")
 def chromium() -> str | None:
     """The path of a Chromium-like browser, or None."""
     return next((path for path in map(shutil.which, CANDIDATES) if path), None)
+
+
+#: Marks a test that needs a real browser: skipped, saying how to get one, where none is.
+needs_chromium = pytest.mark.skipif(
+    chromium() is None,
+    reason="no Chromium for the browser test (Debian: apt-get install chromium; `make test` "
+    "installs it when run as root)",
+)
 
 
 def screenshot(url: str, path: Path, *, seconds: float = 20.0, size=(1280, 800), ready=None) -> np.ndarray:

@@ -12,6 +12,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from browser import needs_chromium
 
 import lf3pm
 from lf3pm.errors import Lf3pmError
@@ -213,11 +214,7 @@ def test_plans_between_clicked_poses_with_and_without_guidance(app):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(
-    __import__("browser").chromium() is None,
-    reason="no Chromium for the browser test (Debian: apt-get install chromium; `make test` "
-    "installs it when run as root)",
-)
+@needs_chromium
 def test_the_page_shows_the_scene_in_a_real_browser(app, tmp_path):
     """Headless Chromium (software WebGL) loads the page; its screenshot is not blank
     and shows the SOLM's colours (viridis)."""

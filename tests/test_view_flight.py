@@ -13,6 +13,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from browser import needs_chromium
 
 import lf3pm
 from lf3pm.errors import Lf3pmError
@@ -288,11 +289,7 @@ def test_the_cli_refuses_bad_flight_input_in_one_line_with_status_2(site, tmp_pa
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(
-    __import__("browser").chromium() is None,
-    reason="no Chromium for the browser test (Debian: apt-get install chromium; `make test` "
-    "installs it when run as root)",
-)
+@needs_chromium
 def test_the_page_shows_the_slice_and_the_flight_in_a_real_browser(app, tmp_path):
     """Headless Chromium (software WebGL): the slice's colours (viridis) and the body's z
     axes (blue) are on the page, the slice at 1 m and the flight climbing from it."""
