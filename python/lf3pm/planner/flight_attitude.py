@@ -61,8 +61,12 @@ class AttitudeGuidance:
         values = np.asarray(solm.channel(self.metric), dtype=np.float64)
         degenerate = np.asarray(solm.channel("degenerate")).astype(bool)
         self.uncapped = np.where(degenerate, np.inf, libm.power(values / layer.scale, power))
-        self.log_sum = np.zeros(layer.filled.shape)
-        self.weight_sum = np.zeros(layer.filled.shape)
+        self.start()
+
+    def start(self) -> None:
+        """Forgets every correction: the next :meth:`correct` begins a new flight's."""
+        self.log_sum = np.zeros(self.layer.filled.shape)
+        self.weight_sum = np.zeros(self.layer.filled.shape)
         self.flight_log_sum, self.flight_samples = 0.0, 0
 
     def ratios(self, positions: np.ndarray, rotations: np.ndarray, yaws: np.ndarray) -> np.ndarray:

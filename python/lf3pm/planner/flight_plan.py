@@ -290,6 +290,7 @@ class FlightPlanner:
         from lf3pm.map import Map
 
         self.threads = threads
+        self._attitude = None  # AttitudeGuidance, made when a plan first asks for rounds
         self.world = world_points if isinstance(world_points, Map) else None
         world_points = world_points.points if self.world is not None else world_points
         self._points = world_points
@@ -390,7 +391,7 @@ class FlightPlanner:
                 # The attitude as flown: after the time scaling that the limits will ask for.
                 flown, _, _ = within_limits(trajectory, quad, self.esdf, self.r_safe, SEARCH_RATE)
                 cost, summary = attitude.correct(flown.sample(sample_rate(self.solm.grid_spec, quad.vmax)), quad)
-                q, T = _waypoints(flight, x)
+                q, T = _waypoints(x, trajectory.durations)
                 flight = problem(w_q, 0.0, q, T, guidance_field(self.solm, guidance, cost))
                 out = flight.optimize(_core.trajectory_lbfgs())
                 x = np.asarray(out["x"])
@@ -415,12 +416,15 @@ class FlightPlanner:
 
     def attitude_guidance(self) -> AttitudeGuidance:
         """A fresh correction of this planner's guidance layer at the planned attitude (the
-        map indexed on first use)."""
+        map indexed and the sensor's rays and uncapped layer made on first use, then kept)."""
         from lf3pm.map import load_map
 
-        if self.world is None:
-            self.world = load_map(self._points)
-        return AttitudeGuidance(self.solm, self.world, self.layer, self.guidance.power, self.threads)
+        if self._attitude is None:
+            if self.world is None:
+                self.world = load_map(self._points)
+            self._attitude = AttitudeGuidance(self.solm, self.world, self.layer, self.guidance.power, self.threads)
+        self._attitude.start()
+        return self._attitude
 
 
 def plan_flight(
@@ -470,9 +474,9 @@ def _trajectory(flight, x: np.ndarray) -> FlightTrajectory:
     return FlightTrajectory(np.asarray(coefficients).reshape(-1, 6, 4), np.asarray(durations))
 
 
-def _waypoints(flight, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The inner waypoints (4 x (N - 1)) and durations (N) of the flight at ``x``."""
-    _, durations = flight.trajectory(x)
+def _waypoints(x: np.ndarray, durations) -> tuple[np.ndarray, np.ndarray]:
+    """The inner waypoints (4 x (N - 1)) of the flight at ``x`` whose N pieces last
+    ``durations``, and those durations."""
     n = len(durations)
     return x[: 4 * (n - 1)].reshape(n - 1, 4).T.copy(), np.asarray(durations)
 
@@ -493,7 +497,7 @@ def _yaw_only(problem, w_q: float, flight, x: np.ndarray):
     (problem, x, outcome)."""
     from scipy.optimize import minimize
 
-    q, durations = _waypoints(flight, x)
+    q, durations = _waypoints(x, flight.trajectory(x)[1])
     n = len(durations)
     yawing = problem(w_q, 0.0, q, durations)
     free = np.arange(3, 4 * (n - 1), 4)  # each waypoint's yaw (x holds them column by column)

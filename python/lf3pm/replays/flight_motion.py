@@ -136,22 +136,23 @@ class FlightMotion:
     def from_csv(cls, path, *, quadrotor: Quadrotor | None = None):
         """The flight in a CSV as `lf3pm plan --robot quadrotor` writes it (the columns
         :data:`FLIGHT_CSV_COLUMNS` at least; :meth:`from_samples`, with its velocities,
-        accelerations and yaw rates where the CSV has them all). Where it holds the attitude (qw, qx, qy, qz), the
-        flatness map of ``quadrotor`` must give it back within :data:`ATTITUDE_TOLERANCE`
-        rad: another mass or drag than the plan's is refused. Lf3pmError in one line naming
+        accelerations and yaw rates where the CSV has them all). Where it holds the attitude
+        (qw, qx, qy, qz), the flatness map of ``quadrotor`` must give it back within
+        :data:`ATTITUDE_TOLERANCE` rad: another mass or drag than the plan's is refused. Lf3pmError in one line naming
         the file for a bad one."""
         from lf3pm.trajectory.trajectory import read_csv
 
-        s = read_csv(path, FLIGHT_CSV_COLUMNS)
-        header = csv_header(path)
-        extra = {}
+        header = set(csv_header(path))
         derived = ("vx", "vy", "vz", "yaw_rate", "ax", "ay", "az")
-        if set(derived) <= set(header):
-            more = read_csv(path, ("t", *derived))
+        derived = derived if set(derived) <= header else ()
+        attitude = ("qw", "qx", "qy", "qz") if {"qw", "qx", "qy", "qz"} <= header else ()
+        s = read_csv(path, (*FLIGHT_CSV_COLUMNS, *derived, *attitude))  # one read of the file
+        extra = {}
+        if derived:
             extra = {
-                "velocity": np.column_stack([more["vx"], more["vy"], more["vz"]]),
-                "acceleration": np.column_stack([more["ax"], more["ay"], more["az"]]),
-                "yaw_rate": more["yaw_rate"],
+                "velocity": np.column_stack([s["vx"], s["vy"], s["vz"]]),
+                "acceleration": np.column_stack([s["ax"], s["ay"], s["az"]]),
+                "yaw_rate": s["yaw_rate"],
             }
         try:
             flight = cls.from_samples(
@@ -159,9 +160,8 @@ class FlightMotion:
             )
         except Lf3pmError as err:
             raise Lf3pmError(f"{path}: {err}") from None
-        if {"qw", "qx", "qy", "qz"} <= set(header):
-            q = read_csv(path, ("t", "qw", "qx", "qy", "qz"))
-            cosine = _quaternion_cosines(flight.attitudes(q["t"]).rotation, q)
+        if attitude:
+            cosine = _quaternion_cosines(flight.attitudes(s["t"]).rotation, s)
             worst = float(np.degrees(2 * np.arccos(np.clip(cosine.min(), 0.0, 1.0))))
             if worst > np.degrees(ATTITUDE_TOLERANCE):
                 raise Lf3pmError(

@@ -50,7 +50,7 @@ AUDIT_REASONS = ("predicted_error_withheld", "registration_error", "sim_error")
 #: The columns of a flight CSV the viewer reads (`lf3pm plan --robot quadrotor` writes
 #: them among others): time, the body's position and yaw, its attitude (body to world).
 FLIGHT_COLUMNS = ("t", "x", "y", "z", "yaw", "qw", "qx", "qy", "qz")
-#: How far from 1 a flight CSV's quaternion's norm may be (its 9 written digits are far nearer).
+#: How far from 1 a flight CSV's quaternion's norm may be (its 17 written digits are far nearer).
 QUATERNION_TOLERANCE = 1e-3
 
 
